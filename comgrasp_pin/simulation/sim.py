@@ -1,0 +1,101 @@
+"""A running world: MuJoCo model and data, the arm servo, the gripper and the raw readings."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from comgrasp_pin.simulation.controller import ArmServo
+from comgrasp_pin.simulation.world import (
+    ARM_JOINTS,
+    EE_SITE,
+    FINGER_JOINTS,
+    WorldConfig,
+    build_model,
+)
+
+
+class Simulation:
+    """Steps the physics with the arm servo in the loop.
+
+    Every ``step`` runs the servo once and ``mj_step`` once (``config.sim_dt``), so the
+    controller and the torque readings are at 1/sim_dt (1 kHz by default).
+
+    Attributes:
+        model, data: the MuJoCo model and data.
+        q_des: (6,) commanded arm configuration (rad).
+        grip_force: commanded force of each finger (N); positive closes, negative opens.
+    """
+
+    def __init__(self, model: mujoco.MjModel | None = None, config: WorldConfig | None = None):
+        self.config = config or WorldConfig()
+        self.model = build_model(config) if model is None else model
+        self.data = mujoco.MjData(self.model)
+        m = self.model
+        self._arm_qadr = np.array([m.joint(j).qposadr[0] for j in ARM_JOINTS])
+        self._arm_vadr = np.array([m.joint(j).dofadr[0] for j in ARM_JOINTS])
+        self._finger_qadr = np.array([m.joint(j).qposadr[0] for j in FINGER_JOINTS])
+        self._arm_act = np.array([m.actuator(j).id for j in ARM_JOINTS])
+        self._finger_act = np.array([m.actuator(j).id for j in FINGER_JOINTS])
+        self._tau_adr = np.array([m.sensor(f"tau_{j}").adr[0] for j in ARM_JOINTS])
+        self._ee_site = m.site(EE_SITE).id
+        kp = float(m.actuator_gainprm[self._arm_act[0], 0])
+        self.servo = ArmServo(len(ARM_JOINTS), kp)
+        self.q_des = np.zeros(len(ARM_JOINTS))
+        self.grip_force = 0.0
+        mujoco.mj_forward(m, self.data)
+
+    @property
+    def time(self) -> float:
+        return float(self.data.time)
+
+    @property
+    def q(self) -> np.ndarray:
+        """(6,) arm joint positions (rad)."""
+        return self.data.qpos[self._arm_qadr].copy()
+
+    @property
+    def qd(self) -> np.ndarray:
+        """(6,) arm joint velocities (rad/s)."""
+        return self.data.qvel[self._arm_vadr].copy()
+
+    @property
+    def finger_q(self) -> np.ndarray:
+        """(2,) finger closings (m); 0 is fully open."""
+        return self.data.qpos[self._finger_qadr].copy()
+
+    def joint_torques(self) -> np.ndarray:
+        """(6,) torque each arm drive exerts now (N m): the noise-free sensor reading."""
+        return self.data.sensordata[self._tau_adr].copy()
+
+    def ee_pose(self) -> np.ndarray:
+        """(4, 4) T_world_ee of the eelink site."""
+        T = np.eye(4)
+        T[:3, :3] = self.data.site_xmat[self._ee_site].reshape(3, 3)
+        T[:3, 3] = self.data.site_xpos[self._ee_site]
+        return T
+
+    def reset_arm(self, q: np.ndarray, finger_q: float = 0.0) -> None:
+        """Teleport the arm to ``q`` at rest, command it to stay there, forget the integral."""
+        q = np.asarray(q, dtype=float)
+        self.data.qpos[self._arm_qadr] = q
+        self.data.qvel[self._arm_vadr] = 0.0
+        self.data.qpos[self._finger_qadr] = finger_q
+        self.q_des = q.copy()
+        self.servo.reset()
+        mujoco.mj_forward(self.model, self.data)
+
+    def step(self, n: int = 1) -> None:
+        """Advance ``n`` physics steps with the servo and gripper in the loop."""
+        m, d = self.model, self.data
+        dt = m.opt.timestep
+        d.ctrl[self._finger_act] = self.grip_force
+        for _ in range(n):
+            tau_ff = d.qfrc_bias[self._arm_vadr]
+            q = d.qpos[self._arm_qadr]
+            d.ctrl[self._arm_act] = self.servo.ctrl(q, self.q_des, tau_ff, dt)
+            mujoco.mj_step(m, d)
+
+    def hold(self, duration: float) -> None:
+        """Keep the commanded configuration for ``duration`` seconds."""
+        self.step(int(round(duration / self.model.opt.timestep)))

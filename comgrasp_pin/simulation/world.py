@@ -1,0 +1,189 @@
+"""The MuJoCo world: the robot compiled from the project's URDF, placed in the paper's scene.
+
+``build_spec`` gives an editable ``mujoco.MjSpec`` (tests and the episode code add objects
+or payloads to it); ``build_model`` compiles it. Kinematics and inertia come from the URDF
+only; what this module adds is what a URDF cannot say: drives, sensors, cameras, contact
+settings and the scene.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from comgrasp_pin._paths import asset_path, example_robot_data_dir
+from comgrasp_pin.robot import UR5_URDF
+
+ARM_JOINTS = (
+    "shoulder_pan_joint",
+    "shoulder_lift_joint",
+    "elbow_joint",
+    "wrist_1_joint",
+    "wrist_2_joint",
+    "wrist_3_joint",
+)
+FINGER_JOINTS = ("finger_left_joint", "finger_right_joint")
+GRIPPER_BODIES = ("gripper_base", "finger_left", "finger_right")
+PAD_GEOMS = ("pad_left", "pad_right")
+EE_SITE = "eelink"
+TOP_CAMERA = "top_down"
+SIDE_CAMERA = "side_camera"
+
+# MuJoCo cameras look along their -z with y up; the optical (OpenCV) frame looks along +z with
+# y down. The URDF's side_camera frame is optical, so MuJoCo's camera sits rotated by pi about x.
+_QUAT_OPTICAL_MUJOCO_WXYZ = (0.0, 1.0, 0.0, 0.0)
+
+# Raised again at compile time for the unprefixed attach (see _attach_unprefixed).
+warnings.filterwarnings("ignore", message="Attaching a spec with an empty prefix")
+
+_VISUAL_GROUP = 1
+_COLLISION_GROUP = 3  # hidden in renders
+
+
+@dataclass(frozen=True)
+class WorldConfig:
+    """Settings of the simulated world. SI units.
+
+    Attributes:
+        sim_dt: physics time step (s); the controller and the torque sensor run every step.
+        kp: stiffness of the arm's position servos (N m / rad).
+        dampratio: damping ratio of the arm servos.
+        armature: reflected rotor inertia of each arm joint (kg m^2); it changes no static
+            torque, it only makes the stiff servos well-behaved at ``sim_dt``.
+        finger_armature: reflected inertia of each finger drive (kg).
+        pad_friction: (sliding, torsional, rolling) friction of the finger pads.
+        pad_condim: contact dimensionality of the pads (4 or 6: with torsional friction).
+        noslip_iterations, impratio: MuJoCo solver settings that make static friction hold
+            (DESIGN.md section 7).
+        side_camera_fovy_deg: vertical field of view of the side camera (deg).
+    """
+
+    sim_dt: float = 0.001
+    kp: float = 2.0e4
+    dampratio: float = 1.0
+    armature: tuple[float, ...] = (0.2, 0.2, 0.1, 0.05, 0.05, 0.05)
+    finger_armature: float = 0.05
+    pad_friction: tuple[float, float, float] = (0.8, 0.004, 0.0001)
+    pad_condim: int = 6
+    noslip_iterations: int = 50
+    impratio: float = 10.0
+    side_camera_fovy_deg: float = 65.0
+
+
+def robot_spec() -> mujoco.MjSpec:
+    """The robot alone, compiled by MuJoCo's URDF reader from ``assets/urdf``.
+
+    Mesh URIs ``package://example-robot-data/...`` are resolved to the installed package.
+    Static bodies are kept (``fusestatic`` off) so that ``eelink`` and ``side_camera`` exist.
+    """
+    urdf = asset_path(UR5_URDF).read_text()
+    urdf = urdf.replace("package://example-robot-data/", f"{example_robot_data_dir()}/")
+    compiler = '<mujoco><compiler fusestatic="false" discardvisual="false" strippath="false"/>'
+    urdf = urdf.replace("</robot>", compiler + "</mujoco></robot>")
+    return mujoco.MjSpec.from_string(urdf)
+
+
+def build_spec(
+    config: WorldConfig | None = None,
+    extras: Sequence[Callable[[mujoco.MjSpec], None]] = (),
+) -> mujoco.MjSpec:
+    """The scene with the robot, drives, sensors and cameras; ``extras`` edit it further
+    (each is called with the spec, e.g. to add an object)."""
+    config = config or WorldConfig()
+    spec = mujoco.MjSpec.from_file(str(asset_path("sim/scene.xml")))
+    spec.option.timestep = config.sim_dt
+    spec.option.noslip_iterations = config.noslip_iterations
+    spec.option.impratio = config.impratio
+    _attach_unprefixed(spec, robot_spec())
+
+    _set_contacts(spec, config)
+    _add_drives(spec, config)
+    _add_sensors_and_cameras(spec, config)
+    for extra in extras:
+        extra(spec)
+    return spec
+
+
+def build_model(
+    config: WorldConfig | None = None,
+    extras: Sequence[Callable[[mujoco.MjSpec], None]] = (),
+) -> mujoco.MjModel:
+    """Compile the world (see ``build_spec``)."""
+    return build_spec(config, extras).compile()
+
+
+def _attach_unprefixed(spec: mujoco.MjSpec, child: mujoco.MjSpec) -> None:
+    """Attach ``child`` at the world origin keeping its names, so that frame and joint names
+    are the URDF's in both Pinocchio and MuJoCo. (MuJoCo warns that an unprefixed attach may
+    not save to XML; we never save the attached spec, so the warning is silenced.)"""
+    old_handler = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(lambda _msg: None)
+    try:
+        spec.attach(child, frame=spec.worldbody.add_frame(), prefix="")
+    finally:
+        mujoco.set_mju_user_warning(old_handler)
+
+
+def _set_contacts(spec: mujoco.MjSpec, config: WorldConfig) -> None:
+    """URDF visuals render, URDF collisions are hidden; only the gripper collides."""
+    for body in spec.bodies:
+        for geom in body.geoms:
+            is_collision = geom.contype != 0 or geom.conaffinity != 0
+            if not is_collision and body.name not in ("world", "table", "drop_box"):
+                geom.group = _VISUAL_GROUP
+                continue
+            if body.name in ("world", "table", "drop_box"):
+                continue
+            geom.group = _COLLISION_GROUP
+            if body.name not in GRIPPER_BODIES:
+                geom.contype = geom.conaffinity = 0
+    for side in ("left", "right"):
+        pad = spec.body(f"finger_{side}").geoms[0]
+        pad.name = f"pad_{side}"
+        pad.friction = list(config.pad_friction)
+        pad.condim = config.pad_condim
+        pad.priority = 1  # the pads' friction decides in pad-object contacts
+
+
+def _add_drives(spec: mujoco.MjSpec, config: WorldConfig) -> None:
+    """Position servos on the arm joints, force-controlled fingers kept symmetric."""
+    for name, armature in zip(ARM_JOINTS, config.armature, strict=True):
+        joint = spec.joint(name)
+        joint.armature = armature
+        joint.actfrclimited = 0  # the URDF's effort limits must not clip the readings silently
+        act = spec.add_actuator(name=name, target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        act.set_to_position(kp=config.kp, dampratio=config.dampratio)
+        act.ctrllimited = 0
+        act.forcelimited = 0
+    for name in FINGER_JOINTS:
+        joint = spec.joint(name)
+        joint.armature = config.finger_armature
+        joint.damping = np.array([5.0, 0.0, 0.0])  # N s / m
+        joint.actfrclimited = 0
+        act = spec.add_actuator(name=name, target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+        act.ctrllimited = 1
+        act.ctrlrange = [-100.0, 100.0]  # N; positive closes
+    spec.add_equality(
+        type=mujoco.mjtEq.mjEQ_JOINT,
+        name1=FINGER_JOINTS[0],
+        name2=FINGER_JOINTS[1],
+        data=np.r_[0.0, 1.0, 0.0, 0.0, 0.0, np.zeros(7)],
+    )
+
+
+def _add_sensors_and_cameras(spec: mujoco.MjSpec, config: WorldConfig) -> None:
+    spec.body("eelink").add_site(name=EE_SITE, size=[0.005, 0, 0], group=_COLLISION_GROUP)
+    for name in ARM_JOINTS:
+        spec.add_sensor(
+            name=f"tau_{name}",
+            type=mujoco.mjtSensor.mjSENS_JOINTACTFRC,
+            objname=name,
+            objtype=mujoco.mjtObj.mjOBJ_JOINT,
+        )
+    spec.body("side_camera").add_camera(
+        name=SIDE_CAMERA, quat=list(_QUAT_OPTICAL_MUJOCO_WXYZ), fovy=config.side_camera_fovy_deg
+    )
