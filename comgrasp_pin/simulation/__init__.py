@@ -1,6 +1,11 @@
 """The MuJoCo world that plays reality: the only part of comgrasp_pin that imports MuJoCo."""
 
-from comgrasp_pin.simulation.sim import Simulation
-from comgrasp_pin.simulation.world import WorldConfig, build_model, build_spec
+import os
+
+# Headless rendering by default; must be set before MuJoCo is first imported.
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+from comgrasp_pin.simulation.sim import Simulation  # noqa: E402
+from comgrasp_pin.simulation.world import WorldConfig, build_model, build_spec  # noqa: E402
 
 __all__ = ["Simulation", "WorldConfig", "build_model", "build_spec"]
