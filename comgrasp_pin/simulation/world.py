@@ -71,7 +71,7 @@ class WorldConfig:
     pad_condim: int = 6
     noslip_iterations: int = 50
     impratio: float = 10.0
-    side_camera_fovy_deg: float = 65.0
+    side_camera_fovy_deg: float = 75.0
 
 
 def robot_spec() -> mujoco.MjSpec:
@@ -113,7 +113,10 @@ def build_model(
     extras: Sequence[Callable[[mujoco.MjSpec], None]] = (),
 ) -> mujoco.MjModel:
     """Compile the world (see ``build_spec``)."""
-    return build_spec(config, extras).compile()
+    spec = build_spec(config, extras)
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="Attaching a spec with an empty prefix")
+        return spec.compile()
 
 
 def _attach_unprefixed(spec: mujoco.MjSpec, child: mujoco.MjSpec) -> None:

@@ -1,0 +1,83 @@
+"""The world's cameras see what they should, in the conventions perception relies on."""
+
+import numpy as np
+import pytest
+
+from comgrasp_pin.camera import PinholeCamera, transform_points
+from comgrasp_pin.simulation import Simulation
+from comgrasp_pin.simulation.cameras import CameraRig
+
+Q_DOWN = np.array([0.0, -1.9, 1.9, -1.57, -1.57, 0.0])
+
+
+@pytest.fixture(scope="module")
+def scene():
+    sim = Simulation()
+    sim.reset_arm(Q_DOWN, finger_q=0.02)
+    rig = CameraRig(sim.model)
+    yield sim, rig
+    rig.close()
+
+
+def test_top_down_camera_sees_the_table_and_its_height(scene):
+    sim, rig = scene
+    rgb = rig.rgb(sim.data, "top_down")
+    depth = rig.depth(sim.data, "top_down")
+    seg = rig.segmentation(sim.data, "top_down")
+    K = rig.intrinsics("top_down")
+    T_world_cam = rig.T_world_cam(sim.data, "top_down")
+    # The camera looks straight down from 2.0 m above the floor (floor at z = -0.75).
+    np.testing.assert_allclose(T_world_cam[:3, 2], [0, 0, -1], atol=1e-12)
+    assert abs(T_world_cam[2, 3] - (-0.75 + 2.0)) < 1e-12
+    # Where the table should be (projected by hand), the renderer shows the table top.
+    table = sim.model.geom("table_top").id
+    corners_world = np.array([[0.35, -0.3, 0.0], [0.75, 0.3, 0.0], [0.55, 0.0, 0.0]])
+    T_cam_world = np.linalg.inv(T_world_cam)
+    uv = K.project(transform_points(T_cam_world, corners_world)).round().astype(int)
+    for u, v in uv:
+        assert seg[v, u] == table
+    on_table = seg == table
+    assert on_table.mean() > 0.3
+    # The table looks like the table (its warm wood colour: red > green > blue), not the floor.
+    mean_table = rgb[on_table].mean(axis=0)
+    mean_floor = rgb[seg == sim.model.geom("floor").id].mean(axis=0)
+    assert mean_table[0] > mean_table[1] > mean_table[2]
+    assert np.linalg.norm(mean_table - mean_floor) > 30
+    # Depth, back-projected with the intrinsics and extrinsics, puts the table top at z = 0.
+    points = transform_points(T_world_cam, K.depth_to_points(depth)[on_table])
+    assert np.abs(points[:, 2]).max() < 2e-3
+    assert abs(np.median(points[:, 2])) < 5e-4
+
+
+def test_side_camera_pose_matches_robot_description_and_sees_pads(scene, ur5):
+    sim, rig = scene
+    T_world_cam = rig.T_world_cam(sim.data, "side_camera")
+    np.testing.assert_allclose(T_world_cam, ur5.frame_pose(sim.q, "side_camera"), atol=1e-9)
+    # Optical axis along the jaw-closing axis (ee y), horizontal with the gripper pointing down.
+    T_world_ee = ur5.ee_pose(sim.q)
+    np.testing.assert_allclose(T_world_cam[:3, 2], T_world_ee[:3, 1], atol=1e-9)
+    assert abs(T_world_cam[2, 2]) < 1e-3
+    seg = rig.segmentation(sim.data, "side_camera")
+    visible = {
+        name: int((seg == sim.model.geom(name).id).sum()) for name in ("pad_left", "pad_right")
+    }
+    assert max(visible.values()) > 100, visible
+    # A point 0.45 m long rod held at the TCP would be in view end to end.
+    K = rig.intrinsics("side_camera")
+    T_cam_ee = np.linalg.inv(T_world_cam) @ T_world_ee
+    ends = transform_points(T_cam_ee, np.array([[-0.225, 0, 0], [0.225, 0, 0]]))
+    uv = K.project(ends)
+    assert np.all(
+        (uv[:, 0] > 0) & (uv[:, 0] < K.width - 1) & (uv[:, 1] > 0) & (uv[:, 1] < K.height - 1)
+    )
+
+
+def test_pinhole_round_trip():
+    K = PinholeCamera.from_fovy(640, 480, 45.0)
+    rng = np.random.default_rng(4)
+    p = np.c_[rng.uniform(-0.3, 0.3, (50, 2)), rng.uniform(0.2, 2.0, 50)]
+    np.testing.assert_allclose(K.backproject(K.project(p), p[:, 2]), p, atol=1e-12)
+    # The optical axis hits the centre of the image.
+    np.testing.assert_allclose(K.project(np.array([[0, 0, 1.0]])), [[319.5, 239.5]])
+    with pytest.raises(ValueError):
+        K.project(np.array([[0, 0, -1.0]]))
