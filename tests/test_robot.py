@@ -26,7 +26,8 @@ TWO_LINK_URDF = """<?xml version="1.0"?>
     <origin xyz="0 0 0"/><axis xyz="0 -1 0"/><limit lower="-3" upper="3" effort="1" velocity="1"/>
   </joint>
   <joint name="j2" type="revolute"><parent link="link1"/><child link="link2"/>
-    <origin xyz="{l1} 0 0"/><axis xyz="0 -1 0"/><limit lower="-3" upper="3" effort="1" velocity="1"/>
+    <origin xyz="{l1} 0 0"/><axis xyz="0 -1 0"/>
+    <limit lower="-3" upper="3" effort="1" velocity="1"/>
   </joint>
   <joint name="tip_joint" type="fixed"><parent link="link2"/><child link="tip"/>
     <origin xyz="{l2} 0 0"/></joint>
