@@ -1,0 +1,181 @@
+"""Inverse kinematics for top-down grasps, on Pinocchio only (no MuJoCo).
+
+A top-down grasp of a lying rod: ee-z points down (world -z), ee-x runs along the rod, so
+ee-y (the jaw axis) is horizontal across it. A rod with yaw psi can be grasped with ee-x at
+psi or psi + pi; ``grasp_frame`` picks one (side-camera boom, along ee -y, away from the
+robot base when possible), ``solve_ik`` finds joints close to a seed (damped least squares
+on the SE(3) log error, joint limits enforced, wrist_3 moved by multiples of 2 pi towards
+the seed), ``solve_top_down`` tries both and keeps the best.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from comgrasp_pin.robot import RobotModel
+
+# Elbow up, wrist down: eelink 0.30 m above (0.45, 0), pointing down, boom away (rad).
+Q_HOME = np.array([-0.245, -1.6895, 1.6866, -1.5679, -1.5708, -0.245])
+TABLE_Z = 0.0
+FINGERTIP_BELOW_EE = 0.015  # fingertips (pad bottoms) below the eelink along ee-z (m)
+FINGERTIP_CLEARANCE = 0.002  # fingertips kept this far above the table (m)
+
+
+class IKError(ValueError):
+    """No joint configuration reaches the target within tolerance and joint limits."""
+
+
+@dataclass(frozen=True)
+class GraspPose:
+    """A top-down grasp in the world frame.
+
+    Attributes:
+        x, y: position of the grasp point (the rod's axis) in the world (m).
+        z: height of the rod's axis (m).
+        yaw: direction of the rod's axis about world z (rad); psi and psi + pi are the
+            same grasp.
+    """
+
+    x: float
+    y: float
+    z: float
+    yaw: float
+
+
+def top_down_frame(x: float, y: float, z: float, yaw: float) -> np.ndarray:
+    """(4, 4) T_world_ee with ee-z down, ee-x = (cos yaw, sin yaw, 0), origin (x, y, z) (m)."""
+    c, s = np.cos(yaw), np.sin(yaw)
+    T = np.eye(4)
+    T[:3, :3] = np.array([[c, s, 0.0], [s, -c, 0.0], [0.0, 0.0, -1.0]])
+    T[:3, 3] = [x, y, z]
+    return T
+
+
+def grasp_height(z_axis: float, table_z: float = TABLE_Z) -> float:
+    """Eelink height (m) for a rod whose axis is at ``z_axis``: on the axis, but with the
+    fingertips at least 2 mm above the table."""
+    return max(z_axis, table_z + FINGERTIP_BELOW_EE + FINGERTIP_CLEARANCE)
+
+
+def grasp_frame(grasp: GraspPose, dz: float = 0.0, boom_away: bool = True) -> np.ndarray:
+    """(4, 4) T_world_ee of ``grasp`` raised by ``dz`` (m), eelink at ``grasp_height``.
+
+    With ``boom_away`` the yaw among (yaw, yaw + pi) that points the side-camera boom (ee -y)
+    away from the robot base (world origin) is chosen.
+    """
+    yaw = grasp.yaw
+    if boom_away:
+        minus_y = np.array([-np.sin(yaw), np.cos(yaw)])
+        if minus_y @ np.array([grasp.x, grasp.y]) < 0.0:
+            yaw += np.pi
+    return top_down_frame(grasp.x, grasp.y, grasp_height(grasp.z) + dz, yaw)
+
+
+def pose_error(robot: RobotModel, q: np.ndarray, T_world_goal: np.ndarray) -> np.ndarray:
+    """(6,) log(T_ee^-1 T_goal) in the ee frame (linear m, angular rad)."""
+    T_ee = pin.SE3(robot.ee_pose(q))
+    return pin.log6(T_ee.actInv(pin.SE3(T_world_goal))).vector
+
+
+def solve_ik(
+    robot: RobotModel,
+    T_world_goal: np.ndarray,
+    q_seed: np.ndarray,
+    tol: float = 1e-8,
+    max_iter: int = 200,
+    damping: float = 1e-3,
+) -> np.ndarray:
+    """(n,) joints reaching ``T_world_goal`` (4, 4), starting from ``q_seed`` (rad).
+
+    Damped least squares in the ee frame, steps clipped to 0.5 rad, joints clipped to their
+    limits. Raises IKError when the pose error norm stays above ``tol``.
+    """
+    q = robot.check_q(q_seed).copy()
+    goal = pin.SE3(np.asarray(T_world_goal, dtype=float))
+    lo, hi = robot.q_lower, robot.q_upper
+    model, data, fid = robot.model, robot.data, robot.ee_frame_id
+    err = np.full(6, np.inf)
+    for _ in range(max_iter):
+        pin.forwardKinematics(model, data, q)
+        T_ee = pin.updateFramePlacement(model, data, fid)
+        err = pin.log6(T_ee.actInv(goal)).vector
+        if np.linalg.norm(err) < tol:
+            break
+        J = pin.computeFrameJacobian(model, data, q, fid, pin.ReferenceFrame.LOCAL)
+        J = pin.Jlog6(T_ee.actInv(goal)) @ J
+        dq = J.T @ np.linalg.solve(J @ J.T + damping**2 * np.eye(6), err)
+        step = np.max(np.abs(dq))
+        if step > 0.5:
+            dq *= 0.5 / step
+        q = np.clip(q + dq, lo, hi)
+    else:
+        raise IKError(
+            f"IK did not converge: pose error {np.linalg.norm(err):.2e} > {tol:.0e} "
+            f"for target position {goal.translation} from seed {q_seed}"
+        )
+    return _wrap_towards(q, q_seed, lo, hi)
+
+
+def _wrap_towards(q: np.ndarray, q_seed: np.ndarray, lo: np.ndarray, hi: np.ndarray):
+    """Move each joint by multiples of 2 pi towards the seed, staying within limits."""
+    q = q.copy()
+    for i in range(len(q)):
+        k = np.round((q_seed[i] - q[i]) / (2 * np.pi))
+        cand = q[i] + 2 * np.pi * k
+        if lo[i] <= cand <= hi[i]:
+            q[i] = cand
+    return q
+
+
+def solve_top_down(
+    robot: RobotModel,
+    grasp: GraspPose,
+    q_seed: np.ndarray | None = None,
+    dz: float = 0.0,
+    boom_away: bool = True,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Joints for the top-down ``grasp`` raised by ``dz`` (m): (q (n,), T_world_ee (4, 4)).
+
+    Both yaws (psi, psi + pi) are solved from ``q_seed`` (default ``Q_HOME``); the one with the
+    boom away from the base is preferred if ``boom_away``, otherwise (or if it fails) the
+    one closest to the seed.
+    """
+    seed = Q_HOME if q_seed is None else robot.check_q(q_seed)
+    preferred = grasp_frame(grasp, dz, boom_away=True)
+    other = preferred.copy()
+    other[:3, :2] *= -1.0  # yaw + pi: x and y flip, z stays down
+    results = []
+    for T in (preferred, other):
+        try:
+            q = solve_ik(robot, T, seed)
+        except IKError:
+            continue
+        results.append((q, T))
+    if not results:
+        raise IKError(f"no IK solution for grasp {grasp} (dz = {dz} m)")
+    if boom_away:
+        return results[0]
+    return min(results, key=lambda r: float(np.linalg.norm(r[0] - seed)))
+
+
+def link_points(robot: RobotModel, q: np.ndarray) -> dict[str, np.ndarray]:
+    """World points (k, 3) on the arm at ``q`` (m), for clearance checks: joint origins,
+    points along each link, the gripper base corners and the fingertips."""
+    origins = robot.joint_origins(q)
+    pts = [origins]
+    for a, b in zip(origins[:-1], origins[1:], strict=True):
+        pts.append(a + np.linspace(0.25, 0.75, 3)[:, None] * (b - a))
+    T_tool = robot.frame_pose(q, "tool0")
+    corners = np.array(
+        [[sx * 0.03, sy * 0.07, z] for sx in (-1, 1) for sy in (-1, 1) for z in (0.0, 0.05)]
+    )
+    gripper = corners @ T_tool[:3, :3].T + T_tool[:3, 3]
+    T_ee = robot.ee_pose(q)
+    tips_local = np.array(
+        [[sx * 0.012, sy * 0.05, FINGERTIP_BELOW_EE] for sx in (-1, 1) for sy in (-1, 1)]
+    )
+    tips = tips_local @ T_ee[:3, :3].T + T_ee[:3, 3]
+    return {"arm": np.vstack(pts), "gripper": gripper, "fingertips": tips}
