@@ -47,3 +47,28 @@ def test_payload_torque_difference_is_analytic(ur5):
     expected = -np.einsum("ij,ij->i", a, np.cross(c - p, mass * G))
     np.testing.assert_allclose(readings[1] - readings[0], expected, atol=1e-3)
     assert np.abs(expected).max() > 1.0  # the check is not vacuous
+
+
+def test_sensor_noise_bias_and_drift_statistics():
+    from comgrasp_pin.simulation.torque_sensor import JointTorqueSensor, TorqueSensorConfig
+
+    tau = np.array([1.0, -2.0, 3.0, 0.0, 0.5, -0.1])
+    white = JointTorqueSensor(6, TorqueSensorConfig(noise_std=0.05, bias=0.2), seed=5)
+    samples = np.array([white.read(tau, 1e-3) for _ in range(20000)])
+    np.testing.assert_allclose(samples.mean(0), tau + 0.2, atol=4 * 0.05 / np.sqrt(20000))
+    np.testing.assert_allclose(samples.std(0), 0.05, rtol=0.03)
+    # A random walk of 0.01 N m / sqrt(s): after 4 s its spread over many sensors is 0.02 N m.
+    drifting = JointTorqueSensor(2000, TorqueSensorConfig(noise_std=0.0, drift_std=0.01), seed=6)
+    for _ in range(4000):
+        last = drifting.read(np.zeros(2000), 1e-3)
+    assert abs(last.std() - 0.02) < 0.02 * 0.1
+
+
+def test_measured_average_is_unbiased_with_honest_error_bar(ur5):
+    sim = Simulation(seed=7)
+    sim.reset_arm(Q_HOLD)
+    measurement = sim.measure_torques(settle=0.3, window=0.5)
+    assert measurement.n_samples == 500
+    np.testing.assert_allclose(measurement.std_error, 0.05 / np.sqrt(500), rtol=0.2)
+    error = measurement.tau - ur5.gravity_torques(measurement.q)
+    assert np.all(np.abs(error) < 5 * measurement.std_error), error / measurement.std_error

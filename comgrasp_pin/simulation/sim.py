@@ -6,6 +6,11 @@ import mujoco
 import numpy as np
 
 from comgrasp_pin.simulation.controller import ArmServo
+from comgrasp_pin.simulation.torque_sensor import (
+    JointTorqueSensor,
+    TorqueMeasurement,
+    TorqueSensorConfig,
+)
 from comgrasp_pin.simulation.world import (
     ARM_JOINTS,
     EE_SITE,
@@ -19,15 +24,22 @@ class Simulation:
     """Steps the physics with the arm servo in the loop.
 
     Every ``step`` runs the servo once and ``mj_step`` once (``config.sim_dt``), so the
-    controller and the torque readings are at 1/sim_dt (1 kHz by default).
+    controller and the torque sensor run at 1/sim_dt (1 kHz by default).
 
     Attributes:
         model, data: the MuJoCo model and data.
         q_des: (6,) commanded arm configuration (rad).
         grip_force: commanded force of each finger (N); positive closes, negative opens.
+        tau_measured: (6,) the torque sensor's latest sample (N m), noisy.
     """
 
-    def __init__(self, model: mujoco.MjModel | None = None, config: WorldConfig | None = None):
+    def __init__(
+        self,
+        model: mujoco.MjModel | None = None,
+        config: WorldConfig | None = None,
+        sensor: TorqueSensorConfig | None = None,
+        seed: int | None = None,
+    ):
         self.config = config or WorldConfig()
         self.model = build_model(config) if model is None else model
         self.data = mujoco.MjData(self.model)
@@ -43,7 +55,9 @@ class Simulation:
         self.servo = ArmServo(len(ARM_JOINTS), kp)
         self.q_des = np.zeros(len(ARM_JOINTS))
         self.grip_force = 0.0
+        self.sensor = JointTorqueSensor(len(ARM_JOINTS), sensor or TorqueSensorConfig(), seed)
         mujoco.mj_forward(m, self.data)
+        self.tau_measured = self.joint_torques()
 
     @property
     def time(self) -> float:
@@ -65,7 +79,7 @@ class Simulation:
         return self.data.qpos[self._finger_qadr].copy()
 
     def joint_torques(self) -> np.ndarray:
-        """(6,) torque each arm drive exerts now (N m): the noise-free sensor reading."""
+        """(6,) torque each arm drive exerts now (N m): the truth behind the sensor."""
         return self.data.sensordata[self._tau_adr].copy()
 
     def ee_pose(self) -> np.ndarray:
@@ -95,7 +109,23 @@ class Simulation:
             q = d.qpos[self._arm_qadr]
             d.ctrl[self._arm_act] = self.servo.ctrl(q, self.q_des, tau_ff, dt)
             mujoco.mj_step(m, d)
+            self.tau_measured = self.sensor.read(d.sensordata[self._tau_adr], dt)
 
     def hold(self, duration: float) -> None:
         """Keep the commanded configuration for ``duration`` seconds."""
         self.step(int(round(duration / self.model.opt.timestep)))
+
+    def measure_torques(self, settle: float = 0.3, window: float = 0.5) -> TorqueMeasurement:
+        """Hold still for ``settle`` s, then average the sensor over ``window`` s."""
+        self.hold(settle)
+        n = max(1, int(round(window / self.model.opt.timestep)))
+        taus = np.empty((n, len(ARM_JOINTS)))
+        qs = np.empty((n, len(ARM_JOINTS)))
+        for k in range(n):
+            self.step()
+            taus[k] = self.tau_measured
+            qs[k] = self.data.qpos[self._arm_qadr]
+        std_error = taus.std(axis=0, ddof=1) / np.sqrt(n) if n > 1 else np.full(6, np.inf)
+        return TorqueMeasurement(
+            taus.mean(axis=0), std_error, qs.mean(axis=0), n, n * self.model.opt.timestep
+        )

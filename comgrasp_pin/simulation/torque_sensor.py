@@ -1,0 +1,67 @@
+"""A joint-torque sensor as a real one behaves: white noise, a constant bias and slow drift.
+
+Sampled at every control step. The default noise (0.05 N m per sample) is that of a
+joint-torque-sensor class arm; the experiments never use a noise-free sensor.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class TorqueSensorConfig:
+    """Error model of each joint's torque reading (N m).
+
+    Attributes:
+        noise_std: standard deviation of the white noise on every sample (N m).
+        bias: constant offset added to every sample (N m), the same for all joints.
+        drift_std: random-walk drift, standard deviation after one second (N m / sqrt(s)).
+    """
+
+    noise_std: float = 0.05
+    bias: float = 0.0
+    drift_std: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.noise_std < 0 or self.drift_std < 0:
+            raise ValueError("noise_std and drift_std must be >= 0")
+
+
+class JointTorqueSensor:
+    """Turns the drives' true torques into readings; one instance per simulated arm."""
+
+    def __init__(self, n: int, config: TorqueSensorConfig, seed: int | None = None):
+        self.config = config
+        self._rng = np.random.default_rng(seed)
+        self._drift = np.zeros(n)
+        self._n = n
+
+    def read(self, tau_true: np.ndarray, dt: float) -> np.ndarray:
+        """One sample (N m) of the (n,) true torques, ``dt`` seconds after the last one."""
+        c = self.config
+        if c.drift_std > 0:
+            self._drift += c.drift_std * np.sqrt(dt) * self._rng.standard_normal(self._n)
+        noise = c.noise_std * self._rng.standard_normal(self._n) if c.noise_std > 0 else 0.0
+        return tau_true + c.bias + self._drift + noise
+
+
+@dataclass(frozen=True)
+class TorqueMeasurement:
+    """Averaged readings over a settling window at one arm configuration.
+
+    Attributes:
+        tau: (n,) mean reading (N m).
+        std_error: (n,) standard error of the mean, from the samples' spread (N m).
+        q: (n,) arm configuration during the window (rad), its mean.
+        n_samples: number of samples averaged.
+        duration: length of the window (s).
+    """
+
+    tau: np.ndarray
+    std_error: np.ndarray
+    q: np.ndarray
+    n_samples: int
+    duration: float
