@@ -1,0 +1,30 @@
+"""The package's errors: one base class, a ``ValueError``, so callers may catch either."""
+
+from __future__ import annotations
+
+
+class ComGraspError(ValueError):
+    """Base class of every error raised by comgrasp_pin for bad input or a failed estimate."""
+
+
+class InvalidInputError(ComGraspError):
+    """An argument has the wrong shape, type or value (NaN, inf, unknown option)."""
+
+
+class UnobservableError(ComGraspError):
+    """The data cannot determine the requested quantity (e.g. the mass, or x_CoM^O for a rod
+    axis parallel to gravity)."""
+
+
+class EmptyGripperError(ComGraspError):
+    """The estimated payload mass is not measurably above zero: nothing is held."""
+
+
+class SolverError(ComGraspError):
+    """A numerical solver failed. ``return_status`` is the solver's own status string
+    (IPOPT's ``return_status``), ``iterations`` its iteration count."""
+
+    def __init__(self, message: str, return_status: str, iterations: int | None = None):
+        super().__init__(f"{message} (solver status: {return_status})")
+        self.return_status = return_status
+        self.iterations = iterations

@@ -1,0 +1,379 @@
+"""Payload mass and CoM from joint torques before/after grasping, at one or several poses.
+
+The model (see ``regressor``) is linear in theta = (m, m*c_ee): dtau = Y(q) theta. Writing
+the unknowns in the ee frame lets k static poses stack into one (k*n, 4) problem.
+
+Observability (threshold ``rcond``, relative to the largest singular value of Y):
+- one pose: the CoM component along gravity never changes the torques; the estimate is the
+  solution whose CoM has no component along gravity (in the ee frame), and
+  ``unobservable_ee`` is the gravity direction in the ee frame;
+- several poses: if the smallest singular value of Y exceeds ``rcond`` times the largest,
+  the full 3-D CoM is estimated (``unobservable_ee`` None); if exactly one direction is
+  lost and it is a pure CoM direction (the wrist orientation never changed relative to
+  gravity), it is treated as for one pose; anything else leaves the mass unobservable and
+  raises ``UnobservableError``.
+
+Uncertainty: with iid Gaussian noise of std sigma on each torque reading, each difference
+has variance 2 sigma^2, the least-squares theta is unbiased with covariance
+2 sigma^2 (Y^T Y)^-1, which is the inverse Fisher information: for a linear-Gaussian model
+least squares is the ML estimator, the BLUE, and attains the Cramer-Rao bound. (m, c_ee) is
+a smooth function of theta (c = (m c)/m): its covariance ``cov`` is propagated by the delta
+method, G cov_theta G^T with G = d(m, c)/d(theta); this equals the CRB of (m, c_ee) (ML is
+invariant under reparametrisation) and is exact to first order in the noise.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from comgrasp_pin._lsq_ipopt import solve_lsq
+from comgrasp_pin.errors import EmptyGripperError, InvalidInputError, UnobservableError
+from comgrasp_pin.regressor import G0, gravity_in_ee, perpendicular_basis, stacked_regressor
+from comgrasp_pin.robot import RobotModel
+
+METHODS = ("lstsq", "ipopt")
+RCOND = 1e-6
+"""Singular values of Y below RCOND * (largest) count as unobservable directions."""
+MASS_NULL_TOL = 1e-3
+"""A lost direction whose mass component exceeds this (unit null vector) makes m unobservable."""
+MIN_MASS_KG = 1e-3
+"""Without torque_std, a payload below this mass (kg) is taken as an empty gripper."""
+MASS_SIGMAS = 3.0
+"""With torque_std, a payload below MASS_SIGMAS standard deviations is an empty gripper."""
+
+_WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+
+def _readonly(a: np.ndarray | None) -> np.ndarray | None:
+    if a is not None:
+        a.flags.writeable = False
+    return a
+
+
+@dataclass(frozen=True)
+class ComEstimate:
+    """A payload estimate. Frames: ``ee`` (the eelink) and ``world``; SI units.
+
+    Attributes:
+        com_ee: (3,) CoM in the ee frame (m); its component along ``unobservable_ee`` is 0.
+        mass: payload mass (kg).
+        weight: payload weight m * G0 (N).
+        unobservable_ee: (3,) unit gravity direction in the ee frame along which the CoM is
+            not observed (one pose), or None when the full 3-D CoM is estimated.
+        cov: (4, 4) covariance of (mass, com_ee) (kg, m) when torque_std was given, else
+            None; zero variance along ``unobservable_ee`` (that component is fixed at 0).
+        residual_rms: RMS of the torque residuals (N m).
+        residuals: (k, n) residuals dtau - Y theta per pose and joint (N m).
+        condition_number: largest / smallest singular value over the estimated directions.
+        singular_values: (4,) singular values of the stacked Y for theta = (m, m c_ee) in SI
+            units, descending; for one pose the last is 0 (the direction along gravity).
+        method: "lstsq" or "ipopt".
+        solver_status: IPOPT's return_status, or "closed_form" for lstsq.
+        iterations: IPOPT iterations (0 for lstsq).
+        n_poses: number of static poses k.
+        T_world_ee: (k, 4, 4) ee poses at the measurement configurations.
+    """
+
+    com_ee: np.ndarray
+    mass: float
+    weight: float
+    unobservable_ee: np.ndarray | None
+    cov: np.ndarray | None
+    residual_rms: float
+    residuals: np.ndarray
+    condition_number: float
+    singular_values: np.ndarray
+    method: str
+    solver_status: str
+    iterations: int
+    n_poses: int
+    T_world_ee: np.ndarray
+
+    @property
+    def std(self) -> np.ndarray | None:
+        """(4,) standard deviations of (mass, com_ee) (kg, m), or None without cov."""
+        return None if self.cov is None else np.sqrt(np.clip(np.diag(self.cov), 0.0, None))
+
+    def com_world(self, pose: int = 0) -> np.ndarray:
+        """(3,) CoM in the world frame (m) at measurement pose ``pose``."""
+        T = self.T_world_ee[pose]
+        return T[:3, :3] @ self.com_ee + T[:3, 3]
+
+    def com_line_ee(self) -> tuple[np.ndarray, np.ndarray | None]:
+        """The CoM locus in the ee frame: (point (3,), direction (3,)) of the vertical line
+        through the CoM for one pose, or (com_ee, None) when fully observed."""
+        return self.com_ee, self.unobservable_ee
+
+
+def estimate_com(
+    robot: RobotModel,
+    q: np.ndarray,
+    tau_before: np.ndarray,
+    tau_after: np.ndarray,
+    method: str = "lstsq",
+    torque_std: float | np.ndarray | None = None,
+    rcond: float = RCOND,
+) -> ComEstimate:
+    """Estimate the held payload's mass and CoM (ee frame) from static joint torques.
+
+    Args:
+        robot: the arm.
+        q: (n,) one static configuration (rad / m) or (k, n) for k poses.
+        tau_before: same shape as q, joint torques without the object (N m).
+        tau_after: same shape as q, joint torques holding the object (N m).
+        method: "lstsq" (closed form) or "ipopt" (CasADi + IPOPT, solver built once).
+        torque_std: std of each torque reading (N m), scalar or (n,) per joint; enables
+            ``cov`` and (per-joint) weighted least squares.
+        rcond: relative singular-value threshold deciding observability.
+    Raises:
+        InvalidInputError, UnobservableError, EmptyGripperError, SolverError (all ValueError).
+    """
+    if method not in METHODS:
+        raise InvalidInputError(f"unknown method {method!r}; valid methods are {METHODS}")
+    if not 0.0 < rcond < 1.0:
+        raise InvalidInputError(f"rcond must be in (0, 1), got {rcond}")
+    if method == "lstsq" and (torque_std is None or isinstance(torque_std, (int, float))):
+        fast = _single_pose_lstsq(robot, q, tau_before, tau_after, torque_std, rcond)
+        if fast is not None:
+            return fast
+    Q, dtau, sigma = _validate(robot, q, tau_before, tau_after, torque_std)
+    return _general(robot, Q, dtau, sigma, method, rcond)
+
+
+def _single_pose_lstsq(robot, q, tau_before, tau_after, torque_std, rcond):
+    """Fast path: one pose, lstsq, scalar or no sigma; about 10 us. Returns None when anything
+    needs the careful path (which then raises the right error).
+
+    Unknowns w = (m, m c_wy, -m c_wx), c_w the horizontal CoM offset in the world, with
+    Y_r = G0 (J_lin_z, J_ang_x, J_ang_y)^T; the 3x3 normal equations are solved in plain
+    Python (adjugate inverse, eigenvalues by the trigonometric formula), since NumPy's
+    LAPACK wrappers cost several microseconds each. Non-finite input shows as a non-finite
+    result and is re-checked by the careful path.
+    """
+    q = np.asarray(q, dtype=float)
+    tb = np.asarray(tau_before, dtype=float)
+    ta = np.asarray(tau_after, dtype=float)
+    n = robot.model.nq
+    if q.shape != (n,) or tb.shape != (n,) or ta.shape != (n,):
+        return None
+    if torque_std is not None and not (math.isfinite(torque_std) and torque_std > 0):
+        return None
+    J = pin.computeFrameJacobian(robot.model, robot.data, q, robot.ee_frame_id, _WORLD_ALIGNED)
+    T = robot.data.oMf[robot.ee_frame_id].homogeneous
+    A = J[2:5]
+    dtau = ta - tb
+    (a, b, c), (_, d, e), (_, _, f) = (A @ A.T).tolist()
+    r0, r1, r2 = (A @ dtau).tolist()
+    # adjugate of the symmetric N = [[a, b, c], [b, d, e], [c, e, f]]
+    i00, i01, i02 = d * f - e * e, c * e - b * f, b * e - c * d
+    i11, i12, i22 = a * f - c * c, b * c - a * e, a * d - b * b
+    det = a * i00 + b * i01 + c * i02
+    lam_max, lam_min = _sym3_extreme_eigenvalues(a, b, c, d, e, f)
+    if not (det > 0.0 and lam_min > rcond * rcond * lam_max):
+        return None
+    s = 1.0 / (det * G0)
+    w0 = (i00 * r0 + i01 * r1 + i02 * r2) * s
+    w1 = (i01 * r0 + i11 * r1 + i12 * r2) * s
+    w2 = (i02 * r0 + i12 * r1 + i22 * r2) * s
+    if not (math.isfinite(w0 + w1 + w2) and w0 > MIN_MASS_KG):
+        return None  # non-finite input or (maybe) empty gripper: the careful path decides
+    residuals = dtau - (G0 * w0) * A[0] - (G0 * w1) * A[1] - (G0 * w2) * A[2]
+    (R0, R1, R2, _) = T.tolist()
+    inv_m = 1.0 / w0
+    com_ee = np.array(
+        [(R1[0] * w1 - R0[0] * w2) * inv_m, (R1[1] * w1 - R0[1] * w2) * inv_m,
+         (R1[2] * w1 - R0[2] * w2) * inv_m]
+    )  # fmt: skip
+    rms = math.sqrt(float(residuals @ residuals) / n)
+    if not math.isfinite(rms):
+        return None
+    lam_mid = a + d + f - lam_max - lam_min
+    sv = np.array([lam_max, max(lam_mid, 0.0), lam_min, 0.0])
+    np.sqrt(sv, out=sv)
+    sv *= G0
+    cond = math.sqrt(lam_max / lam_min)
+    if torque_std is not None:
+        N_inv = np.array([[i00, i01, i02], [i01, i11, i12], [i02, i12, i22]]) / det
+        R = T[:3, :3]
+        B = np.zeros((4, 3))
+        B[0, 0] = 1.0
+        B[1:, 1] = R[1]
+        B[1:, 2] = -R[0]
+        cov_w = (2.0 * torque_std * torque_std / (G0 * G0)) * N_inv
+        theta = B @ np.array([w0, w1, w2])
+        return _result(theta, B, cov_w, -R[2], residuals[None], sv, cond, "lstsq",
+                       "closed_form", 0, T[None])  # fmt: skip
+    residuals.shape = (1, n)
+    return ComEstimate(
+        com_ee=_readonly(com_ee),
+        mass=w0,
+        weight=w0 * G0,
+        unobservable_ee=_readonly(np.array([-R2[0], -R2[1], -R2[2]])),
+        cov=None,
+        residual_rms=rms,
+        residuals=_readonly(residuals),
+        condition_number=cond,
+        singular_values=_readonly(sv),
+        method="lstsq",
+        solver_status="closed_form",
+        iterations=0,
+        n_poses=1,
+        T_world_ee=_readonly(T.reshape(1, 4, 4)),
+    )
+
+
+def _sym3_extreme_eigenvalues(a, b, c, d, e, f) -> tuple[float, float]:
+    """Largest and smallest eigenvalue of the symmetric [[a, b, c], [b, d, e], [c, e, f]]
+    (trigonometric formula; absolute accuracy ~ 1e-15 * largest)."""
+    p1 = b * b + c * c + e * e
+    q3 = (a + d + f) / 3.0
+    p2 = (a - q3) * (a - q3) + (d - q3) * (d - q3) + (f - q3) * (f - q3) + 2.0 * p1
+    if p2 <= 0.0:
+        return q3, q3
+    p = math.sqrt(p2 / 6.0)
+    x, y, z = (a - q3) / p, (d - q3) / p, (f - q3) / p
+    bb, cc, ee = b / p, c / p, e / p
+    half_det = 0.5 * (x * (y * z - ee * ee) - bb * (bb * z - ee * cc) + cc * (bb * ee - y * cc))
+    phi = math.acos(min(1.0, max(-1.0, half_det))) / 3.0
+    return q3 + 2.0 * p * math.cos(phi), q3 + 2.0 * p * math.cos(phi + 2.0 * math.pi / 3.0)
+
+
+def _general(robot, Q, dtau, sigma, method, rcond) -> ComEstimate:
+    k, n = Q.shape
+    Y, T = stacked_regressor(robot, Q)
+    if k == 1:
+        R = T[0, :3, :3]
+        u = gravity_in_ee(R)
+        B = np.zeros((4, 3))
+        B[0, 0] = 1.0
+        B[1:, 1:] = np.stack([R[1], -R[0]], axis=1)
+    else:
+        s_full, Vt = np.linalg.svd(Y, full_matrices=False)[1:]
+        rank = int(np.sum(s_full > rcond * s_full[0])) if s_full[0] > 0 else 0
+        if rank == 4:
+            u, B = None, np.eye(4)
+        elif rank == 3 and abs(Vt[3, 0]) <= MASS_NULL_TOL:
+            u = Vt[3, 1:] / np.linalg.norm(Vt[3, 1:])
+            u = u if u @ gravity_in_ee(T[0, :3, :3]) >= 0 else -u
+            B = np.zeros((4, 3))
+            B[0, 0] = 1.0
+            B[1:, 1:] = perpendicular_basis(u)
+        else:
+            raise UnobservableError(
+                f"the {k} poses leave the mass unobservable: singular values of the "
+                f"regression {np.array2string(s_full, precision=3)} (rank {rank} of 4 at "
+                f"rcond={rcond}); use poses where the joints bear the payload's weight"
+            )
+    Yr = Y @ B
+    U, S, Vt_r = np.linalg.svd(Yr, full_matrices=False)
+    if not S[-1] > rcond * S[0]:
+        raise UnobservableError(
+            "the pose set leaves the mass unobservable: singular values of the regression "
+            f"for (mass, CoM across gravity) are {np.array2string(S, precision=3)}, below "
+            f"rcond={rcond}; no joint torque separates mass from CoM offset at this q"
+        )
+    sv = np.append(S, 0.0) if k == 1 else s_full
+    b = dtau.ravel()
+    rows_w = None if sigma is None else np.tile(1.0 / (math.sqrt(2.0) * sigma), k)
+    if rows_w is not None and np.ptp(rows_w) > 0:  # per-joint sigma: weighted least squares
+        U, S_w, Vt_r = np.linalg.svd(Yr * rows_w[:, None], full_matrices=False)
+        Ysolve, bsolve = Yr * rows_w[:, None], b * rows_w
+        cov_w = (Vt_r.T / S_w**2) @ Vt_r
+    else:
+        S_w = S
+        Ysolve, bsolve = Yr, b
+        cov_w = None if rows_w is None else (Vt_r.T / (S * rows_w[0]) ** 2) @ Vt_r
+    if method == "ipopt":
+        res = solve_lsq(Ysolve, bsolve)
+        w, status, iters = res.w, res.return_status, res.iterations
+    else:
+        w = Vt_r.T @ ((U.T @ bsolve) / S_w)
+        status, iters = "closed_form", 0
+    theta = B @ w
+    residuals = (b - Y @ theta).reshape(k, n)
+    return _result(theta, B, cov_w, u, residuals, sv, S[0] / S[-1], method, status, iters, T)
+
+
+def _result(theta, B, cov_w, u, residuals, sv, cond, method, status, iters, T) -> ComEstimate:
+    """Assemble the estimate; EmptyGripperError if the mass is not measurably positive."""
+    m = float(theta[0])
+    cov = None
+    if cov_w is not None:
+        cov_theta = B @ cov_w @ B.T
+        threshold = MASS_SIGMAS * math.sqrt(max(cov_theta[0, 0], 0.0))
+    else:
+        threshold = MIN_MASS_KG
+    if not m > threshold:
+        what = f"{MASS_SIGMAS:g} standard deviations" if cov_w is not None else "MIN_MASS_KG"
+        raise EmptyGripperError(
+            f"estimated payload mass {m:.3g} kg is not measurably above zero (threshold "
+            f"{threshold:.3g} kg = {what}): is the gripper empty, or are tau_before and "
+            "tau_after swapped?"
+        )
+    com_ee = theta[1:] / m
+    if cov_w is not None:
+        G = np.zeros((4, 4))
+        G[0, 0] = 1.0
+        G[1:, 0] = -com_ee / m
+        G[1:, 1:] = np.eye(3) / m
+        cov = G @ cov_theta @ G.T
+    rms = math.sqrt(float(residuals.ravel() @ residuals.ravel()) / residuals.size)
+    return ComEstimate(
+        com_ee=_readonly(com_ee),
+        mass=m,
+        weight=m * G0,
+        unobservable_ee=_readonly(None if u is None else np.array(u, dtype=float)),
+        cov=_readonly(cov),
+        residual_rms=rms,
+        residuals=_readonly(residuals),
+        condition_number=float(cond),
+        singular_values=_readonly(sv),
+        method=method,
+        solver_status=status,
+        iterations=iters,
+        n_poses=residuals.shape[0],
+        T_world_ee=_readonly(np.array(T, dtype=float)),
+    )
+
+
+def _validate(robot, q, tau_before, tau_after, torque_std):
+    """(Q (k, n), dtau (k, n), sigma (n,) or None) from the raw inputs, or a clear error."""
+    n = robot.nq
+    arrays = {}
+    for name, value in (("q", q), ("tau_before", tau_before), ("tau_after", tau_after)):
+        try:
+            arrays[name] = np.asarray(value, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise InvalidInputError(f"{name} is not a numeric array: {exc}") from None
+    shape = arrays["q"].shape
+    if arrays["q"].ndim not in (1, 2) or shape[-1] != n or (len(shape) == 2 and shape[0] < 1):
+        raise InvalidInputError(
+            f"q must have shape ({n},) for one pose or (k, {n}) for k >= 1 poses (the robot "
+            f"has {n} joints), got {shape}"
+        )
+    for name, a in arrays.items():
+        if a.shape != shape:
+            raise InvalidInputError(f"{name} has shape {a.shape} but q has shape {shape}")
+        bad = ~np.isfinite(a)
+        if bad.any():
+            where = np.argwhere(bad.reshape(-1, n)).tolist()
+            raise InvalidInputError(f"{name} contains NaN or inf at (pose, joint) {where}")
+    sigma = None
+    if torque_std is not None:
+        try:
+            sigma = np.broadcast_to(np.asarray(torque_std, dtype=float), (n,)).copy()
+        except (TypeError, ValueError):
+            raise InvalidInputError(
+                f"torque_std must be a scalar or shape ({n},), got {np.shape(torque_std)}"
+            ) from None
+        if not np.all(np.isfinite(sigma) & (sigma > 0)):
+            raise InvalidInputError(f"torque_std must be finite and > 0, got {torque_std}")
+    Q = arrays["q"].reshape(-1, n)
+    dtau = (arrays["tau_after"] - arrays["tau_before"]).reshape(-1, n)
+    if not np.all(np.isfinite(dtau)):
+        raise InvalidInputError("tau_after - tau_before overflows (values too large)")
+    return Q, dtau, sigma
