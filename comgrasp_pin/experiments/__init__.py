@@ -1,0 +1,1 @@
+"""The paper's experiments, run at scale: trials, results files, figures and reports."""
