@@ -164,10 +164,11 @@ def _single_pose_lstsq(robot, q, tau_before, tau_after, torque_std, rcond):
         return None
     J = pin.computeFrameJacobian(robot.model, robot.data, q, robot.ee_frame_id, _WORLD_ALIGNED)
     T = robot.data.oMf[robot.ee_frame_id].homogeneous
-    A = J[2:5]
-    dtau = ta - tb
-    (a, b, c), (_, d, e), (_, _, f) = (A @ A.T).tolist()
-    r0, r1, r2 = (A @ dtau).tolist()
+    # J is a fresh array and its last row (J_ang_z) is not needed: put dtau there, so that one
+    # product gives N = A A^T and A dtau.
+    np.subtract(ta, tb, out=J[5])
+    Z = J[2:6]
+    (a, b, c, r0), (_, d, e, r1), (_, _, f, r2), _ = (Z @ Z.T).tolist()
     # adjugate of the symmetric N = [[a, b, c], [b, d, e], [c, e, f]]
     i00, i01, i02 = d * f - e * e, c * e - b * f, b * e - c * d
     i11, i12, i22 = a * f - c * c, b * c - a * e, a * d - b * b
@@ -181,49 +182,54 @@ def _single_pose_lstsq(robot, q, tau_before, tau_after, torque_std, rcond):
     w2 = (i02 * r0 + i12 * r1 + i22 * r2) * s
     if not (math.isfinite(w0 + w1 + w2) and w0 > MIN_MASS_KG):
         return None  # non-finite input or (maybe) empty gripper: the careful path decides
-    residuals = dtau - (G0 * w0) * A[0] - (G0 * w1) * A[1] - (G0 * w2) * A[2]
+    residuals = np.array([-G0 * w0, -G0 * w1, -G0 * w2, 1.0]) @ Z  # dtau - Y_r w
+    rms = math.hypot(*residuals.tolist()) / math.sqrt(n)
+    if not math.isfinite(rms):
+        return None
     (R0, R1, R2, _) = T.tolist()
     inv_m = 1.0 / w0
     com_ee = np.array(
         [(R1[0] * w1 - R0[0] * w2) * inv_m, (R1[1] * w1 - R0[1] * w2) * inv_m,
          (R1[2] * w1 - R0[2] * w2) * inv_m]
     )  # fmt: skip
-    rms = math.sqrt(float(residuals @ residuals) / n)
-    if not math.isfinite(rms):
-        return None
-    lam_mid = a + d + f - lam_max - lam_min
-    sv = np.array([lam_max, max(lam_mid, 0.0), lam_min, 0.0])
-    np.sqrt(sv, out=sv)
-    sv *= G0
+    lam_mid = max(a + d + f - lam_max - lam_min, 0.0)
+    sv = np.array([G0 * math.sqrt(lam_max), G0 * math.sqrt(lam_mid), G0 * math.sqrt(lam_min), 0.0])
     cond = math.sqrt(lam_max / lam_min)
+    residuals.shape = (1, n)
+    T.shape = (1, 4, 4)
     if torque_std is not None:
         N_inv = np.array([[i00, i01, i02], [i01, i11, i12], [i02, i12, i22]]) / det
-        R = T[:3, :3]
         B = np.zeros((4, 3))
         B[0, 0] = 1.0
-        B[1:, 1] = R[1]
-        B[1:, 2] = -R[0]
+        B[1:, 1] = R1[:3]
+        B[1:, 2] = R0[:3]
+        B[1:, 2] *= -1.0
         cov_w = (2.0 * torque_std * torque_std / (G0 * G0)) * N_inv
         theta = B @ np.array([w0, w1, w2])
-        return _result(theta, B, cov_w, -R[2], residuals[None], sv, cond, "lstsq",
-                       "closed_form", 0, T[None])  # fmt: skip
-    residuals.shape = (1, n)
-    return ComEstimate(
-        com_ee=_readonly(com_ee),
+        return _result(theta, B, cov_w, -np.array(R2[:3]), residuals, sv, cond, "lstsq",
+                       "closed_form", 0, T)  # fmt: skip
+    for arr in (com_ee, residuals, sv, T):
+        arr.flags.writeable = False
+    unobservable_ee = np.array([-R2[0], -R2[1], -R2[2]])
+    unobservable_ee.flags.writeable = False
+    est = object.__new__(ComEstimate)  # the frozen dataclass, without its slow __init__
+    est.__dict__.update(
+        com_ee=com_ee,
         mass=w0,
         weight=w0 * G0,
-        unobservable_ee=_readonly(np.array([-R2[0], -R2[1], -R2[2]])),
+        unobservable_ee=unobservable_ee,
         cov=None,
         residual_rms=rms,
-        residuals=_readonly(residuals),
+        residuals=residuals,
         condition_number=cond,
-        singular_values=_readonly(sv),
+        singular_values=sv,
         method="lstsq",
         solver_status="closed_form",
         iterations=0,
         n_poses=1,
-        T_world_ee=_readonly(T.reshape(1, 4, 4)),
+        T_world_ee=T,
     )
+    return est
 
 
 def _sym3_extreme_eigenvalues(a, b, c, d, e, f) -> tuple[float, float]:
