@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import mujoco
 import numpy as np
 
@@ -31,6 +33,8 @@ class Simulation:
         q_des: (6,) commanded arm configuration (rad).
         grip_force: commanded force of each finger (N); positive closes, negative opens.
         tau_measured: (6,) the torque sensor's latest sample (N m), noisy.
+        observers: callables ``f(sim)`` run after every physics step (video recording, slip
+            monitoring); each should return at once unless it is its time to act.
     """
 
     def __init__(
@@ -58,6 +62,7 @@ class Simulation:
         self.sensor = JointTorqueSensor(len(ARM_JOINTS), sensor or TorqueSensorConfig(), seed)
         mujoco.mj_forward(m, self.data)
         self.tau_measured = self.joint_torques()
+        self.observers: list[Callable[[Simulation], None]] = []
 
     @property
     def time(self) -> float:
@@ -110,6 +115,8 @@ class Simulation:
             d.ctrl[self._arm_act] = self.servo.ctrl(q, self.q_des, tau_ff, dt)
             mujoco.mj_step(m, d)
             self.tau_measured = self.sensor.read(d.sensordata[self._tau_adr], dt)
+            for observer in self.observers:
+                observer(self)
 
     def hold(self, duration: float) -> None:
         """Keep the commanded configuration for ``duration`` seconds."""
