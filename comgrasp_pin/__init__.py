@@ -1,6 +1,30 @@
 """comgrasp_pin: centre-of-mass-based grasp adaptation from joint torques and RGBD cameras."""
 
+from comgrasp_pin.errors import (
+    ComGraspError,
+    EmptyGripperError,
+    InvalidInputError,
+    SolverError,
+    UnobservableError,
+)
+from comgrasp_pin.estimator import ComEstimate, estimate_com
+from comgrasp_pin.estimator_batch import ComEstimateBatch, estimate_com_batch
+from comgrasp_pin.geometry import com_along_axis
+from comgrasp_pin.pose_planning import plan_wrist_poses
 from comgrasp_pin.robot import RobotModel
 
-__all__ = ["RobotModel"]
+__all__ = [
+    "ComEstimate",
+    "ComEstimateBatch",
+    "ComGraspError",
+    "EmptyGripperError",
+    "InvalidInputError",
+    "RobotModel",
+    "SolverError",
+    "UnobservableError",
+    "com_along_axis",
+    "estimate_com",
+    "estimate_com_batch",
+    "plan_wrist_poses",
+]
 __version__ = "0.1.0"

@@ -1,0 +1,97 @@
+"""Extra static poses that make the full 3-D CoM observable: turn only the wrist.
+
+With one pose the CoM along gravity is lost. Further poses that change the wrist's
+orientation relative to gravity (not merely about the vertical) add the missing direction.
+The poses are chosen for D-optimality: maximise log det(Y^T Y) of the stacked regression
+(``regressor``) for theta = (m, m c_ee). The criterion is independent of the payload and of
+the units of theta, and maximising it minimises the volume of the confidence ellipsoid of
+(m, c_ee) as well, since that covariance is G cov_theta G^T with a fixed Jacobian G.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+
+from comgrasp_pin.errors import InvalidInputError
+from comgrasp_pin.regressor import pose_regressor
+from comgrasp_pin.robot import RobotModel
+
+N_WRIST = 3
+"""The wrist joints are the last N_WRIST joints of the arm."""
+
+
+def plan_wrist_poses(
+    robot: RobotModel,
+    q: np.ndarray,
+    k: int,
+    max_offset: float = 0.6,
+    n_grid: int = 5,
+    margin: float = 0.05,
+) -> np.ndarray:
+    """k static configurations for estimation: ``q`` and k - 1 wrist variations of it.
+
+    Greedy D-optimal design over a grid of wrist offsets: each step adds the candidate that
+    most increases log det(sum_i Y_i^T Y_i).
+
+    Args:
+        robot: the arm (n >= 3 joints).
+        q: (n,) measurement configuration (rad / m), returned as row 0.
+        k: number of poses wanted (k >= 1).
+        max_offset: largest change of a wrist joint from q (rad).
+        n_grid: grid points per wrist joint in [-max_offset, max_offset].
+        margin: distance kept from the joint limits (rad).
+    Returns:
+        (k, n) configurations; only the last three joints differ from ``q``.
+    """
+    q = robot.check_q(q)
+    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
+        raise InvalidInputError(f"k must be an integer >= 1, got {k!r}")
+    if robot.nq < N_WRIST:
+        raise InvalidInputError(f"the robot has {robot.nq} joints; a wrist needs {N_WRIST}")
+    if not (max_offset > 0 and np.isfinite(max_offset)) or n_grid < 2:
+        raise InvalidInputError(f"need max_offset > 0 and n_grid >= 2, got {max_offset}, {n_grid}")
+    if k == 1:
+        return q[None].copy()
+    candidates = _wrist_candidates(robot, q, max_offset, n_grid, margin)
+    if len(candidates) < k - 1:
+        raise InvalidInputError(
+            f"only {len(candidates)} distinct wrist poses fit within the joint limits near q; "
+            f"{k - 1} are needed (increase max_offset or n_grid)"
+        )
+    Y0 = pose_regressor(robot, q)[0]
+    info = Y0.T @ Y0
+    infos = np.array([Y.T @ Y for Y in (pose_regressor(robot, c)[0] for c in candidates)])
+    chosen = []
+    available = np.ones(len(candidates), dtype=bool)
+    for _ in range(k - 1):
+        sign, logdet = np.linalg.slogdet(info + infos)
+        score = np.where((sign > 0) & available, logdet, -np.inf)
+        # before full rank every det is 0: fall back to the trace (total information)
+        if not np.isfinite(score).any():
+            score = np.where(available, np.trace(infos, axis1=1, axis2=2), -np.inf)
+        best = int(np.argmax(score))
+        chosen.append(best)
+        available[best] = False
+        info = info + infos[best]
+    return np.vstack([q, candidates[chosen]])
+
+
+def _wrist_candidates(
+    robot: RobotModel, q: np.ndarray, max_offset: float, n_grid: int, margin: float
+) -> np.ndarray:
+    """(C, n) distinct configurations with the wrist offset on a grid, within the limits."""
+    steps = np.linspace(-max_offset, max_offset, n_grid)
+    wrist = slice(robot.nq - N_WRIST, robot.nq)
+    lo = robot.q_lower[wrist] + margin
+    hi = robot.q_upper[wrist] - margin
+    out = []
+    for offset in itertools.product(steps, repeat=N_WRIST):
+        c = q.copy()
+        c[wrist] = np.clip(q[wrist] + np.array(offset), lo, np.maximum(lo, hi))
+        if np.abs(c - q).max() > 1e-9:
+            out.append(c)
+    if not out:
+        return np.empty((0, robot.nq))
+    return np.unique(np.round(np.array(out), 12), axis=0)
