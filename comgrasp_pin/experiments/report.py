@@ -1,0 +1,151 @@
+"""Figures (PNG) and Markdown tables of the two experiments, beside the paper's numbers."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from comgrasp_pin.experiments import paper
+from comgrasp_pin.experiments.stats import THETA_BINS_DEG, binned_mean, wilson_interval
+
+OBJECTS = ("obj1", "obj2", "obj3", "obj4", "obj5", "obj6")
+
+
+def _ok(rows: Sequence[dict]) -> list[dict]:
+    return [r for r in rows if not r.get("error")]
+
+
+def _column(rows: Sequence[dict], name: str) -> np.ndarray:
+    return np.array([float(r[name]) for r in rows])
+
+
+def _objects(rows: Sequence[dict]) -> list[str]:
+    present = {r["object"] for r in rows}
+    return [o for o in OBJECTS if o in present] + sorted(present - set(OBJECTS))
+
+
+def _pyplot():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def accuracy_figure(rows: Sequence[dict], path: Path) -> Path:
+    """Accuracy (%) against tilt θ (deg) per object, with the paper's objects 1 and 6."""
+    plt = _pyplot()
+    rows = _ok(rows)
+    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    colours = plt.get_cmap("viridis")(np.linspace(0, 0.9, len(OBJECTS)))
+    for k, obj in enumerate(_objects(rows)):
+        sel = [r for r in rows if r["object"] == obj]
+        theta, acc = np.abs(_column(sel, "theta_deg")), 100 * _column(sel, "accuracy")
+        colour = colours[k % len(colours)]
+        ax.scatter(theta, acc, s=10, alpha=0.45, color=colour)
+        bins = [(0.5 * (lo + hi), m) for lo, hi, m, n in binned_mean(theta, acc) if n]
+        if bins:
+            ax.plot(*zip(*bins), "-o", ms=3, color=colour, label=f"{obj} (ours)")
+    for obj, style in (("obj1", "k--"), ("obj6", "k:")):
+        ax.plot(
+            paper.ACCURACY_THETA_DEG, paper.ACCURACY_PERCENT[obj], style, label=f"{obj} (paper)"
+        )
+    ax.set_xlabel("tilt in the jaws θ (deg)")
+    ax.set_ylabel("CoM accuracy 1 − 5|Δx|/l (%)")
+    ax.set_ylim(50, 101)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, ncol=2, loc="lower left")
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return path
+
+
+def accuracy_table(rows: Sequence[dict]) -> str:
+    """Markdown: mean accuracy (%) and count per θ bin and object, the paper's beside."""
+    rows = _ok(rows)
+    objects = _objects(rows)
+    head = "| θ bin (deg) | " + " | ".join(objects) + " | paper obj1 | paper obj6 |"
+    lines = [head, "|" + "---|" * (len(objects) + 3)]
+    for lo, hi in zip(THETA_BINS_DEG[:-1], THETA_BINS_DEG[1:]):
+        cells = []
+        for obj in objects:
+            sel = [r for r in rows if r["object"] == obj]
+            theta = np.abs(_column(sel, "theta_deg"))
+            inside = (theta >= lo) & (theta < hi)
+            acc = 100 * _column(sel, "accuracy")[inside]
+            cells.append(f"{acc.mean():.1f} ({inside.sum()})" if inside.any() else "–")
+        ref = [paper.paper_accuracy_at(o, 0.5 * (lo + hi)) for o in ("obj1", "obj6")]
+        ref_cells = [f"{v:.1f}" if v is not None else "–" for v in ref]
+        lines.append(f"| {lo:g}–{hi:g} | " + " | ".join(cells + ref_cells) + " |")
+    return "\n".join(lines)
+
+
+def success_rates(rows: Sequence[dict]) -> dict[tuple[str, str], tuple[int, int]]:
+    """(object, method) -> (successes, trials); failed trials (errors) count as failures."""
+    out: dict[tuple[str, str], tuple[int, int]] = {}
+    for r in rows:
+        key = (r["object"], r["method"])
+        s, n = out.get(key, (0, 0))
+        success = not r.get("error") and int(float(r.get("success") or 0)) == 1
+        out[key] = (s + int(success), n + 1)
+    return out
+
+
+def regrasp_figure(rows: Sequence[dict], path: Path) -> Path:
+    """Success rate (%) per object, baseline vs regrasp, 95 % Wilson intervals, paper's marks."""
+    plt = _pyplot()
+    rates = success_rates(rows)
+    objects = _objects(rows)
+    fig, ax = plt.subplots(figsize=(7.5, 4.2))
+    x = np.arange(len(objects))
+    for offset, method, colour in ((-0.2, "baseline", "#c0504d"), (0.2, "regrasp", "#4f81bd")):
+        rate, err_lo, err_hi = [], [], []
+        for obj in objects:
+            s, n = rates.get((obj, method), (0, 0))
+            lo, hi = wilson_interval(s, n)
+            p = s / n if n else np.nan
+            rate.append(100 * p)
+            err_lo.append(100 * (p - lo))
+            err_hi.append(100 * (hi - p))
+        ax.bar(x + offset, rate, 0.38, color=colour, label=f"{method} (ours)")
+        ax.errorbar(x + offset, rate, yerr=[err_lo, err_hi], fmt="none", ecolor="k", capsize=3)
+        ref = [
+            paper.SUCCESS_PERCENT.get(o, (np.nan, np.nan))[method == "baseline"] for o in objects
+        ]
+        ax.plot(
+            x + offset, ref, "k_", ms=18, mew=2, label=f"{method} (paper)" if offset < 0 else None
+        )
+    ax.set_xticks(x, objects)
+    ax.set_ylabel("pick-and-place success (%)")
+    ax.set_ylim(0, 105)
+    ax.legend(fontsize=8, loc="lower right")
+    ax.grid(axis="y", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return path
+
+
+def regrasp_table(rows: Sequence[dict]) -> str:
+    """Markdown: success rates with 95 % intervals per object and method, the paper's beside."""
+    rates = success_rates(rows)
+    lines = [
+        "| object | baseline (ours) | regrasp (ours) | baseline (paper) | regrasp (paper) |",
+        "|---|---|---|---|---|",
+    ]
+    for obj in _objects(rows):
+        cells = []
+        for method in ("baseline", "regrasp"):
+            s, n = rates.get((obj, method), (0, 0))
+            lo, hi = wilson_interval(s, n)
+            cells.append(
+                f"{100 * s / n:.1f} % ({s}/{n}, {100 * lo:.0f}–{100 * hi:.0f})" if n else "–"
+            )
+        ref = paper.SUCCESS_PERCENT.get(obj)
+        ref_cells = [f"{ref[1]:.1f} %", f"{ref[0]:.1f} %"] if ref else ["–", "–"]
+        lines.append(f"| {obj} | " + " | ".join(cells + ref_cells) + " |")
+    return "\n".join(lines)
