@@ -153,7 +153,7 @@ OBJECTS: dict[str, ObjectSpec] = {
             0.40,
             (
                 _handle("capsule", 0.40, 0.16, 0.005, 0.06, _WOOD),
-                _end(0.16, 0.20, 0.018, 0.018, 0.30, _STEEL),
+                _end(0.16, 0.20, 0.020, 0.020, 0.45, _STEEL),
             ),
         ),
         ObjectSpec(
@@ -171,9 +171,9 @@ OBJECTS: dict[str, ObjectSpec] = {
             "open/ring spanner: flat 3 cm steel bar, heavy ring end",
             0.30,
             (
-                Part("box", -0.12, 0.11, 0.015, 0.005, 0.20, _STEEL),
-                _end(0.11, 0.15, 0.026, 0.005, 0.16, _STEEL),
-                _end(-0.15, -0.12, 0.022, 0.005, 0.06, _STEEL),
+                Part("box", -0.12, 0.11, 0.015, 0.005, 0.25, _STEEL),
+                _end(0.11, 0.15, 0.026, 0.005, 0.25, _STEEL),
+                _end(-0.15, -0.12, 0.022, 0.005, 0.10, _STEEL),
             ),
         ),
         ObjectSpec(
@@ -197,10 +197,10 @@ OBJECTS: dict[str, ObjectSpec] = {
         ),
         ObjectSpec(
             "obj6",
-            "axe: flattened 5.6 cm hickory handle, steel blade head",
+            "axe: 5.6 cm hickory handle, steel blade head across the rod",
             0.45,
             (
-                Part("box", -0.225, 0.16, 0.028, 0.020, 0.45, _WOOD),
+                _handle("capsule", 0.45, 0.16, 0.028, 0.45, _WOOD),
                 _end(0.16, 0.225, 0.070, 0.020, 0.95, _RED),
             ),
         ),

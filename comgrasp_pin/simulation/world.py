@@ -67,8 +67,8 @@ class WorldConfig:
     dampratio: float = 1.0
     armature: tuple[float, ...] = (0.2, 0.2, 0.1, 0.05, 0.05, 0.05)
     finger_armature: float = 0.05
-    pad_friction: tuple[float, float, float] = (0.8, 0.004, 0.0001)
-    pad_condim: int = 6
+    pad_friction: tuple[float, float, float] = (0.8, 0.002, 0.0001)
+    pad_condim: int = 4
     noslip_iterations: int = 50
     impratio: float = 10.0
     side_camera_fovy_deg: float = 75.0
@@ -145,11 +145,18 @@ def _set_contacts(spec: mujoco.MjSpec, config: WorldConfig) -> None:
             if body.name not in GRIPPER_BODIES:
                 geom.contype = geom.conaffinity = 0
     for side in ("left", "right"):
-        pad = spec.body(f"finger_{side}").geoms[0]
-        pad.name = f"pad_{side}"
-        pad.friction = list(config.pad_friction)
-        pad.condim = config.pad_condim
-        pad.priority = 1  # the pads' friction decides in pad-object contacts
+        # The URDF gives each finger a visual pad, a visual finger, a collision pad and a
+        # collision finger, in that order. The visual pad keeps the name ``pad_{side}``
+        # (segmentation); the colliding pad is ``pad_{side}_contact`` and carries the
+        # contact settings. The finger behind it (set back 4 mm) gets them as well.
+        geoms = spec.body(f"finger_{side}").geoms
+        geoms[0].name = f"pad_{side}"
+        colliding = [g for g in geoms if g.contype != 0 or g.conaffinity != 0]
+        colliding[0].name = f"pad_{side}_contact"
+        for geom in colliding:
+            geom.friction = list(config.pad_friction)
+            geom.condim = config.pad_condim
+            geom.priority = 1  # the pads' friction and condim decide in pad-object contacts
 
 
 def _add_drives(spec: mujoco.MjSpec, config: WorldConfig) -> None:
