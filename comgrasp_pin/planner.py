@@ -1,0 +1,99 @@
+"""The regrasp planner: decide from what the trial grasp showed, and where to grasp again.
+
+Pure geometry (no simulator): it works on a real robot's measurements as well.
+
+Decision (documented choice): put the rod down and grasp it again when slip was seen (the
+side camera saw the tilt change, or the rod hangs tilted by more than ``slip_tilt_deg``), or
+when the estimated CoM lies more than ``max_com_offset`` from the jaws along the rod even
+though nothing slipped yet (the transport's accelerations add to the gravity moment, so an
+off-centre grasp that holds at rest may still slip on the way).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from comgrasp_pin.ik import GraspPose
+
+
+@dataclass(frozen=True)
+class PlannerConfig:
+    """Thresholds of the regrasp decision.
+
+    Attributes:
+        slip_tilt_deg: a tilt in the jaws above this (deg) counts as slip seen.
+        max_com_offset: CoM farther than this from the grasp point along the rod (m) is
+            regrasped even without slip.
+    """
+
+    slip_tilt_deg: float = 2.0
+    max_com_offset: float = 0.015
+
+
+@dataclass(frozen=True)
+class RegraspDecision:
+    """What the planner decided.
+
+    Attributes:
+        regrasp: True to put the rod down and grasp it at the CoM.
+        reason: a short human-readable reason.
+        x_com_obj: estimated CoM along the rod from its geometric centre (m).
+        grasp_offset_obj: where the jaws held the rod, along it from its centre (m).
+    """
+
+    regrasp: bool
+    reason: str
+    x_com_obj: float
+    grasp_offset_obj: float
+
+
+def decide(
+    theta: float,
+    slip_seen: bool,
+    x_com_obj: float,
+    grasp_offset_obj: float,
+    config: PlannerConfig | None = None,
+) -> RegraspDecision:
+    """Regrasp decision from the tilt ``theta`` (rad), the slip monitor's verdict, and the
+    estimated CoM and grasp positions along the rod (m)."""
+    config = config or PlannerConfig()
+    values = np.array([theta, x_com_obj, grasp_offset_obj], dtype=float)
+    if not np.all(np.isfinite(values)):
+        raise ValueError(f"non-finite planner input: theta, x_com, grasp_offset = {values}")
+    offset = abs(x_com_obj - grasp_offset_obj)
+    if slip_seen:
+        reason = "slip seen by the side camera"
+    elif abs(np.degrees(theta)) > config.slip_tilt_deg:
+        reason = f"rod hangs tilted by {np.degrees(theta):.1f} deg"
+    elif offset > config.max_com_offset:
+        reason = f"CoM {1e3 * offset:.0f} mm from the jaws"
+    else:
+        return RegraspDecision(False, "grasp holds near the CoM", x_com_obj, grasp_offset_obj)
+    return RegraspDecision(True, reason, x_com_obj, grasp_offset_obj)
+
+
+def rod_axis_world(T_world_ee: np.ndarray, T_ee_obj: np.ndarray) -> np.ndarray:
+    """(3,) unit horizontal direction of the rod's +x axis in the world, from a held rod."""
+    axis = T_world_ee[:3, :3] @ T_ee_obj[:3, 0]
+    horizontal = np.array([axis[0], axis[1], 0.0])
+    norm = np.linalg.norm(horizontal)
+    if norm < 1e-6:
+        raise ValueError("the rod's axis is vertical: its direction on the table is undefined")
+    return horizontal / norm
+
+
+def com_grasp(rod: GraspPose, axis_hint_world: np.ndarray, x_com_obj: float) -> GraspPose:
+    """Top-down grasp at the CoM of a rod lying on the table.
+
+    Args:
+        rod: the rod's centre and yaw as seen from the top camera (yaw defined modulo pi).
+        axis_hint_world: (3,) direction of the rod's +x axis (its orientation is ambiguous
+            in a top view; this resolves it, e.g. ``rod_axis_world`` before putting it down).
+        x_com_obj: CoM along +x from the centre (m).
+    """
+    d = np.array([np.cos(rod.yaw), np.sin(rod.yaw), 0.0])
+    if d @ np.asarray(axis_hint_world, dtype=float) < 0.0:
+        d = -d
+    return GraspPose(rod.x + x_com_obj * d[0], rod.y + x_com_obj * d[1], rod.z, rod.yaw)
