@@ -22,6 +22,13 @@ Q_HOME = np.array([-0.245, -1.6895, 1.6866, -1.5679, -1.5708, -0.245])
 TABLE_Z = 0.0
 FINGERTIP_BELOW_EE = 0.015  # fingertips (pad bottoms) below the eelink along ee-z (m)
 FINGERTIP_CLEARANCE = 0.002  # fingertips kept this far above the table (m)
+# Scene obstacles (world frame, m): table top, drop box (walls 0.06 m high) and pedestal.
+_OBSTACLES = (  # (x_min, x_max, y_min, y_max, top z)
+    (0.30, 0.80, -0.35, 0.35, TABLE_Z),
+    (-0.22, 0.32, 0.43, 0.73, 0.06),
+    (-0.12, 0.12, -0.12, 0.12, 0.0),
+)
+_FLOOR_Z = -0.75
 
 
 class IKError(ValueError):
@@ -179,3 +186,19 @@ def link_points(robot: RobotModel, q: np.ndarray) -> dict[str, np.ndarray]:
     )
     tips = tips_local @ T_ee[:3, :3].T + T_ee[:3, 3]
     return {"arm": np.vstack(pts), "gripper": gripper, "fingertips": tips}
+
+
+def scene_clearance(points: np.ndarray) -> np.ndarray:
+    """(k,) height (m) of world points (k, 3) above whatever lies below them in the scene
+    (table top, drop box walls, pedestal, floor); negative means inside an obstacle."""
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    below = np.full(len(points), _FLOOR_Z)
+    for x0, x1, y0, y1, top in _OBSTACLES:
+        over = (
+            (points[:, 0] >= x0)
+            & (points[:, 0] <= x1)
+            & (points[:, 1] >= y0)
+            & (points[:, 1] <= y1)
+        )
+        below[over] = np.maximum(below[over], top)
+    return points[:, 2] - below
