@@ -154,9 +154,12 @@ def _single_pose_lstsq(robot, q, tau_before, tau_after, torque_std, rcond):
     LAPACK wrappers cost several microseconds each. Non-finite input shows as a non-finite
     result and is re-checked by the careful path.
     """
-    q = np.asarray(q, dtype=float)
-    tb = np.asarray(tau_before, dtype=float)
-    ta = np.asarray(tau_after, dtype=float)
+    try:
+        q = np.asarray(q, dtype=float)
+        tb = np.asarray(tau_before, dtype=float)
+        ta = np.asarray(tau_after, dtype=float)
+    except (TypeError, ValueError):
+        return None
     n = robot.model.nq
     if q.shape != (n,) or tb.shape != (n,) or ta.shape != (n,):
         return None
