@@ -86,12 +86,12 @@ def _wrist_candidates(
     wrist = slice(robot.nq - N_WRIST, robot.nq)
     lo = robot.q_lower[wrist] + margin
     hi = robot.q_upper[wrist] - margin
-    out = []
+    out, seen = [], {tuple(np.round(q[wrist], 9))}
     for offset in itertools.product(steps, repeat=N_WRIST):
         c = q.copy()
         c[wrist] = np.clip(q[wrist] + np.array(offset), lo, np.maximum(lo, hi))
-        if np.abs(c - q).max() > 1e-9:
+        key = tuple(np.round(c[wrist], 9))
+        if key not in seen:  # clipping may map several offsets to one pose
+            seen.add(key)
             out.append(c)
-    if not out:
-        return np.empty((0, robot.nq))
-    return np.unique(np.round(np.array(out), 12), axis=0)
+    return np.array(out).reshape(-1, robot.nq)
