@@ -191,15 +191,16 @@ def _single_pose_lstsq(robot, q, tau_before, tau_after, torque_std, rcond):
         return None
     (R0, R1, R2, _) = T.tolist()
     inv_m = 1.0 / w0
-    com_ee = np.array(
-        [(R1[0] * w1 - R0[0] * w2) * inv_m, (R1[1] * w1 - R0[1] * w2) * inv_m,
-         (R1[2] * w1 - R0[2] * w2) * inv_m]
-    )  # fmt: skip
     lam_mid = max(a + d + f - lam_max - lam_min, 0.0)
-    sv = np.array([G0 * math.sqrt(lam_max), G0 * math.sqrt(lam_mid), G0 * math.sqrt(lam_min), 0.0])
     cond = math.sqrt(lam_max / lam_min)
     residuals.shape = (1, n)
     T.shape = (1, 4, 4)
+    # com_ee = R^T (c_wx, c_wy, 0); unobservable_ee = R^T (0, 0, -1); then singular values
+    buf = np.array(
+        [(R1[0] * w1 - R0[0] * w2) * inv_m, (R1[1] * w1 - R0[1] * w2) * inv_m,
+         (R1[2] * w1 - R0[2] * w2) * inv_m, -R2[0], -R2[1], -R2[2],
+         G0 * math.sqrt(lam_max), G0 * math.sqrt(lam_mid), G0 * math.sqrt(lam_min), 0.0]
+    )  # fmt: skip
     if torque_std is not None:
         N_inv = np.array([[i00, i01, i02], [i01, i11, i12], [i02, i12, i22]]) / det
         B = np.zeros((4, 3))
@@ -209,12 +210,12 @@ def _single_pose_lstsq(robot, q, tau_before, tau_after, torque_std, rcond):
         B[1:, 2] *= -1.0
         cov_w = (2.0 * torque_std * torque_std / (G0 * G0)) * N_inv
         theta = B @ np.array([w0, w1, w2])
-        return _result(theta, B, cov_w, -np.array(R2[:3]), residuals, sv, cond, "lstsq",
+        return _result(theta, B, cov_w, buf[3:6], residuals, buf[6:], cond, "lstsq",
                        "closed_form", 0, T)  # fmt: skip
-    for arr in (com_ee, residuals, sv, T):
-        arr.flags.writeable = False
-    unobservable_ee = np.array([-R2[0], -R2[1], -R2[2]])
-    unobservable_ee.flags.writeable = False
+    buf.flags.writeable = False  # and so its views
+    residuals.flags.writeable = False
+    T.flags.writeable = False
+    com_ee, unobservable_ee, sv = buf[:3], buf[3:6], buf[6:]
     est = object.__new__(ComEstimate)  # the frozen dataclass, without its slow __init__
     est.__dict__.update(
         com_ee=com_ee,
@@ -261,10 +262,10 @@ def _general(robot, Q, dtau, sigma, method, rcond) -> ComEstimate:
         B[0, 0] = 1.0
         B[1:, 1:] = np.stack([R[1], -R[0]], axis=1)
     else:
-        s_full, Vt = np.linalg.svd(Y, full_matrices=False)[1:]
+        U_full, s_full, Vt = np.linalg.svd(Y, full_matrices=False)
         rank = int(np.sum(s_full > rcond * s_full[0])) if s_full[0] > 0 else 0
         if rank == 4:
-            u, B = None, np.eye(4)
+            u, B = None, np.eye(4)  # Y @ B is Y: its SVD is reused below
         elif rank == 3 and abs(Vt[3, 0]) <= MASS_NULL_TOL:
             u = Vt[3, 1:] / np.linalg.norm(Vt[3, 1:])
             u = u if u @ gravity_in_ee(T[0, :3, :3]) >= 0 else -u
@@ -278,7 +279,10 @@ def _general(robot, Q, dtau, sigma, method, rcond) -> ComEstimate:
                 f"rcond={rcond}); use poses where the joints bear the payload's weight"
             )
     Yr = Y @ B
-    U, S, Vt_r = np.linalg.svd(Yr, full_matrices=False)
+    if k > 1 and rank == 4:
+        U, S, Vt_r = U_full, s_full, Vt
+    else:
+        U, S, Vt_r = np.linalg.svd(Yr, full_matrices=False)
     if not S[-1] > rcond * S[0]:
         raise UnobservableError(
             "the pose set leaves the mass unobservable: singular values of the regression "

@@ -40,12 +40,10 @@ def regressor_from_jacobian(J_world: np.ndarray, R_world_ee: np.ndarray) -> np.n
     Returns:
         Y with dtau = Y @ theta; column 0 in N m/kg, columns 1..3 in N/kg.
     """
-    J_lin, J_ang = J_world[:3], J_world[3:]
-    # [g]x R = G0 * (R[1]; -R[0]; 0) for g = (0, 0, -G0).
-    skew_g_R = G0 * np.stack([R_world_ee[1], -R_world_ee[0], np.zeros(3)])
+    # -J_lin^T g = G0 J_lin_z;  J_ang^T [g]x R = G0 (J_ang_x R[1] - J_ang_y R[0])
     Y = np.empty((J_world.shape[1], 4))
-    Y[:, 0] = -J_lin.T @ GRAVITY_WORLD
-    Y[:, 1:] = J_ang.T @ skew_g_R
+    Y[:, 0] = G0 * J_world[2]
+    Y[:, 1:] = G0 * (J_world[3, :, None] * R_world_ee[1] - J_world[4, :, None] * R_world_ee[0])
     return Y
 
 
@@ -62,11 +60,17 @@ def stacked_regressor(robot: RobotModel, Q: np.ndarray) -> tuple[np.ndarray, np.
     ``Q`` is (k, n); the unknowns are shared because theta is written in the ee frame.
     """
     k, n = Q.shape
-    Y = np.empty((k * n, 4))
+    J = np.empty((k, 6, n))
     T = np.empty((k, 4, 4))
     for i in range(k):
-        Y[i * n : (i + 1) * n], T[i] = pose_regressor(robot, Q[i])
-    return Y, T
+        J[i] = pin.computeFrameJacobian(
+            robot.model, robot.data, Q[i], robot.ee_frame_id, _WORLD_ALIGNED
+        )
+        T[i] = robot.data.oMf[robot.ee_frame_id].homogeneous
+    Y = np.empty((k, n, 4))
+    Y[:, :, 0] = G0 * J[:, 2]
+    Y[:, :, 1:] = G0 * (J[:, 3, :, None] * T[:, None, 1, :3] - J[:, 4, :, None] * T[:, None, 0, :3])
+    return Y.reshape(k * n, 4), T
 
 
 def gravity_in_ee(R_world_ee: np.ndarray) -> np.ndarray:
