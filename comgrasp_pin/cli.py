@@ -7,6 +7,10 @@ import json
 import sys
 from pathlib import Path
 
+import numpy as np
+
+OBJECTS = ("obj1", "obj2", "obj3", "obj4", "obj5", "obj6")
+
 
 def _cmd_check(args: argparse.Namespace) -> int:
     from comgrasp_pin.simulation.checks import run_checks
@@ -23,6 +27,72 @@ def _cmd_check(args: argparse.Namespace) -> int:
     return 0 if ok else 1
 
 
+def _options(args: argparse.Namespace):
+    from comgrasp_pin.experiments.reproduce import PAPER_TRIALS, QUICK_TRIALS, RunOptions
+
+    objects = tuple(o.strip() for o in args.objects.split(",") if o.strip())
+    unknown = sorted(set(objects) - set(OBJECTS))
+    if unknown:
+        raise SystemExit(f"unknown object(s) {unknown}; objects are {', '.join(OBJECTS)}")
+    trials = args.trials
+    if trials is None:
+        trials = QUICK_TRIALS if getattr(args, "quick", False) else PAPER_TRIALS
+    return RunOptions(Path(args.out), objects, trials, args.seed, args.workers, args.resume,
+                      args.overwrite, args.noise)  # fmt: skip
+
+
+def _cmd_experiment(args: argparse.Namespace) -> int:
+    from comgrasp_pin.experiments import reproduce
+
+    opts = _options(args)
+    if args.command == "accuracy":
+        reproduce.run_accuracy(opts)
+        print(f"wrote {opts.out / 'accuracy.csv'}, accuracy.png, accuracy_table.md")
+    elif args.command == "regrasp":
+        reproduce.run_regrasp(opts)
+        print(f"wrote {opts.out / 'regrasp.csv'}, regrasp.png, regrasp_table.md")
+    else:
+        path = reproduce.reproduce(opts)
+        print(path.read_text())
+        print(f"report written to {path}")
+    return 0
+
+
+def _cmd_demo(args: argparse.Namespace) -> int:
+    from comgrasp_pin.simulation.episode import run_episode
+
+    out = Path(args.out)
+    video = out / f"episode_{args.object}_{args.method}_seed{args.seed}.mp4"
+    result = run_episode(args.object, args.seed, args.method, video=video)
+    print(f"object {args.object}, method {args.method}, seed {args.seed}")
+    if result.trial is not None:
+        t = result.trial
+        print(f"  tilt in the jaws      {np.degrees(t.theta):7.2f} deg "
+              f"(truth {np.degrees(t.theta_true):.2f})")  # fmt: skip
+        print(f"  CoM along the rod     {1e3 * t.pos_esti:7.1f} mm (truth {1e3 * t.pos_real:.1f})")
+        print(f"  mass                  {t.mass_esti:7.3f} kg (truth {t.mass_real:.3f})")
+        print(f"  accuracy              {100 * t.accuracy:7.1f} %")
+    print(f"  decision              {result.reason}")
+    print(f"  success               {result.success}")
+    print(f"video: {video}\nkey frames: {video.with_suffix('.png')}")
+    return 0
+
+
+def _add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
+    p.add_argument("--out", default=default_out, help="output folder (%(default)s)")
+    p.add_argument("--objects", default=",".join(OBJECTS), help="comma-separated (%(default)s)")
+    p.add_argument("--trials", type=int, default=None,
+                   help="per object and method (default 50, the paper's; 3 with --quick)")  # fmt: skip
+    p.add_argument("--seed", type=int, default=0, help="run seed (%(default)s)")
+    p.add_argument("--workers", type=int, default=1, help="parallel processes (%(default)s)")
+    p.add_argument("--noise", type=float, default=0.05,
+                   help="torque sensor noise per sample, N m (%(default)s)")  # fmt: skip
+    p.add_argument("--resume", action="store_true", help="continue the CSV in --out")
+    p.add_argument("--overwrite", action="store_true", help="start the CSV in --out again")
+    p.add_argument("--quick", action="store_true", help="a few-minute run (3 trials)")
+    p.set_defaults(func=_cmd_experiment)
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="comgrasp",
@@ -32,10 +102,22 @@ def build_parser() -> argparse.ArgumentParser:
     check = sub.add_parser(
         "check", help="render the scene from every camera and check Pinocchio against MuJoCo"
     )
-    check.add_argument(
-        "--out", default="results/check", help="output folder (default: %(default)s)"
-    )
+    check.add_argument("--out", default="results/check", help="output folder (%(default)s)")
     check.set_defaults(func=_cmd_check)
+
+    for name, help_text in (
+        ("accuracy", "experiment 1: CoM accuracy against tilt (accuracy.csv, figure, table)"),
+        ("regrasp", "experiment 2: pick-and-place success, baseline vs regrasp (regrasp.csv)"),
+        ("reproduce", "both experiments and report.md (paper's sizes; --quick for minutes)"),
+    ):
+        _add_experiment_args(sub.add_parser(name, help=help_text), f"results/{name}")
+
+    demo = sub.add_parser("demo", help="one episode with a video and the estimate vs the truth")
+    demo.add_argument("--object", default="obj1", choices=OBJECTS)
+    demo.add_argument("--seed", type=int, default=0)
+    demo.add_argument("--method", default="regrasp", choices=("baseline", "regrasp"))
+    demo.add_argument("--out", default="results/demo", help="output folder (%(default)s)")
+    demo.set_defaults(func=_cmd_demo)
     return parser
 
 
