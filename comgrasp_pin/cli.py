@@ -81,8 +81,12 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 def _add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
     p.add_argument("--out", default=default_out, help="output folder (%(default)s)")
     p.add_argument("--objects", default=",".join(OBJECTS), help="comma-separated (%(default)s)")
-    p.add_argument("--trials", type=int, default=None,
-                   help="per object and method (default 50, the paper's; 3 with --quick)")  # fmt: skip
+    p.add_argument(
+        "--trials",
+        type=int,
+        default=None,
+        help="per object and method (default 50, the paper's; 3 with --quick)",
+    )
     p.add_argument("--seed", type=int, default=0, help="run seed (%(default)s)")
     p.add_argument("--workers", type=int, default=1, help="parallel processes (%(default)s)")
     p.add_argument("--noise", type=float, default=0.05,
