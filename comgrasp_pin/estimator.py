@@ -25,13 +25,13 @@ invariant under reparametrisation) and is exact to first order in the noise.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
 from comgrasp_pin._lsq_ipopt import solve_lsq
-from comgrasp_pin.errors import EmptyGripperError, InvalidInputError, UnobservableError
+from comgrasp_pin.com_estimate import MIN_MASS_KG, ComEstimate, assemble_estimate
+from comgrasp_pin.errors import InvalidInputError, UnobservableError
 from comgrasp_pin.regressor import G0, gravity_in_ee, perpendicular_basis, stacked_regressor
 from comgrasp_pin.robot import RobotModel
 
@@ -40,73 +40,7 @@ RCOND = 1e-6
 """Singular values of Y below RCOND * (largest) count as unobservable directions."""
 MASS_NULL_TOL = 1e-3
 """A lost direction whose mass component exceeds this (unit null vector) makes m unobservable."""
-MIN_MASS_KG = 1e-3
-"""Without torque_std, a payload below this mass (kg) is taken as an empty gripper."""
-MASS_SIGMAS = 3.0
-"""With torque_std, a payload below MASS_SIGMAS standard deviations is an empty gripper."""
-
 _WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-
-
-def _readonly(a: np.ndarray | None) -> np.ndarray | None:
-    if a is not None:
-        a.flags.writeable = False
-    return a
-
-
-@dataclass(frozen=True)
-class ComEstimate:
-    """A payload estimate. Frames: ``ee`` (the eelink) and ``world``; SI units.
-
-    Attributes:
-        com_ee: (3,) CoM in the ee frame (m); its component along ``unobservable_ee`` is 0.
-        mass: payload mass (kg).
-        weight: payload weight m * G0 (N).
-        unobservable_ee: (3,) unit gravity direction in the ee frame along which the CoM is
-            not observed (one pose), or None when the full 3-D CoM is estimated.
-        cov: (4, 4) covariance of (mass, com_ee) (kg, m) when torque_std was given, else
-            None; zero variance along ``unobservable_ee`` (that component is fixed at 0).
-        residual_rms: RMS of the torque residuals (N m).
-        residuals: (k, n) residuals dtau - Y theta per pose and joint (N m).
-        condition_number: largest / smallest singular value over the estimated directions.
-        singular_values: (4,) singular values of the stacked Y for theta = (m, m c_ee) in SI
-            units, descending; for one pose the last is 0 (the direction along gravity).
-        method: "lstsq" or "ipopt".
-        solver_status: IPOPT's return_status, or "closed_form" for lstsq.
-        iterations: IPOPT iterations (0 for lstsq).
-        n_poses: number of static poses k.
-        T_world_ee: (k, 4, 4) ee poses at the measurement configurations.
-    """
-
-    com_ee: np.ndarray
-    mass: float
-    weight: float
-    unobservable_ee: np.ndarray | None
-    cov: np.ndarray | None
-    residual_rms: float
-    residuals: np.ndarray
-    condition_number: float
-    singular_values: np.ndarray
-    method: str
-    solver_status: str
-    iterations: int
-    n_poses: int
-    T_world_ee: np.ndarray
-
-    @property
-    def std(self) -> np.ndarray | None:
-        """(4,) standard deviations of (mass, com_ee) (kg, m), or None without cov."""
-        return None if self.cov is None else np.sqrt(np.clip(np.diag(self.cov), 0.0, None))
-
-    def com_world(self, pose: int = 0) -> np.ndarray:
-        """(3,) CoM in the world frame (m) at measurement pose ``pose``."""
-        T = self.T_world_ee[pose]
-        return T[:3, :3] @ self.com_ee + T[:3, 3]
-
-    def com_line_ee(self) -> tuple[np.ndarray, np.ndarray | None]:
-        """The CoM locus in the ee frame: (point (3,), direction (3,)) of the vertical line
-        through the CoM for one pose, or (com_ee, None) when fully observed."""
-        return self.com_ee, self.unobservable_ee
 
 
 def estimate_com(
@@ -129,6 +63,8 @@ def estimate_com(
         torque_std: std of each torque reading (N m), scalar or (n,) per joint; enables
             ``cov`` and (per-joint) weighted least squares.
         rcond: relative singular-value threshold deciding observability.
+    An estimated mass at or below 3 standard deviations (with torque_std; MIN_MASS_KG = 1 g
+    without) is refused as an empty gripper rather than returned.
     Raises:
         InvalidInputError, UnobservableError, EmptyGripperError, SolverError (all ValueError).
     """
@@ -210,7 +146,7 @@ def _single_pose_lstsq(robot, q, tau_before, tau_after, torque_std, rcond):
         B[1:, 2] *= -1.0
         cov_w = (2.0 * torque_std * torque_std / (G0 * G0)) * N_inv
         theta = B @ np.array([w0, w1, w2])
-        return _result(theta, B, cov_w, buf[3:6], residuals, buf[6:], cond, "lstsq",
+        return assemble_estimate(theta, B, cov_w, buf[3:6], residuals, buf[6:], cond, "lstsq",
                        "closed_form", 0, T)  # fmt: skip
     buf.flags.writeable = False  # and so its views
     residuals.flags.writeable = False
@@ -308,48 +244,8 @@ def _general(robot, Q, dtau, sigma, method, rcond) -> ComEstimate:
         status, iters = "closed_form", 0
     theta = B @ w
     residuals = (b - Y @ theta).reshape(k, n)
-    return _result(theta, B, cov_w, u, residuals, sv, S[0] / S[-1], method, status, iters, T)
-
-
-def _result(theta, B, cov_w, u, residuals, sv, cond, method, status, iters, T) -> ComEstimate:
-    """Assemble the estimate; EmptyGripperError if the mass is not measurably positive."""
-    m = float(theta[0])
-    cov = None
-    if cov_w is not None:
-        cov_theta = B @ cov_w @ B.T
-        threshold = MASS_SIGMAS * math.sqrt(max(cov_theta[0, 0], 0.0))
-    else:
-        threshold = MIN_MASS_KG
-    if not m > threshold:
-        what = f"{MASS_SIGMAS:g} standard deviations" if cov_w is not None else "MIN_MASS_KG"
-        raise EmptyGripperError(
-            f"estimated payload mass {m:.3g} kg is not measurably above zero (threshold "
-            f"{threshold:.3g} kg = {what}): is the gripper empty, or are tau_before and "
-            "tau_after swapped?"
-        )
-    com_ee = theta[1:] / m
-    if cov_w is not None:
-        G = np.zeros((4, 4))
-        G[0, 0] = 1.0
-        G[1:, 0] = -com_ee / m
-        G[1:, 1:] = np.eye(3) / m
-        cov = G @ cov_theta @ G.T
-    rms = math.sqrt(float(residuals.ravel() @ residuals.ravel()) / residuals.size)
-    return ComEstimate(
-        com_ee=_readonly(com_ee),
-        mass=m,
-        weight=m * G0,
-        unobservable_ee=_readonly(None if u is None else np.array(u, dtype=float)),
-        cov=_readonly(cov),
-        residual_rms=rms,
-        residuals=_readonly(residuals),
-        condition_number=float(cond),
-        singular_values=_readonly(sv),
-        method=method,
-        solver_status=status,
-        iterations=iters,
-        n_poses=residuals.shape[0],
-        T_world_ee=_readonly(np.array(T, dtype=float)),
+    return assemble_estimate(
+        theta, B, cov_w, u, residuals, sv, S[0] / S[-1], method, status, iters, T
     )
 
 
