@@ -39,6 +39,11 @@ def _run(sim: Simulation, n: int, callback: Callback) -> None:
         callback(sim)
 
 
+def hold(sim: Simulation, duration: float, callback: Callback = None) -> None:
+    """Keep the commanded configuration for ``duration`` s."""
+    _run(sim, int(round(duration / sim.model.opt.timestep)), callback)
+
+
 def follow(sim: Simulation, traj: Quintic, callback: Callback = None) -> None:
     """Track ``traj`` (started now) with the servo, one sample per physics step."""
     dt = sim.model.opt.timestep
@@ -231,6 +236,7 @@ __all__ = [
     "close_gripper",
     "drop_box_pose",
     "follow",
+    "hold",
     "grasp_frame",
     "move_linear",
     "move_to",
