@@ -28,3 +28,20 @@ class SolverError(ComGraspError):
         super().__init__(f"{message} (solver status: {return_status})")
         self.return_status = return_status
         self.iterations = iterations
+
+
+class PerceptionError(ComGraspError):
+    """The cameras' images do not give what was asked (base of the perception errors)."""
+
+
+class ObjectNotFoundError(PerceptionError):
+    """No object is in view where one is expected."""
+
+
+class ObjectCutByBorderError(PerceptionError):
+    """The object touches the image border: part of it is out of view, so its extent (and
+    centre) cannot be measured."""
+
+
+class InvalidDepthError(PerceptionError):
+    """The depth image is missing, of the wrong shape, or has no valid values where needed."""

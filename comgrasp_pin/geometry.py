@@ -5,6 +5,8 @@ Names follow DESIGN section 3: ``T_a_b`` is the pose of frame b in frame a (4x4)
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from comgrasp_pin.errors import InvalidInputError, UnobservableError
@@ -12,6 +14,23 @@ from comgrasp_pin.errors import InvalidInputError, UnobservableError
 MIN_AXIS_GRAVITY_ANGLE = 0.05
 """Smallest angle (rad, about 2.9 deg) between the rod axis and the CoM line (gravity) for
 which ``com_along_axis`` intersects them; the error of x_CoM^O grows as 1 / sin(angle)."""
+
+
+@dataclass(frozen=True)
+class GraspPose:
+    """A top-down grasp in the world frame.
+
+    Attributes:
+        x, y: position of the grasp point (the rod's axis) in the world (m).
+        z: height of the rod's axis (m).
+        yaw: direction of the rod's axis about world z (rad); psi and psi + pi are the
+            same grasp.
+    """
+
+    x: float
+    y: float
+    z: float
+    yaw: float
 
 
 def check_transform(T: np.ndarray, name: str = "T", atol: float = 1e-6) -> np.ndarray:

@@ -10,11 +10,10 @@ the seed), ``solve_top_down`` tries both and keeps the best.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import pinocchio as pin
 
+from comgrasp_pin.geometry import GraspPose
 from comgrasp_pin.robot import RobotModel
 
 # Elbow up, wrist down: eelink 0.30 m above (0.45, 0), pointing down, boom away (rad).
@@ -33,23 +32,6 @@ _FLOOR_Z = -0.75
 
 class IKError(ValueError):
     """No joint configuration reaches the target within tolerance and joint limits."""
-
-
-@dataclass(frozen=True)
-class GraspPose:
-    """A top-down grasp in the world frame.
-
-    Attributes:
-        x, y: position of the grasp point (the rod's axis) in the world (m).
-        z: height of the rod's axis (m).
-        yaw: direction of the rod's axis about world z (rad); psi and psi + pi are the
-            same grasp.
-    """
-
-    x: float
-    y: float
-    z: float
-    yaw: float
 
 
 def top_down_frame(x: float, y: float, z: float, yaw: float) -> np.ndarray:

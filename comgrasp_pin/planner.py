@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from comgrasp_pin.ik import GraspPose
+from comgrasp_pin.geometry import GraspPose
 
 
 @dataclass(frozen=True)
