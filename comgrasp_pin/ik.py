@@ -18,6 +18,9 @@ from comgrasp_pin.robot import RobotModel
 
 # Elbow up, wrist down: eelink 0.30 m above (0.45, 0), pointing down, boom away (rad).
 Q_HOME = np.array([-0.245, -1.6895, 1.6866, -1.5679, -1.5708, -0.245])
+# Parked at the robot's right, eelink 0.30 m above (0.12, -0.42): out of the top camera's
+# view of the table, so that it sees the whole pick area (rad).
+Q_PARK = np.array([-1.5451, -1.7218, 1.7142, -1.5632, -1.5708, -1.5451])
 TABLE_Z = 0.0
 FINGERTIP_BELOW_EE = 0.015  # fingertips (pad bottoms) below the eelink along ee-z (m)
 FINGERTIP_CLEARANCE = 0.002  # fingertips kept this far above the table (m)

@@ -1,0 +1,83 @@
+"""Shared steps: validating images, lifting masked pixels to 3-D, robust line fits."""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from comgrasp_pin.camera import PinholeCamera, transform_points
+from comgrasp_pin.errors import InvalidDepthError, ObjectCutByBorderError, ObjectNotFoundError
+
+
+def check_images(rgb: np.ndarray | None, depth: np.ndarray, camera: PinholeCamera) -> np.ndarray:
+    """``depth`` as float (H, W) metric z-depth; InvalidDepthError if unusable."""
+    shape = (camera.height, camera.width)
+    depth = np.asarray(depth, dtype=float)
+    if depth.shape != shape:
+        raise InvalidDepthError(f"depth image has shape {depth.shape}, the camera is {shape}")
+    if rgb is not None and np.asarray(rgb).shape[:2] != shape:
+        raise InvalidDepthError(f"RGB image {np.asarray(rgb).shape} does not match depth {shape}")
+    if np.isnan(depth).any():
+        raise InvalidDepthError("depth image contains NaN (use inf for 'no return')")
+    if not np.isfinite(depth).any() or (depth[np.isfinite(depth)] <= 0).all():
+        raise InvalidDepthError("depth image has no valid (finite, positive) value")
+    return depth
+
+
+def points_in(T_frame_cam: np.ndarray, depth: np.ndarray, camera: PinholeCamera) -> np.ndarray:
+    """(H, W, 3) points of every pixel in the frame of ``T_frame_cam``; NaN where no depth."""
+    valid = np.isfinite(depth) & (depth > 0)
+    points = camera.depth_to_points(np.where(valid, depth, 1.0))
+    points = transform_points(T_frame_cam, points.reshape(-1, 3)).reshape(points.shape)
+    points[~valid] = np.nan
+    return points
+
+
+def border_pixels(blob: np.ndarray) -> np.ndarray:
+    """(H, W) bool: pixels of ``blob`` on the image border."""
+    edge = np.zeros_like(blob)
+    edge[0], edge[-1], edge[:, 0], edge[:, -1] = blob[0], blob[-1], blob[:, 0], blob[:, -1]
+    return edge
+
+
+def largest_component(mask: np.ndarray, min_pixels: int, what: str) -> np.ndarray:
+    """The largest connected blob of ``mask`` after a small opening; ObjectNotFoundError if
+    there is none, ObjectCutByBorderError if it touches the border."""
+    mask = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    if count <= 1 or stats[1:, cv2.CC_STAT_AREA].max() < min_pixels:
+        raise ObjectNotFoundError(f"no object found in the {what} (fewer than {min_pixels} px)")
+    best = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    blob = labels == best
+    if border_pixels(blob).any():
+        raise ObjectCutByBorderError(f"the object touches the border of the {what}")
+    return blob
+
+
+def blobs(mask: np.ndarray, min_pixels: int, what: str, min_blob: int = 20) -> np.ndarray:
+    """Every connected blob of ``mask`` of at least ``min_blob`` pixels, after a small
+    opening (an object split by an occluder, e.g. the near finger, stays whole);
+    ObjectNotFoundError if fewer than ``min_pixels`` remain."""
+    mask = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    big = 1 + np.flatnonzero(stats[1:, cv2.CC_STAT_AREA] >= min_blob)
+    kept = np.isin(labels, big)
+    if kept.sum() < min_pixels:
+        raise ObjectNotFoundError(f"no object found in the {what} (fewer than {min_pixels} px)")
+    return kept
+
+
+def fit_line(points: np.ndarray, iterations: int = 3) -> tuple[np.ndarray, np.ndarray]:
+    """Robust 3-D line through (N, 3) points: (centroid (3,), unit direction (3,)).
+
+    PCA, then twice: drop points farther from the line than 3 median distances, refit.
+    """
+    keep = np.ones(len(points), dtype=bool)
+    for _ in range(iterations):
+        centroid = points[keep].mean(axis=0)
+        _, _, vt = np.linalg.svd(points[keep] - centroid, full_matrices=False)
+        direction = vt[0]
+        offsets = points - centroid
+        dist = np.linalg.norm(offsets - np.outer(offsets @ direction, direction), axis=1)
+        keep = dist <= 3.0 * np.median(dist[keep]) + 1e-4
+    return centroid, direction

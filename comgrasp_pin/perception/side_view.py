@@ -1,0 +1,222 @@
+"""The rod held in the jaws, from the side camera on the gripper: its pose in the ee frame.
+
+Segmentation again leans on depth and on what the robot knows about itself: pixels are
+lifted to the ee frame (T_ee_cam comes from the robot description), and the rod is what lies
+in the slab between the jaws (|y_ee| small) outside the gripper's own volume (fingers, pads,
+palm, wrist) and, when the table is near, above it. The jaws centre the rod, so its axis
+passes through y_ee = 0; a robust 3-D line fit on the visible surface gives its direction,
+the extreme points along it give its ends, hence its geometric centre, length and tilt.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from comgrasp_pin.camera import PinholeCamera
+from comgrasp_pin.errors import ObjectCutByBorderError, ObjectNotFoundError
+from comgrasp_pin.perception._points import (
+    blobs,
+    check_images,
+    fit_line,
+    points_in,
+)
+
+SLAB_HALF_WIDTH = 0.08  # |y_ee| of the region the held object may occupy (m)
+REACH = 0.40  # distance from the TCP beyond which nothing is the held object (m)
+TABLE_MARGIN = 0.003  # points less than this above the table are the table (m)
+MIN_PIXELS = 60
+# The gripper's own volume in the ee frame (from the URDF): fingers and pads (with margin),
+# palm, and the wrist above it.
+_FINGERS = (0.016, 0.06, -0.085, 0.018)  # |x| <, |y| <, z from, z to
+_PALM = (0.035, 0.075, -0.14, -0.075)
+_WRIST_RADIUS, _WRIST_BELOW_Z = 0.05, -0.13
+
+
+@dataclass(frozen=True)
+class SideView:
+    """The held rod in the ee frame. SI units, angles in rad.
+
+    Attributes:
+        T_ee_obj: (4, 4) pose of the rod: origin at its geometric centre, x along it (the
+            end towards +x_ee), y along the jaw axis (ee y), z = x cross y.
+        theta: tilt in the jaws: rotation of the rod's axis about ee-y from ee-x, signed
+            (positive when the +x end is higher, i.e. towards -z_ee); in (-pi/2, pi/2).
+        length: visible extent of the rod along its axis (m).
+        grasp_offset: where the jaws hold it: the point of the axis nearest the TCP, along
+            +x_obj from the rod's centre (m).
+        mask: (H, W) bool rod pixels; rect: OpenCV rotated rectangle of the mask;
+        axis_px: (2, 2) pixel ends of the axis; tcp_px: (2,) pixel of the TCP.
+    """
+
+    T_ee_obj: np.ndarray
+    theta: float
+    length: float
+    grasp_offset: float
+    mask: np.ndarray
+    rect: tuple
+    axis_px: np.ndarray
+    tcp_px: np.ndarray
+
+
+def _gripper_volume(p: np.ndarray) -> np.ndarray:
+    x, y, z = p[..., 0], p[..., 1], p[..., 2]
+    inside = np.zeros(x.shape, dtype=bool)
+    for ax, ay, z0, z1 in (_FINGERS, _PALM):
+        inside |= (np.abs(x) < ax) & (np.abs(y) < ay) & (z > z0) & (z < z1)
+    inside |= (np.hypot(x, y) < _WRIST_RADIUS) & (z < _WRIST_BELOW_Z)
+    return inside
+
+
+def observe_held_rod(
+    rgb: np.ndarray | None,
+    depth: np.ndarray,
+    camera: PinholeCamera,
+    T_ee_cam: np.ndarray,
+    T_world_ee: np.ndarray | None = None,
+    table_z: float | None = None,
+    rod_length: float | None = None,
+    exclude_capsules: Sequence[tuple[np.ndarray, np.ndarray, float]] = (),
+    centre_hint: float | None = None,
+) -> SideView:
+    """Locate the rod held in the jaws in a side-camera RGBD frame.
+
+    Args:
+        depth: (H, W) z-depth (m), inf where nothing is seen.
+        camera: intrinsics. T_ee_cam: (4, 4) optical frame of the camera in the ee frame.
+        T_world_ee, table_z: with both, points within 3 mm of the table plane (world z) are
+            left out, so that the rod can be seen while it still rests on the table.
+        rod_length: the rod's length if known (e.g. from the top view, m). A steeply hanging
+            rod may leave the image or hide an end behind the gripper; with the length, the
+            centre is found from the one end that is seen whole.
+        exclude_capsules: the robot's own links as (p0 (3,), p1 (3,), radius) capsules in
+            the ee frame; points inside them are not the rod (self-filtering).
+        centre_hint: where the rod's centre was along ee-x from the TCP when it was grasped
+            (m; from the top view and the commanded grasp). Used only when neither end of
+            the rod is seen whole: the rod turns in the jaws, it hardly slides along them.
+    Raises ObjectNotFoundError, ObjectCutByBorderError, InvalidDepthError.
+    """
+    depth = check_images(rgb, depth, camera)
+    p = points_in(T_ee_cam, depth, camera)
+    finite = np.isfinite(p[..., 0])
+    candidate = finite & (np.abs(p[..., 1]) < SLAB_HALF_WIDTH)
+    candidate &= np.linalg.norm(np.nan_to_num(p, nan=1e3), axis=-1) < REACH
+    candidate &= ~_gripper_volume(np.nan_to_num(p, nan=1e3))
+    for p0, p1, radius in exclude_capsules:
+        candidate &= ~_in_capsule(p, np.asarray(p0, float), np.asarray(p1, float), radius)
+    if T_world_ee is not None and table_z is not None:
+        z_world = np.nan_to_num(p, nan=1e3) @ T_world_ee[2, :3] + T_world_ee[2, 3]
+        candidate &= z_world > table_z + TABLE_MARGIN
+    if not candidate.any():
+        raise ObjectNotFoundError("nothing is held between the jaws (side camera)")
+    mask = blobs(candidate, MIN_PIXELS, "side-camera image")
+    points = p[mask]
+    # Tilt lives in the ee x-z plane; the jaws fix the axis at y = 0.
+    x_axis, offset_xz = _centre_line(points[:, [0, 2]])
+    x_axis = np.array([x_axis[0], 0.0, x_axis[1]])
+    along = points @ x_axis
+    lo, hi = np.percentile(along, [0.5, 99.5])
+    offset = np.array([offset_xz[0], 0.0, offset_xz[1]])
+    T_cam_ee = np.linalg.inv(T_ee_cam)
+    mid = _centre_along(x_axis, lo, hi, offset, depth, camera, T_cam_ee, rod_length, centre_hint)
+    centre = offset + mid * x_axis
+    y_axis = np.array([0.0, 1.0, 0.0])
+    T_ee_obj = np.eye(4)
+    T_ee_obj[:3, :3] = np.column_stack([x_axis, y_axis, np.cross(x_axis, y_axis)])
+    T_ee_obj[:3, 3] = centre
+    theta = float(np.arctan2(-x_axis[2], x_axis[0]))
+    grasp_offset = float(-centre @ x_axis)
+
+    ends = np.array([centre + s * x_axis for s in (lo - mid, hi - mid)])
+    ends_cam = ends @ T_cam_ee[:3, :3].T + T_cam_ee[:3, 3]
+    tcp_cam = T_cam_ee[:3, 3]
+    contours, _ = cv2.findContours(mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    rect = cv2.minAreaRect(np.vstack(contours))
+    return SideView(T_ee_obj, theta, float(hi - lo), grasp_offset, mask, rect,
+                    camera.project(ends_cam), camera.project(tcp_cam[None])[0])  # fmt: skip
+
+
+PEEK = 0.012  # look this far beyond an end to tell whether it is really the end (m)
+
+
+def _centre_along(
+    x_axis, lo, hi, offset, depth, camera, T_cam_ee, rod_length, centre_hint=None
+) -> float:
+    """Where the rod's centre lies along ``x_axis`` (coordinate, m), from its trusted ends.
+
+    An end is trusted when the point just beyond it is in the image and nothing nearer to
+    the camera covers it (else the rod may go on out of view or behind the gripper).
+    """
+    trusted = [_end_is_seen(offset + e * x_axis, s * x_axis, depth, camera, T_cam_ee)
+               for e, s in ((lo, -1.0), (hi, 1.0))]  # fmt: skip
+    if all(trusted) and (rod_length is None or abs((hi - lo) - rod_length) < 2 * PEEK):
+        return 0.5 * (lo + hi)
+    if rod_length is None:
+        raise ObjectCutByBorderError(
+            "an end of the held rod is out of view or hidden; pass rod_length (top view)"
+        )
+    if trusted[0] and (not trusted[1] or abs(lo) > abs(hi)):
+        return lo + 0.5 * rod_length
+    if trusted[1]:
+        return hi - 0.5 * rod_length
+    if centre_hint is not None:
+        return float(centre_hint)
+    raise ObjectCutByBorderError("neither end of the held rod is seen whole (side camera)")
+
+
+def _end_is_seen(end, outwards, depth, camera, T_cam_ee) -> bool:
+    beyond = end + PEEK * outwards
+    p_cam = T_cam_ee[:3, :3] @ beyond + T_cam_ee[:3, 3]
+    if p_cam[2] <= 0:
+        return False
+    u, v = camera.project(p_cam[None])[0]
+    if not (2 <= u < camera.width - 2 and 2 <= v < camera.height - 2):
+        return False
+    return bool(depth[int(round(v)), int(round(u))] > p_cam[2] - 0.01)
+
+
+def _centre_line(xz: np.ndarray, bin_width: float = 0.01) -> tuple[np.ndarray, np.ndarray]:
+    """The rod's axis in the ee x-z plane: (unit direction (2,) with positive x, the point
+    of the axis nearest the TCP (2,)).
+
+    The visible points are cut in slices across the rod; the median of each slice is a
+    point of the centre line, and a line is fitted to those slice centres with outlier
+    rejection. Heads and weights, which stand off the handle's axis over a few slices
+    only, then do not pull the axis (a plain PCA of all points would).
+    """
+    _, direction = fit_line(np.c_[xz, np.zeros(len(xz))])
+    direction = direction[:2] / np.linalg.norm(direction[:2])
+    point = xz.mean(axis=0)
+    for _ in range(2):
+        normal = np.array([-direction[1], direction[0]])
+        along, across = xz @ direction, xz @ normal
+        bins = np.floor(along / bin_width).astype(int)
+        centres = [
+            (np.median(along[bins == b]), np.median(across[bins == b]))
+            for b in np.unique(bins)
+            if np.count_nonzero(bins == b) >= 5
+        ]
+        if len(centres) < 3:
+            break
+        c = np.array(centres)
+        keep = np.ones(len(c), dtype=bool)
+        for _ in range(3):
+            slope, intercept = np.polyfit(c[keep, 0], c[keep, 1], 1)
+            residual = np.abs(c[:, 1] - (slope * c[:, 0] + intercept))
+            keep = residual <= max(3.0 * np.median(residual[keep]), 0.002)
+        point = intercept * normal
+        direction = (direction + slope * normal) / np.hypot(1.0, slope)
+    if direction[0] < 0:
+        direction = -direction
+    return direction, point - (point @ direction) * direction
+
+
+def _in_capsule(p: np.ndarray, p0: np.ndarray, p1: np.ndarray, radius: float) -> np.ndarray:
+    """(H, W) bool: points of ``p`` (H, W, 3; NaN = none) within ``radius`` of segment p0-p1."""
+    d = p1 - p0
+    t = np.clip(np.nan_to_num((p - p0) @ d / max(d @ d, 1e-12), nan=0.0), 0.0, 1.0)
+    dist = np.linalg.norm(p - p0 - t[..., None] * d, axis=-1)
+    return np.nan_to_num(dist, nan=np.inf) < radius

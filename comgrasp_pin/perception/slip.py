@@ -1,0 +1,55 @@
+"""Slip monitor: the tilt of the rod in the jaws over time, and a slipping/settled verdict."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+SLIP_RATE_DEG_S = 2.0  # |dθ/dt| above this over the recent window: slipping
+SLIP_CHANGE_DEG = 1.0  # total change of θ since the first sample above this: slip was seen
+WINDOW_S = 0.3  # length of the recent window for the rate (s)
+
+
+@dataclass(frozen=True)
+class SlipVerdict:
+    """Attributes: slipping: θ is changing now; slip_seen: θ changed by more than
+    SLIP_CHANGE_DEG since the first sample; rate_deg_s: recent |dθ/dt|; change_deg: total
+    change; theta: last θ (rad)."""
+
+    slipping: bool
+    slip_seen: bool
+    rate_deg_s: float
+    change_deg: float
+    theta: float
+
+
+@dataclass
+class SlipMonitor:
+    """Feed (t, θ) samples (s, rad) as they come; ``verdict()`` at any time."""
+
+    rate_deg_s: float = SLIP_RATE_DEG_S
+    change_deg: float = SLIP_CHANGE_DEG
+    window_s: float = WINDOW_S
+    times: list[float] = field(default_factory=list)
+    thetas: list[float] = field(default_factory=list)
+
+    def add(self, t: float, theta: float) -> None:
+        if not np.isfinite(theta):
+            raise ValueError(f"tilt must be finite, got {theta}")
+        if self.times and t <= self.times[-1]:
+            raise ValueError(f"samples must come in time order: {t} after {self.times[-1]}")
+        self.times.append(float(t))
+        self.thetas.append(float(theta))
+
+    def verdict(self) -> SlipVerdict:
+        if not self.times:
+            raise ValueError("no tilt samples yet")
+        t, th = np.array(self.times), np.degrees(np.array(self.thetas))
+        recent = t >= t[-1] - self.window_s
+        rate = 0.0
+        if recent.sum() >= 2 and np.ptp(t[recent]) > 0:
+            rate = abs(np.polyfit(t[recent], th[recent], 1)[0])
+        change = float(np.max(np.abs(th - th[0])))
+        return SlipVerdict(rate > self.rate_deg_s, change > self.change_deg, float(rate), change,
+                           float(self.thetas[-1]))  # fmt: skip

@@ -1,0 +1,112 @@
+"""The simulated robot's eyes: render a camera, hand the images to ``comgrasp_pin.perception``.
+
+Only images, the robot's own joint readings and its description (T_ee_cam from the URDF)
+are used, as on a real robot; no ground truth.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from comgrasp_pin.errors import PerceptionError
+from comgrasp_pin.geometry import invert_transform
+from comgrasp_pin.perception import (
+    RodDetection,
+    SideView,
+    SlipMonitor,
+    detect_rod_top_down,
+    observe_held_rod,
+)
+from comgrasp_pin.robot import RobotModel
+from comgrasp_pin.simulation.cameras import CameraRig
+from comgrasp_pin.simulation.world import SIDE_CAMERA, TOP_CAMERA
+
+TABLE_Z = 0.0  # the workcell's table plane (m, world), known like the camera extrinsics
+ARM_RADIUS = 0.075  # UR5 upper arm and forearm: about 0.06 m in radius, with a margin (m)
+WRIST_RADIUS = 0.05  # UR5 wrist links: about 0.045 m (m)
+
+__all__ = ["SideView", "SlipWatcher", "look_from_above", "look_from_side"]
+
+
+def look_from_above(rig: CameraRig, data: mujoco.MjData) -> RodDetection:
+    """Detect the rod on the table with the top-down camera."""
+    rgb, depth = rig.rgb(data, TOP_CAMERA), rig.depth(data, TOP_CAMERA)
+    return detect_rod_top_down(rgb, depth, rig.intrinsics(TOP_CAMERA),
+                               rig.T_world_cam(data, TOP_CAMERA))  # fmt: skip
+
+
+def side_camera_pose(robot: RobotModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(T_world_ee, T_ee_cam) at the arm configuration ``q``, from the robot description."""
+    T_world_ee = robot.ee_pose(q)
+    return T_world_ee, invert_transform(T_world_ee) @ robot.frame_pose(q, SIDE_CAMERA)
+
+
+def look_from_side(
+    rig: CameraRig,
+    data: mujoco.MjData,
+    robot: RobotModel,
+    q: np.ndarray,
+    rod_length: float | None = None,
+    centre_hint: float | None = None,
+) -> SideView:
+    """The held rod's pose in the ee frame, from the side camera at joint reading ``q``
+    (``rod_length`` and ``centre_hint`` from the top view help when the rod leaves the
+    image; see ``observe_held_rod``)."""
+    T_world_ee, T_ee_cam = side_camera_pose(robot, q)
+    rgb, depth = rig.rgb(data, SIDE_CAMERA), rig.depth(data, SIDE_CAMERA)
+    return observe_held_rod(rgb, depth, rig.intrinsics(SIDE_CAMERA), T_ee_cam, T_world_ee,
+                            TABLE_Z, rod_length, arm_capsules(robot, q), centre_hint)  # fmt: skip
+
+
+def arm_capsules(robot: RobotModel, q: np.ndarray):
+    """The arm's links as capsules in the ee frame: segments between successive joint
+    origins (and on to the flange), for the side view's self-filtering. The wrist's
+    segments are thinner (UR5: about 0.045 m in radius)."""
+    T_ee_world = invert_transform(robot.ee_pose(q))
+    points = np.vstack([robot.joint_origins(q), robot.frame_pose(q, "tool0")[None, :3, 3]])
+    points = points @ T_ee_world[:3, :3].T + T_ee_world[:3, 3]
+    radii = [ARM_RADIUS] * 3 + [WRIST_RADIUS] * (len(points) - 4)
+    return [(a, b, r) for a, b, r in zip(points[:-1], points[1:], radii, strict=True)]
+
+
+class SlipWatcher:
+    """A Simulation observer sampling the tilt with the side camera every ``dt`` seconds
+    once the jaws hold with ``grip_force``; frames where the rod cannot be measured are
+    counted and skipped."""
+
+    def __init__(
+        self,
+        rig: CameraRig,
+        robot: RobotModel,
+        dt: float,
+        grip_force: float,
+        rod_length: float | None = None,
+        centre_hint: float | None = None,
+    ):
+        self.rig, self.robot, self.dt, self.grip_force = rig, robot, dt, grip_force
+        self.rod_length, self.centre_hint = rod_length, centre_hint
+        self.monitor = SlipMonitor()
+        self.failed_frames = 0
+        self._next = -np.inf
+
+    def __call__(self, sim, force: bool = False) -> None:
+        if sim.grip_force < self.grip_force - 1e-9 or (sim.time < self._next and not force):
+            return
+        self._next = sim.time + self.dt
+        try:
+            view = look_from_side(
+                self.rig, sim.data, self.robot, sim.q, self.rod_length, self.centre_hint
+            )
+        except PerceptionError:
+            self.failed_frames += 1
+            return
+        if not self.monitor.times or sim.time > self.monitor.times[-1]:
+            self.monitor.add(sim.time, view.theta)
+
+    def slipping_or_tilted(self) -> bool:
+        """True when slip was seen, or the rod is slipping at the last sample."""
+        if not self.monitor.times:
+            return False
+        verdict = self.monitor.verdict()
+        return verdict.slip_seen or verdict.slipping
