@@ -29,6 +29,8 @@ SLAB_HALF_WIDTH = 0.08  # |y_ee| of the region the held object may occupy (m)
 REACH = 0.40  # distance from the TCP beyond which nothing is the held object (m)
 TABLE_MARGIN = 0.003  # points less than this above the table are the table (m)
 MIN_PIXELS = 60
+MAX_AXIS_FROM_TCP = 0.035  # a held rod's axis passes this close to the TCP (m)
+MIN_EXTENT = 0.05  # a held rod is at least this long in view (m)
 # The gripper's own volume in the ee frame (from the URDF): fingers and pads (with margin),
 # palm, and the wrist above it.
 _FINGERS = (0.016, 0.06, -0.085, 0.018)  # |x| <, |y| <, z from, z to
@@ -104,12 +106,15 @@ def observe_held_rod(
     finite = np.isfinite(p[..., 0])
     candidate = finite & (np.abs(p[..., 1]) < SLAB_HALF_WIDTH)
     candidate &= np.linalg.norm(np.nan_to_num(p, nan=1e3), axis=-1) < REACH
-    candidate &= ~_gripper_volume(np.nan_to_num(p, nan=1e3))
-    for p0, p1, radius in exclude_capsules:
-        candidate &= ~_in_capsule(p, np.asarray(p0, float), np.asarray(p1, float), radius)
     if T_world_ee is not None and table_z is not None:
         z_world = np.nan_to_num(p, nan=1e3) @ T_world_ee[2, :3] + T_world_ee[2, 3]
         candidate &= z_world > table_z + TABLE_MARGIN
+    idx = np.flatnonzero(candidate)  # the costlier tests only on what is left
+    q = p.reshape(-1, 3)[idx]
+    robot = _gripper_volume(q)
+    for p0, p1, radius in exclude_capsules:
+        robot |= _in_capsule(q, np.asarray(p0, float), np.asarray(p1, float), radius)
+    candidate.flat[idx[robot]] = False
     if not candidate.any():
         raise ObjectNotFoundError("nothing is held between the jaws (side camera)")
     mask = blobs(candidate, MIN_PIXELS, "side-camera image")
@@ -120,6 +125,11 @@ def observe_held_rod(
     along = points @ x_axis
     lo, hi = np.percentile(along, [0.5, 99.5])
     offset = np.array([offset_xz[0], 0.0, offset_xz[1]])
+    if np.linalg.norm(offset) > MAX_AXIS_FROM_TCP or hi - lo < MIN_EXTENT:
+        raise ObjectNotFoundError(
+            "nothing is held between the jaws: what the side camera sees "
+            f"({100 * (hi - lo):.0f} cm long) does not pass through them"
+        )
     T_cam_ee = np.linalg.inv(T_ee_cam)
     mid = _centre_along(x_axis, lo, hi, offset, depth, camera, T_cam_ee, rod_length, centre_hint)
     centre = offset + mid * x_axis
@@ -215,7 +225,7 @@ def _centre_line(xz: np.ndarray, bin_width: float = 0.01) -> tuple[np.ndarray, n
 
 
 def _in_capsule(p: np.ndarray, p0: np.ndarray, p1: np.ndarray, radius: float) -> np.ndarray:
-    """(H, W) bool: points of ``p`` (H, W, 3; NaN = none) within ``radius`` of segment p0-p1."""
+    """Bool mask of the points ``p`` (..., 3) within ``radius`` of the segment p0-p1."""
     d = p1 - p0
     t = np.clip(np.nan_to_num((p - p0) @ d / max(d @ d, 1e-12), nan=0.0), 0.0, 1.0)
     dist = np.linalg.norm(p - p0 - t[..., None] * d, axis=-1)

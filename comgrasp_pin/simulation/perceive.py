@@ -24,7 +24,7 @@ from comgrasp_pin.simulation.world import SIDE_CAMERA, TOP_CAMERA
 
 TABLE_Z = 0.0  # the workcell's table plane (m, world), known like the camera extrinsics
 ARM_RADIUS = 0.075  # UR5 upper arm and forearm: about 0.06 m in radius, with a margin (m)
-WRIST_RADIUS = 0.05  # UR5 wrist links: about 0.045 m (m)
+WRIST_RADIUS = 0.06  # UR5 wrist housings: about 0.045-0.055 m, with a margin (m)
 
 __all__ = ["SideView", "SlipWatcher", "look_from_above", "look_from_side"]
 
@@ -49,12 +49,15 @@ def look_from_side(
     q: np.ndarray,
     rod_length: float | None = None,
     centre_hint: float | None = None,
+    with_rgb: bool = True,
 ) -> SideView:
     """The held rod's pose in the ee frame, from the side camera at joint reading ``q``
     (``rod_length`` and ``centre_hint`` from the top view help when the rod leaves the
-    image; see ``observe_held_rod``)."""
+    image; see ``observe_held_rod``). The measurement needs depth only; ``with_rgb=False``
+    skips the colour render (the slip monitor's frames)."""
     T_world_ee, T_ee_cam = side_camera_pose(robot, q)
-    rgb, depth = rig.rgb(data, SIDE_CAMERA), rig.depth(data, SIDE_CAMERA)
+    rgb = rig.rgb(data, SIDE_CAMERA) if with_rgb else None
+    depth = rig.depth(data, SIDE_CAMERA)
     return observe_held_rod(rgb, depth, rig.intrinsics(SIDE_CAMERA), T_ee_cam, T_world_ee,
                             TABLE_Z, rod_length, arm_capsules(robot, q), centre_hint)  # fmt: skip
 
@@ -95,9 +98,8 @@ class SlipWatcher:
             return
         self._next = sim.time + self.dt
         try:
-            view = look_from_side(
-                self.rig, sim.data, self.robot, sim.q, self.rod_length, self.centre_hint
-            )
+            view = look_from_side(self.rig, sim.data, self.robot, sim.q, self.rod_length,
+                                  self.centre_hint, with_rgb=False)  # fmt: skip
         except PerceptionError:
             self.failed_frames += 1
             return
