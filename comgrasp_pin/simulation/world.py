@@ -184,11 +184,15 @@ def _add_drives(spec: mujoco.MjSpec, config: WorldConfig) -> None:
     for name in FINGER_JOINTS:
         joint = spec.joint(name)
         joint.armature = config.finger_armature
+        joint.solref_limit = [0.005, 1.0]  # a stiff end stop
         joint.damping = np.array([5.0, 0.0, 0.0])  # N s / m
         joint.actfrclimited = 0
         act = spec.add_actuator(name=name, target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
         act.ctrllimited = 1
         act.ctrlrange = [-100.0, 100.0]  # N; positive closes
+    # The joint limits stop the fingers 1 mm apart; a pad-pad contact could only fight them
+    # (closed on nothing, the pads would be pushed through each other and lock).
+    spec.add_exclude(bodyname1="finger_left", bodyname2="finger_right")
     spec.add_equality(
         type=mujoco.mjtEq.mjEQ_JOINT,
         name1=FINGER_JOINTS[0],
