@@ -14,7 +14,8 @@ import numpy as np
 ACCURACY_COLUMNS = [
     "object", "trial", "method", "seed", "length_m", "pos_real_m", "pos_esti_m", "theta_deg",
     "accuracy", "mass_real_kg", "mass_esti_kg", "theta_true_deg", "grasp_offset_m",
-    "com_std_m", "residual_rms_Nm", "slip_seen", "wall_s",
+    "com_std_m", "residual_rms_Nm", "slip_seen", "pos_esti_line_m", "accuracy_line",
+    "rolled_slip", "wall_s",
 ]  # fmt: skip
 REGRASP_COLUMNS = [
     "object", "trial", "method", "seed", "success", "regrasped", "reason", "length_m",
@@ -78,6 +79,9 @@ def accuracy_trial(task: dict) -> dict:
         "com_std_m": float(np.linalg.norm(std[1:])) if std is not None else float("nan"),
         "residual_rms_Nm": t.estimate.residual_rms,
         "slip_seen": int(t.slip_seen),
+        "pos_esti_line_m": t.pos_esti_line,
+        "accuracy_line": t.accuracy_line,
+        "rolled_slip": int(t.rolled_slip),
         "wall_s": wall,
     }
 

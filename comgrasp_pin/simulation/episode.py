@@ -20,10 +20,10 @@ from pathlib import Path
 
 import numpy as np
 
-from comgrasp_pin.errors import EmptyGripperError
+from comgrasp_pin.errors import EmptyGripperError, ObjectNotFoundError
 from comgrasp_pin.estimator import estimate_com
 from comgrasp_pin.geometry import com_along_axis, invert_transform
-from comgrasp_pin.ik import Q_PARK, GraspPose, grasp_frame, solve_ik, solve_top_down
+from comgrasp_pin.ik import Q_PARK, GraspPose, grasp_frame, solve_ik, solve_top_down, top_down_frame
 from comgrasp_pin.perception import SideView
 from comgrasp_pin.planner import PlannerConfig, com_grasp, decide, rod_axis_world
 from comgrasp_pin.robot import RobotModel
@@ -36,6 +36,8 @@ from comgrasp_pin.simulation.torque_sensor import TorqueSensorConfig
 from comgrasp_pin.simulation.world import WorldConfig, build_model
 
 METHODS = ("baseline", "regrasp")
+PUT_DOWN_XY = (0.55, 0.0)  # where a rod is put down to be grasped again: mid-table (m)
+RETRY_SHIFT = 0.12  # a dropped rod is grasped again this fraction of its length off-centre
 ROLL_SLIP_DEG = 0.5  # a tilt change above this at the rolled pose means the rod moved (deg)
 DROP_BOX_INNER = (0.05, 0.58, 0.24, 0.12)  # centre x, y and half sizes (m), inside the walls
 
@@ -127,8 +129,10 @@ class TrialGrasp:
         rolled_slip: the rod moved in the jaws at the rolled pose (two-pose estimate unused).
         mass_esti, mass_real: kg. grasp_offset: where the jaws hold the rod (true, m).
         length: the rod's true length (m). grasp_z: eelink height of the grasp (m).
-        estimate: the ComEstimate. q_meas: (6,) measurement configuration (rad).
-        T_world_ee: (4, 4) ee pose at q_meas.
+        estimate: the ComEstimate used; estimate_line: the single-pose one.
+        q_meas: (k, 6) measurement configurations (rad); tau_before, tau_after: (k, 6)
+            averaged torque readings there (N m).
+        T_world_ee: (4, 4) ee pose at the first measurement configuration.
     """
 
     theta: float
@@ -146,7 +150,10 @@ class TrialGrasp:
     length: float
     grasp_z: float
     estimate: object
+    estimate_line: object
     q_meas: np.ndarray
+    tau_before: np.ndarray
+    tau_after: np.ndarray
     T_world_ee: np.ndarray
     side_view: SideView
 
@@ -238,6 +245,27 @@ class World:
         self.rig.close()
 
 
+class RodDroppedError(EmptyGripperError):
+    """The rod fell out of the jaws during the trial grasp. ``heavy_side_world``: (3,) unit
+    horizontal direction of the end that went down first (from the side camera's tilt
+    samples), or None if no tilt was seen."""
+
+    def __init__(self, message: str, heavy_side_world: np.ndarray | None):
+        super().__init__(f"the rod was dropped in the trial grasp: {message}")
+        self.heavy_side_world = heavy_side_world
+
+
+def _heavy_side(watcher: SlipWatcher, T_world_ee: np.ndarray) -> np.ndarray | None:
+    """Direction (world, horizontal) of the rod's end that went down, from the tilt samples:
+    a positive tilt raises the ee +x end, so the heavy end lies towards -x."""
+    thetas = np.array(watcher.monitor.thetas)
+    if thetas.size == 0 or np.max(np.abs(thetas)) < np.radians(2.0):
+        return None
+    theta = thetas[np.argmax(np.abs(thetas))]
+    x_world = T_world_ee[:3, 0] * np.array([1.0, 1.0, 0.0])
+    return -np.sign(theta) * x_world / np.linalg.norm(x_world)
+
+
 def trial_grasp(world: World, offset: float = 0.0) -> TrialGrasp:
     """The paper's measurement: grasp ``offset`` m along the rod from the perceived centre.
 
@@ -283,7 +311,10 @@ def trial_grasp(world: World, offset: float = 0.0) -> TrialGrasp:
     motion.hold(sim, 0.5, callback=watcher)
     watcher(sim, force=True)
     after = [sim.measure_torques(config.settle, config.window)]
-    side = look_from_side(world.rig, sim.data, robot, after[0].q, rod_length, centre_hint)
+    try:
+        side = look_from_side(world.rig, sim.data, robot, after[0].q, rod_length, centre_hint)
+    except ObjectNotFoundError as exc:
+        raise RodDroppedError(str(exc), _heavy_side(watcher, T_meas)) from exc
     slip_seen = watcher.slipping_or_tilted()
     moved = False
     if len(poses) > 1:
@@ -304,7 +335,10 @@ def trial_grasp(world: World, offset: float = 0.0) -> TrialGrasp:
         return estimate_com(robot, q, np.array(tau_before[:k]), tau_a,
                             method=config.estimator, torque_std=pair_std)  # fmt: skip
 
-    est_line = estimate(1)
+    try:
+        est_line = estimate(1)
+    except EmptyGripperError as exc:
+        raise RodDroppedError(str(exc), _heavy_side(watcher, T_meas)) from exc
     x_line = com_along_axis(est_line, side.T_ee_obj)
     est, x_com_obj = est_line, x_line
     if len(poses) > 1 and not moved:
@@ -336,7 +370,10 @@ def trial_grasp(world: World, offset: float = 0.0) -> TrialGrasp:
         length=world.scene.length,
         grasp_z=grasp_frame(grasp)[2, 3],
         estimate=est,
-        q_meas=after[0].q,
+        estimate_line=est_line,
+        q_meas=np.array([m.q for m in after]),
+        tau_before=np.array(tau_before),
+        tau_after=np.array([m.tau for m in after]),
         T_world_ee=T_world_ee,
         side_view=side,
     )
@@ -347,18 +384,25 @@ def _rot_x(angle: float) -> np.ndarray:
     return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
 
 
-def _trial_with_retry(world: World, attempts: int = 2) -> TrialGrasp:
-    """The trial grasp; if the rod fell out of the jaws (nothing measurable was held), go
-    home, look again and make one more trial grasp where it now lies."""
+def _trial_with_retry(world: World, attempts: int = 3) -> TrialGrasp:
+    """The trial grasp; if the rod fell out of the jaws, go home, look again and grasp it
+    again where it now lies, shifted towards the end the side camera saw go down (by a
+    further RETRY_SHIFT of its length each time): the CoM is on that side."""
+    offset = 0.0
     for attempt in range(attempts):
         try:
-            return trial_grasp(world)
-        except EmptyGripperError:
+            return trial_grasp(world, offset)
+        except RodDroppedError as exc:
             if attempt == attempts - 1:
                 raise
             motion.open_gripper(world.sim)
             motion.move_to(world.sim, Q_PARK)
             world.sim.hold(1.0)
+            if exc.heavy_side_world is not None:
+                rod = look_from_above(world.rig, world.sim.data)
+                d = np.array([np.cos(rod.grasp.yaw), np.sin(rod.grasp.yaw), 0.0])
+                step = RETRY_SHIFT * rod.length * np.sign(d @ exc.heavy_side_world)
+                offset += step
     raise AssertionError("unreachable")
 
 
@@ -433,11 +477,17 @@ def run_episode(
 
 
 def _put_down(world: World, grasp_z: float) -> None:
-    """Lower the held rod straight down until the jaws are 5 mm above the height they
-    grasped it at (a tilted rod meets the table with its low end and turns back level in
-    the jaws), open, retreat and go home, out of the top camera's view."""
+    """Carry the rod over the middle of the table, turned along its long side (y), lower it
+    until the jaws are 5 mm above the height they grasped it at (a tilted rod meets the
+    table with its low end and turns back level in the jaws), open, retreat and go home,
+    out of the top camera's view."""
     sim, robot = world.sim, world.robot
-    T_release = robot.ee_pose(sim.q_des)
+    T_now = robot.ee_pose(sim.q_des)
+    x_now = T_now[:2, 0]
+    yaw = np.pi / 2 if x_now[1] >= 0 else -np.pi / 2  # the nearer of the two
+    T_above = top_down_frame(*PUT_DOWN_XY, T_now[2, 3], yaw)
+    motion.move_to(sim, solve_ik(robot, T_above, sim.q_des), settle=0.2)
+    T_release = T_above.copy()
     T_release[2, 3] = grasp_z + 0.005
     motion.place(sim, robot, T_release, lower_time=1.5)
     motion.move_to(sim, Q_PARK)
