@@ -128,7 +128,8 @@ class TrialGrasp:
             rod axis), from the same measurements.
         rolled_slip: the rod moved in the jaws at the rolled pose (two-pose estimate unused).
         mass_esti, mass_real: kg. grasp_offset: where the jaws hold the rod (true, m).
-        length: the rod's true length (m). grasp_z: eelink height of the grasp (m).
+        length: the rod's true length (m); rod_length: as the top view measured it (m).
+        grasp_z: eelink height of the grasp (m).
         estimate: the ComEstimate used; estimate_line: the single-pose one.
         q_meas: (k, 6) measurement configurations (rad); tau_before, tau_after: (k, 6)
             averaged torque readings there (N m).
@@ -148,6 +149,7 @@ class TrialGrasp:
     mass_real: float
     grasp_offset: float
     length: float
+    rod_length: float
     grasp_z: float
     estimate: object
     estimate_line: object
@@ -368,6 +370,7 @@ def trial_grasp(world: World, offset: float = 0.0) -> TrialGrasp:
         mass_real=truth.mass,
         grasp_offset=world.grasp_offset_true(),
         length=world.scene.length,
+        rod_length=rod_length,
         grasp_z=grasp_frame(grasp)[2, 3],
         estimate=est,
         estimate_line=est_line,
@@ -455,7 +458,7 @@ def run_episode(
                 regrasped = True
                 _caption(recorder, f"regrasp: {decision.reason}")
                 axis_hint = rod_axis_world(trial.T_world_ee, trial.T_ee_obj)
-                _put_down(world, trial.grasp_z)
+                _put_down(world, trial)
                 rod = look_from_above(world.rig, world.sim.data).grasp
                 target = com_grasp(rod, axis_hint, decision.x_com_obj)
                 motion.pick(world.sim, world.robot, target, grip_force=config.grip_force)
@@ -476,20 +479,32 @@ def run_episode(
     return EpisodeResult(scene, method, success, regrasped, reason, trial, final_offset, timings)
 
 
-def _put_down(world: World, grasp_z: float) -> None:
-    """Carry the rod over the middle of the table, turned along its long side (y), lower it
-    until the jaws are 5 mm above the height they grasped it at (a tilted rod meets the
-    table with its low end and turns back level in the jaws), open, retreat and go home,
-    out of the top camera's view."""
+def _put_down(world: World, trial: TrialGrasp) -> None:
+    """Lay the held rod down mid-table, along the table's long side (y), and go home.
+
+    A rod hanging tilted in the jaws is laid down as a person would: lowered until its low
+    end nearly touches the table, then the jaws move down and away from that end together,
+    so that the rod pivots on it and comes to lie flat where it is (lowering it straight
+    down would push it through the jaws and topple it). Uses only what the side camera
+    measured (axis, centre, length from the top view)."""
     sim, robot = world.sim, world.robot
     T_now = robot.ee_pose(sim.q_des)
-    x_now = T_now[:2, 0]
-    yaw = np.pi / 2 if x_now[1] >= 0 else -np.pi / 2  # the nearer of the two
+    yaw = np.pi / 2 if T_now[1, 0] >= 0 else -np.pi / 2  # the nearer of the two
     T_above = top_down_frame(*PUT_DOWN_XY, T_now[2, 3], yaw)
     motion.move_to(sim, solve_ik(robot, T_above, sim.q_des), settle=0.2)
-    T_release = T_above.copy()
-    T_release[2, 3] = grasp_z + 0.005
-    motion.place(sim, robot, T_release, lower_time=1.5)
+
+    x_axis, centre = trial.T_ee_obj[:3, 0], trial.T_ee_obj[:3, 3]
+    ends = [centre + s * 0.5 * trial.rod_length * x_axis for s in (-1.0, 1.0)]
+    low = max(ends, key=lambda e: e[2])  # ee z points down
+    reach = float(np.hypot(low[0], low[2]))  # TCP to the low end, in the jaws' plane
+    shift = low[0] - np.sign(low[0]) * reach  # TCP move along ee-x that lays the rod flat
+    T_touch = T_above.copy()
+    T_touch[2, 3] = max(trial.grasp_z + low[2] + 0.01, trial.grasp_z)
+    T_flat = T_above.copy()
+    T_flat[:3, 3] += shift * T_above[:3, 0]
+    T_flat[2, 3] = trial.grasp_z + 0.003
+    motion.move_linear(sim, robot, T_touch, 1.5)
+    motion.place(sim, robot, T_flat, lower_time=2.0)
     motion.move_to(sim, Q_PARK)
     sim.hold(0.5)
 
