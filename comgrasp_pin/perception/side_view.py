@@ -120,10 +120,18 @@ def observe_held_rod(
     mask = blobs(candidate, MIN_PIXELS, "side-camera image")
     points = p[mask]
     # Tilt lives in the ee x-z plane; the jaws fix the axis at y = 0.
-    x_axis, offset_xz = _centre_line(points[:, [0, 2]])
+    x_axis, offset_xz, handle = _centre_line(points[:, [0, 2]])
+    if handle.sum() >= MIN_PIXELS:
+        x_fit, offset_fit = _fit_cylinder(points[handle], x_axis, offset_xz)
+        # Trust the refinement only near the slice estimate (it can lock on a wrong side).
+        if (
+            x_fit @ x_axis > np.cos(np.radians(5.0))
+            and np.linalg.norm(offset_fit - offset_xz) < 0.01
+        ):
+            x_axis, offset_xz = x_fit, offset_fit
     x_axis = np.array([x_axis[0], 0.0, x_axis[1]])
     along = points @ x_axis
-    lo, hi = np.percentile(along, [0.5, 99.5])
+    lo, hi = np.percentile(along, [0.1, 99.9])
     offset = np.array([offset_xz[0], 0.0, offset_xz[1]])
     if np.linalg.norm(offset) > MAX_AXIS_FROM_TCP or hi - lo < MIN_EXTENT:
         raise ObjectNotFoundError(
@@ -131,7 +139,9 @@ def observe_held_rod(
             f"({100 * (hi - lo):.0f} cm long) does not pass through them"
         )
     T_cam_ee = np.linalg.inv(T_ee_cam)
-    mid = _centre_along(x_axis, lo, hi, offset, depth, camera, T_cam_ee, rod_length, centre_hint)
+    mid = _centre_along(
+        x_axis, lo, hi, offset, depth, mask, camera, T_cam_ee, rod_length, centre_hint
+    )
     centre = offset + mid * x_axis
     y_axis = np.array([0.0, 1.0, 0.0])
     T_ee_obj = np.eye(4)
@@ -153,14 +163,14 @@ PEEK = 0.012  # look this far beyond an end to tell whether it is really the end
 
 
 def _centre_along(
-    x_axis, lo, hi, offset, depth, camera, T_cam_ee, rod_length, centre_hint=None
+    x_axis, lo, hi, offset, depth, mask, camera, T_cam_ee, rod_length, centre_hint=None
 ) -> float:
     """Where the rod's centre lies along ``x_axis`` (coordinate, m), from its trusted ends.
 
     An end is trusted when the point just beyond it is in the image and nothing nearer to
     the camera covers it (else the rod may go on out of view or behind the gripper).
     """
-    trusted = [_end_is_seen(offset + e * x_axis, s * x_axis, depth, camera, T_cam_ee)
+    trusted = [_end_is_seen(offset + e * x_axis, s * x_axis, depth, mask, camera, T_cam_ee)
                for e, s in ((lo, -1.0), (hi, 1.0))]  # fmt: skip
     if all(trusted) and (rod_length is None or abs((hi - lo) - rod_length) < 2 * PEEK):
         return 0.5 * (lo + hi)
@@ -177,7 +187,7 @@ def _centre_along(
     raise ObjectCutByBorderError("neither end of the held rod is seen whole (side camera)")
 
 
-def _end_is_seen(end, outwards, depth, camera, T_cam_ee) -> bool:
+def _end_is_seen(end, outwards, depth, mask, camera, T_cam_ee) -> bool:
     beyond = end + PEEK * outwards
     p_cam = T_cam_ee[:3, :3] @ beyond + T_cam_ee[:3, 3]
     if p_cam[2] <= 0:
@@ -185,33 +195,34 @@ def _end_is_seen(end, outwards, depth, camera, T_cam_ee) -> bool:
     u, v = camera.project(p_cam[None])[0]
     if not (2 <= u < camera.width - 2 and 2 <= v < camera.height - 2):
         return False
-    return bool(depth[int(round(v)), int(round(u))] > p_cam[2] - 0.01)
+    row, col = int(round(v)), int(round(u))
+    # Seen if what lies there is farther (background) or is the rod itself (a wide head
+    # seen in perspective); hidden if something else, nearer, covers it (the gripper).
+    return bool(mask[row, col] or depth[row, col] > p_cam[2] - 0.01)
 
 
-def _centre_line(xz: np.ndarray, bin_width: float = 0.01) -> tuple[np.ndarray, np.ndarray]:
-    """The rod's axis in the ee x-z plane: (unit direction (2,) with positive x, the point
-    of the axis nearest the TCP (2,)).
+def _centre_line(xz: np.ndarray, bin_width: float = 0.01):
+    """The rod's axis in the ee x-z plane, from slice centres.
 
     The visible points are cut in slices across the rod; the median of each slice is a
     point of the centre line, and a line is fitted to those slice centres with outlier
     rejection. Heads and weights, which stand off the handle's axis over a few slices
     only, then do not pull the axis (a plain PCA of all points would).
+    Returns (unit direction (2,) with positive x, the point nearest the TCP (2,), (N,) bool
+    mask of the points in the slices kept: the handle).
     """
     _, direction = fit_line(np.c_[xz, np.zeros(len(xz))])
     direction = direction[:2] / np.linalg.norm(direction[:2])
     point = xz.mean(axis=0)
+    in_kept = np.ones(len(xz), dtype=bool)
     for _ in range(2):
         normal = np.array([-direction[1], direction[0]])
         along, across = xz @ direction, xz @ normal
         bins = np.floor(along / bin_width).astype(int)
-        centres = [
-            (np.median(along[bins == b]), np.median(across[bins == b]))
-            for b in np.unique(bins)
-            if np.count_nonzero(bins == b) >= 5
-        ]
-        if len(centres) < 3:
+        labels = [b for b in np.unique(bins) if np.count_nonzero(bins == b) >= 5]
+        if len(labels) < 3:
             break
-        c = np.array(centres)
+        c = np.array([(np.median(along[bins == b]), np.median(across[bins == b])) for b in labels])
         keep = np.ones(len(c), dtype=bool)
         for _ in range(3):
             slope, intercept = np.polyfit(c[keep, 0], c[keep, 1], 1)
@@ -219,9 +230,54 @@ def _centre_line(xz: np.ndarray, bin_width: float = 0.01) -> tuple[np.ndarray, n
             keep = residual <= max(3.0 * np.median(residual[keep]), 0.002)
         point = intercept * normal
         direction = (direction + slope * normal) / np.hypot(1.0, slope)
+        in_kept = np.isin(bins, np.array(labels)[keep])
     if direction[0] < 0:
         direction = -direction
-    return direction, point - (point @ direction) * direction
+    return direction, point - (point @ direction) * direction, in_kept
+
+
+def _fit_cylinder(points: np.ndarray, direction: np.ndarray, point: np.ndarray):
+    """Refine the axis (in the plane y = 0) by fitting a cylinder to the visible surface.
+
+    The camera sees one side of the rod, so the visible points stand off the axis towards
+    the camera; the slice centres inherit that offset, which changes along a tilted rod
+    and biases the tilt. Fitting |(p - a) x u| = r (axis angle, its offset, radius r) by
+    Gauss-Newton, with points far off the cylinder (heads, weights) left out, removes it.
+    Returns (direction (2,), point nearest the TCP (2,)) in the x-z plane.
+    """
+    angle = np.arctan2(direction[1], direction[0])
+    normal = np.array([-direction[1], direction[0]])
+    params = np.array([angle, point @ normal, 0.0])
+
+    def residuals(prm, pts):
+        u = np.array([np.cos(prm[0]), 0.0, np.sin(prm[0])])
+        n = np.array([-np.sin(prm[0]), 0.0, np.cos(prm[0])])
+        rel = pts - prm[1] * n
+        return np.linalg.norm(rel - np.outer(rel @ u, u), axis=1) - prm[2]
+
+    params[2] = np.median(residuals(params, points))
+    keep = np.ones(len(points), dtype=bool)
+    for _ in range(8):
+        res = residuals(params, points[keep])
+        jac = np.empty((len(res), 3))
+        for k, h in enumerate((1e-6, 1e-7, 1e-7)):
+            step = np.zeros(3)
+            step[k] = h
+            jac[:, k] = (residuals(params + step, points[keep]) - res) / h
+        # Levenberg-Marquardt step: damped, accepted only if it lowers the cost.
+        jtj, jtr = jac.T @ jac, jac.T @ res
+        for damping in (1e-6, 1e-3, 1e-1, 1.0):
+            trial = params - np.linalg.solve(jtj + damping * np.diag(np.diag(jtj)), jtr)
+            if np.sum(residuals(trial, points[keep]) ** 2) < np.sum(res**2):
+                params = trial
+                break
+        res_all = np.abs(residuals(params, points))
+        keep = res_all < 3.0 * np.median(res_all[keep]) + 0.002
+    u = np.array([np.cos(params[0]), np.sin(params[0])])
+    if u[0] < 0:
+        u = -u
+    n = np.array([-np.sin(params[0]), np.cos(params[0])])
+    return u, params[1] * n
 
 
 def _in_capsule(p: np.ndarray, p0: np.ndarray, p1: np.ndarray, radius: float) -> np.ndarray:

@@ -16,7 +16,7 @@ import cv2
 import numpy as np
 
 from comgrasp_pin.camera import PinholeCamera
-from comgrasp_pin.errors import ObjectNotFoundError
+from comgrasp_pin.errors import ObjectCutByBorderError, ObjectNotFoundError
 from comgrasp_pin.geometry import GraspPose
 from comgrasp_pin.perception._points import check_images, largest_component, points_in
 
@@ -24,6 +24,7 @@ PICK_AREA = (0.30, 0.80, -0.35, 0.35)  # x_min, x_max, y_min, y_max of the table
 MIN_HEIGHT = 0.003  # a pixel counts as object if it stands this far above the table (m)
 MAX_HEIGHT = 0.15  # ... and no higher than this (the robot above the table is not the rod)
 MIN_PIXELS = 40
+EDGE_BAND = 0.01  # an object within 2 bands of the pick area's edge may leave it (m)
 
 
 @dataclass(frozen=True)
@@ -58,29 +59,33 @@ def detect_rod_top_down(
     """Find the rod in a top-down RGBD frame (depth: (H, W) z-depth in m, inf = none).
 
     Raises ObjectNotFoundError (nothing above the table), ObjectCutByBorderError (the rod
-    leaves the image), InvalidDepthError (unusable depth).
+    leaves the image or reaches the edge of the pick area), InvalidDepthError (unusable
+    depth).
     """
     depth = check_images(rgb, depth, camera)
     points = points_in(T_world_cam, depth, camera)
     x, y, z = points[..., 0], points[..., 1], points[..., 2]
     x0, x1, y0, y1 = pick_area
-    inside = (x > x0 + 0.01) & (x < x1 - 0.01) & (y > y0 + 0.01) & (y < y1 - 0.01)
-    inside &= np.isfinite(z)
+
+    def within(margin: float) -> np.ndarray:
+        return (x > x0 + margin) & (x < x1 - margin) & (y > y0 + margin) & (y < y1 - margin)
+
+    inside = within(EDGE_BAND) & np.isfinite(z)
     if inside.sum() < 100:
         raise ObjectNotFoundError("the pick area is not in view of the camera")
     table_z = float(np.median(z[inside]))  # the rod covers a small part of the table
-    mask = largest_component(
-        inside & (z > table_z + MIN_HEIGHT) & (z < table_z + MAX_HEIGHT),
-        MIN_PIXELS,
-        "top-down image",
-    )
+    standing = (z > table_z + MIN_HEIGHT) & (z < table_z + MAX_HEIGHT)
+    mask = largest_component(inside & standing, MIN_PIXELS, "top-down image")
+    grown = cv2.dilate(mask.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
+    if np.any(grown & standing & ~within(2 * EDGE_BAND) & np.isfinite(z)):
+        raise ObjectCutByBorderError("the object reaches the edge of the pick area")
 
     p = points[mask]
     centroid = p[:, :2].mean(axis=0)
     _, _, vt = np.linalg.svd(p[:, :2] - centroid, full_matrices=False)
     direction = vt[0]
     along = (p[:, :2] - centroid) @ direction
-    lo, hi = np.percentile(along, [0.2, 99.8])
+    lo, hi = np.percentile(along, [0.02, 99.98])
     centre = centroid + 0.5 * (lo + hi) * direction
     near_centre = np.abs(along - 0.5 * (lo + hi)) < 0.01
     heights = p[near_centre, 2] - table_z if near_centre.any() else p[:, 2] - table_z

@@ -25,6 +25,7 @@ from comgrasp_pin.estimator import estimate_com
 from comgrasp_pin.geometry import com_along_axis, invert_transform
 from comgrasp_pin.ik import Q_PARK, GraspPose, grasp_frame, solve_ik, solve_top_down, top_down_frame
 from comgrasp_pin.perception import SideView
+from comgrasp_pin.perception.top_down import PICK_AREA
 from comgrasp_pin.planner import PlannerConfig, com_grasp, decide, rod_axis_world
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.simulation import motion
@@ -36,6 +37,7 @@ from comgrasp_pin.simulation.torque_sensor import TorqueSensorConfig
 from comgrasp_pin.simulation.world import WorldConfig, build_model
 
 METHODS = ("baseline", "regrasp")
+SCENE_MARGIN = 0.05  # rods lie at least this far inside the pick area's edges (m)
 PUT_DOWN_XY = (0.55, 0.0)  # where a rod is put down to be grasped again: mid-table (m)
 RETRY_SHIFT = 0.12  # a dropped rod is grasped again this fraction of its length off-centre
 ROLL_SLIP_DEG = 0.5  # a tilt change above this at the rolled pose means the rod moved (deg)
@@ -103,14 +105,20 @@ class Scene:
         spec = get_object(obj)
         if pos_real is None:
             pos_real = rng.choice([-1.0, 1.0]) * rng.uniform(*com_range) * spec.length
-        return cls(
-            obj,
-            spec.length,
-            float(pos_real),
-            float(rng.uniform(0.47, 0.63)),
-            float(rng.uniform(-0.12, 0.12)),
-            float(rng.uniform(-np.pi / 2, np.pi / 2)),
-        )
+        x, y, yaw = random_table_pose(rng, spec.length)
+        return cls(obj, spec.length, float(pos_real), x, y, yaw)
+
+
+def random_table_pose(rng: np.random.Generator, length: float) -> tuple[float, float, float]:
+    """(x, y, yaw) of a rod of ``length`` (m) lying wholly in the pick area, at least
+    SCENE_MARGIN from its edges, its centre in the part of the table the arm reaches best."""
+    x0, x1, y0, y1 = PICK_AREA
+    while True:
+        x, y = rng.uniform(0.47, 0.63), rng.uniform(-0.12, 0.12)
+        yaw = rng.uniform(-np.pi / 2, np.pi / 2)
+        half = 0.5 * length * np.abs([np.cos(yaw), np.sin(yaw)]) + SCENE_MARGIN
+        if x0 < x - half[0] and x + half[0] < x1 and y0 < y - half[1] and y + half[1] < y1:
+            return float(x), float(y), float(yaw)
 
 
 @dataclass(frozen=True)

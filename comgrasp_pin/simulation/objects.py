@@ -230,6 +230,7 @@ def add_object(
     pose: np.ndarray | tuple[float, float, float],
     pos_real: float | None = None,
     name: str = "object",
+    parent: str | None = None,
 ) -> mujoco.MjsBody:
     """Add ``obj`` as a free body called ``name`` to ``spec``.
 
@@ -237,6 +238,8 @@ def add_object(
         pose: (4, 4) T_world_obj, or (x, y, yaw) lying on the table (m, m, rad).
         pos_real: true CoM along obj-x from the geometric centre (m); None keeps the parts'
             own CoM. Must lie within the rod.
+        parent: attach the object rigidly (no free joint) to this body instead, with
+            ``pose`` relative to it, e.g. ``"eelink"`` to render a rod held in the jaws.
     Geoms are named ``{name}_{i}`` and the body carries a site ``{name}_com`` at its CoM.
     """
     T = np.asarray(pose, dtype=float)
@@ -251,8 +254,10 @@ def add_object(
         com[0] = pos_real
     quat = np.zeros(4)
     mujoco.mju_mat2Quat(quat, T[:3, :3].ravel())
-    body = spec.worldbody.add_body(name=name, pos=T[:3, 3].tolist(), quat=quat.tolist())
-    body.add_freejoint(name=f"{name}_free")
+    holder = spec.worldbody if parent is None else spec.body(parent)
+    body = holder.add_body(name=name, pos=T[:3, 3].tolist(), quat=quat.tolist())
+    if parent is None:
+        body.add_freejoint(name=f"{name}_free")
     body.explicitinertial = True
     body.mass = obj.mass
     body.ipos = com.tolist()
