@@ -11,6 +11,7 @@ off-centre grasp that holds at rest may still slip on the way).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -84,7 +85,12 @@ def rod_axis_world(T_world_ee: np.ndarray, T_ee_obj: np.ndarray) -> np.ndarray:
     return horizontal / norm
 
 
-def com_grasp(rod: GraspPose, axis_hint_world: np.ndarray, x_com_obj: float) -> GraspPose:
+def com_grasp(
+    rod: GraspPose,
+    axis_hint_world: np.ndarray,
+    x_com_obj: float,
+    nearest_graspable: Callable[[float], float] | None = None,
+) -> GraspPose:
     """Top-down grasp at the CoM of a rod lying on the table.
 
     Args:
@@ -92,8 +98,12 @@ def com_grasp(rod: GraspPose, axis_hint_world: np.ndarray, x_com_obj: float) -> 
         axis_hint_world: (3,) direction of the rod's +x axis (its orientation is ambiguous
             in a top view; this resolves it, e.g. ``rod_axis_world`` before putting it down).
         x_com_obj: CoM along +x from the centre (m).
+        nearest_graspable: maps a position along the rod (m from its centre, towards
+            +yaw) to the nearest one the jaws can close on (a head or a blade may be too
+            wide); the grasp then goes there, as near the CoM as the object allows.
     """
     d = np.array([np.cos(rod.yaw), np.sin(rod.yaw), 0.0])
-    if d @ np.asarray(axis_hint_world, dtype=float) < 0.0:
-        d = -d
-    return GraspPose(rod.x + x_com_obj * d[0], rod.y + x_com_obj * d[1], rod.z, rod.yaw)
+    s = x_com_obj if d @ np.asarray(axis_hint_world, dtype=float) >= 0.0 else -x_com_obj
+    if nearest_graspable is not None:
+        s = nearest_graspable(s)
+    return GraspPose(rod.x + s * d[0], rod.y + s * d[1], rod.z, rod.yaw)

@@ -20,6 +20,7 @@ from comgrasp_pin.camera import PinholeCamera
 from comgrasp_pin.errors import ObjectCutByBorderError, ObjectNotFoundError
 from comgrasp_pin.perception._points import (
     blobs,
+    border_pixels,
     check_images,
     fit_line,
     points_in,
@@ -83,6 +84,7 @@ def observe_held_rod(
     rod_length: float | None = None,
     exclude_capsules: Sequence[tuple[np.ndarray, np.ndarray, float]] = (),
     centre_hint: float | None = None,
+    handle_radius: float | None = None,
 ) -> SideView:
     """Locate the rod held in the jaws in a side-camera RGBD frame.
 
@@ -99,6 +101,8 @@ def observe_held_rod(
         centre_hint: where the rod's centre was along ee-x from the TCP when it was grasped
             (m; from the top view and the commanded grasp). Used only when neither end of
             the rod is seen whole: the rod turns in the jaws, it hardly slides along them.
+        handle_radius: half the jaws' opening where they hold the rod (m), from the
+            fingers' joint reading; fixes the radius of the fitted cylinder.
     Raises ObjectNotFoundError, ObjectCutByBorderError, InvalidDepthError.
     """
     depth = check_images(rgb, depth, camera)
@@ -109,12 +113,16 @@ def observe_held_rod(
     if T_world_ee is not None and table_z is not None:
         z_world = np.nan_to_num(p, nan=1e3) @ T_world_ee[2, :3] + T_world_ee[2, 3]
         candidate &= z_world > table_z + TABLE_MARGIN
+
+    def excluded(pts: np.ndarray) -> np.ndarray:
+        """The robot's own volume (gripper and arm) among points (N, 3)."""
+        inside = _gripper_volume(pts)
+        for p0, p1, radius in exclude_capsules:
+            inside |= _in_capsule(pts, np.asarray(p0, float), np.asarray(p1, float), radius)
+        return inside
+
     idx = np.flatnonzero(candidate)  # the costlier tests only on what is left
-    q = p.reshape(-1, 3)[idx]
-    robot = _gripper_volume(q)
-    for p0, p1, radius in exclude_capsules:
-        robot |= _in_capsule(q, np.asarray(p0, float), np.asarray(p1, float), radius)
-    candidate.flat[idx[robot]] = False
+    candidate.flat[idx[excluded(p.reshape(-1, 3)[idx])]] = False
     if not candidate.any():
         raise ObjectNotFoundError("nothing is held between the jaws (side camera)")
     mask = blobs(candidate, MIN_PIXELS, "side-camera image")
@@ -122,7 +130,7 @@ def observe_held_rod(
     # Tilt lives in the ee x-z plane; the jaws fix the axis at y = 0.
     x_axis, offset_xz, handle = _centre_line(points[:, [0, 2]])
     if handle.sum() >= MIN_PIXELS:
-        x_fit, offset_fit = _fit_cylinder(points[handle], x_axis, offset_xz)
+        x_fit, offset_fit = _fit_cylinder(points[handle], x_axis, offset_xz, handle_radius)
         # Trust the refinement only near the slice estimate (it can lock on a wrong side).
         if (
             x_fit @ x_axis > np.cos(np.radians(5.0))
@@ -140,8 +148,9 @@ def observe_held_rod(
         )
     T_cam_ee = np.linalg.inv(T_ee_cam)
     mid = _centre_along(
-        x_axis, lo, hi, offset, depth, mask, camera, T_cam_ee, rod_length, centre_hint
-    )
+        x_axis, lo, hi, along, offset, depth, p, mask, camera, T_cam_ee, rod_length,
+        centre_hint, excluded,
+    )  # fmt: skip
     centre = offset + mid * x_axis
     y_axis = np.array([0.0, 1.0, 0.0])
     T_ee_obj = np.eye(4)
@@ -160,24 +169,42 @@ def observe_held_rod(
 
 
 PEEK = 0.012  # look this far beyond an end to tell whether it is really the end (m)
+LENGTH_TOLERANCE = 0.01  # seen and known lengths this close agree (m)
+BORDER_NEAR = 0.03  # an end this close to where the rod meets the image border is cut (m)
 
 
 def _centre_along(
-    x_axis, lo, hi, offset, depth, mask, camera, T_cam_ee, rod_length, centre_hint=None
-) -> float:
+    x_axis, lo, hi, along, offset, depth, points, mask, camera, T_cam_ee, rod_length,
+    centre_hint, excluded,
+) -> float:  # fmt: skip
     """Where the rod's centre lies along ``x_axis`` (coordinate, m), from its trusted ends.
 
-    An end is trusted when the point just beyond it is in the image and nothing nearer to
-    the camera covers it (else the rod may go on out of view or behind the gripper).
+    An end is trusted when the point just beyond it is in the image, nothing nearer to the
+    camera covers it, and it is not in a region left out as the robot's own (else the rod
+    may go on out of view, behind the gripper, or into the self-filter).
     """
-    trusted = [_end_is_seen(offset + e * x_axis, s * x_axis, depth, mask, camera, T_cam_ee)
-               for e, s in ((lo, -1.0), (hi, 1.0))]  # fmt: skip
-    if all(trusted) and (rod_length is None or abs((hi - lo) - rod_length) < 2 * PEEK):
-        return 0.5 * (lo + hi)
+    along_border = points[border_pixels(mask)] @ x_axis
+    trusted = [
+        _end_is_seen(
+            offset + e * x_axis, s * x_axis, depth, points, mask, camera, T_cam_ee, excluded
+        )
+        and not np.any(np.abs(along_border - e) < BORDER_NEAR)
+        for e, s in ((lo, -1.0), (hi, 1.0))
+    ]
     if rod_length is None:
+        if all(trusted):
+            return 0.5 * (lo + hi)
         raise ObjectCutByBorderError(
             "an end of the held rod is out of view or hidden; pass rod_length (top view)"
         )
+    if hi - lo > rod_length + LENGTH_TOLERANCE:
+        # Something beyond the rod joined the mask: the rod is the length-L window that
+        # holds the most points.
+        centres = np.arange(lo + 0.5 * rod_length, hi - 0.5 * rod_length, 0.001)
+        counts = [np.count_nonzero(np.abs(along - c) <= 0.5 * rod_length) for c in centres]
+        return float(centres[np.asarray(counts) >= max(counts)].mean())
+    if all(trusted) and hi - lo > rod_length - LENGTH_TOLERANCE:
+        return 0.5 * (lo + hi)
     if trusted[0] and (not trusted[1] or abs(lo) > abs(hi)):
         return lo + 0.5 * rod_length
     if trusted[1]:
@@ -187,8 +214,10 @@ def _centre_along(
     raise ObjectCutByBorderError("neither end of the held rod is seen whole (side camera)")
 
 
-def _end_is_seen(end, outwards, depth, mask, camera, T_cam_ee) -> bool:
+def _end_is_seen(end, outwards, depth, points, mask, camera, T_cam_ee, excluded) -> bool:
     beyond = end + PEEK * outwards
+    if excluded(beyond[None])[0]:
+        return False
     p_cam = T_cam_ee[:3, :3] @ beyond + T_cam_ee[:3, 3]
     if p_cam[2] <= 0:
         return False
@@ -196,9 +225,13 @@ def _end_is_seen(end, outwards, depth, mask, camera, T_cam_ee) -> bool:
     if not (2 <= u < camera.width - 2 and 2 <= v < camera.height - 2):
         return False
     row, col = int(round(v)), int(round(u))
-    # Seen if what lies there is farther (background) or is the rod itself (a wide head
-    # seen in perspective); hidden if something else, nearer, covers it (the gripper).
-    return bool(mask[row, col] or depth[row, col] > p_cam[2] - 0.01)
+    if mask[row, col]:
+        # The rod itself: a wide head seen in perspective (its point lies within the ends
+        # found), or the rod going on beyond this end (it was cut off by the border).
+        return bool((points[row, col] - end) @ outwards <= 0.0)
+    # Seen if what lies there is farther (background); hidden if something else, nearer,
+    # covers it (the gripper).
+    return bool(depth[row, col] > p_cam[2] - 0.01)
 
 
 def _centre_line(xz: np.ndarray, bin_width: float = 0.01):
@@ -236,13 +269,16 @@ def _centre_line(xz: np.ndarray, bin_width: float = 0.01):
     return direction, point - (point @ direction) * direction, in_kept
 
 
-def _fit_cylinder(points: np.ndarray, direction: np.ndarray, point: np.ndarray):
+def _fit_cylinder(
+    points: np.ndarray, direction: np.ndarray, point: np.ndarray, radius: float | None = None
+):
     """Refine the axis (in the plane y = 0) by fitting a cylinder to the visible surface.
 
     The camera sees one side of the rod, so the visible points stand off the axis towards
     the camera; the slice centres inherit that offset, which changes along a tilted rod
     and biases the tilt. Fitting |(p - a) x u| = r (axis angle, its offset, radius r) by
     Gauss-Newton, with points far off the cylinder (heads, weights) left out, removes it.
+    ``radius`` (m), when known (half the jaws' opening), is held fixed.
     Returns (direction (2,), point nearest the TCP (2,)) in the x-z plane.
     """
     angle = np.arctan2(direction[1], direction[0])
@@ -255,19 +291,21 @@ def _fit_cylinder(points: np.ndarray, direction: np.ndarray, point: np.ndarray):
         rel = pts - prm[1] * n
         return np.linalg.norm(rel - np.outer(rel @ u, u), axis=1) - prm[2]
 
-    params[2] = np.median(residuals(params, points))
+    params[2] = np.median(residuals(params, points)) if radius is None else radius
+    free = 2 if radius is not None else 3
     keep = np.ones(len(points), dtype=bool)
     for _ in range(8):
         res = residuals(params, points[keep])
-        jac = np.empty((len(res), 3))
-        for k, h in enumerate((1e-6, 1e-7, 1e-7)):
+        jac = np.empty((len(res), free))
+        for k, h in enumerate((1e-6, 1e-7, 1e-7)[:free]):
             step = np.zeros(3)
             step[k] = h
             jac[:, k] = (residuals(params + step, points[keep]) - res) / h
         # Levenberg-Marquardt step: damped, accepted only if it lowers the cost.
         jtj, jtr = jac.T @ jac, jac.T @ res
         for damping in (1e-6, 1e-3, 1e-1, 1.0):
-            trial = params - np.linalg.solve(jtj + damping * np.diag(np.diag(jtj)), jtr)
+            delta = np.linalg.solve(jtj + damping * np.diag(np.diag(jtj)), jtr)
+            trial = params - np.r_[delta, np.zeros(3 - free)]
             if np.sum(residuals(trial, points[keep]) ** 2) < np.sum(res**2):
                 params = trial
                 break

@@ -35,6 +35,8 @@ class RodDetection:
         grasp: top-down grasp at the rod's geometric centre: (x, y) of the centre, z of the
             handle's axis (half the handle's height above the table), yaw of the rod.
         length: extent along the rod (m). table_z: height of the table plane (m).
+        widths: (K, 2) the rod's width across its axis (m) in 1 cm slices, as rows
+            (position along the rod from its centre towards +yaw, width).
         handle_height: the rod's height at its centre above the table (m).
         mask: (H, W) bool pixels of the rod. rect: OpenCV rotated rectangle
             ((u, v), (w, h), angle_deg) of the mask. axis_px: (2, 2) pixel ends of the axis.
@@ -42,6 +44,7 @@ class RodDetection:
 
     grasp: GraspPose
     length: float
+    widths: np.ndarray
     table_z: float
     handle_height: float
     mask: np.ndarray
@@ -99,5 +102,27 @@ def detect_rod_top_down(
     ends_world = np.array([[*(centre + s * direction), table_z] for s in (lo, hi)])
     T_cam_world = np.linalg.inv(T_world_cam)
     ends_cam = ends_world @ T_cam_world[:3, :3].T + T_cam_world[:3, 3]
-    return RodDetection(grasp, float(hi - lo), table_z, handle_height, mask, rect,
+    across = (p[:, :2] - centroid) @ np.array([-direction[1], direction[0]])
+    s_rel = along - 0.5 * (lo + hi)
+    bins = np.floor(s_rel / 0.01).astype(int)
+    widths = np.array([((b + 0.5) * 0.01, np.ptp(across[bins == b])) for b in np.unique(bins)])
+    if direction @ np.array([np.cos(yaw), np.sin(yaw)]) < 0:  # rows towards +yaw
+        widths = widths[::-1] * np.array([-1.0, 1.0])
+    return RodDetection(grasp, float(hi - lo), widths, table_z, handle_height, mask, rect,
                         camera.project(ends_cam))  # fmt: skip
+
+
+def nearest_graspable(
+    det: RodDetection, s: float, max_width: float = 0.075, half_pad: float = 0.022
+) -> float:
+    """The position along the rod (m from its centre, towards +yaw) nearest ``s`` where the
+    jaws fit: the rod is narrower than ``max_width`` over ``half_pad`` either side."""
+    pos, width = det.widths[:, 0], det.widths[:, 1]
+    ok = []
+    for c in pos:
+        near = np.abs(pos - c) <= half_pad
+        if np.all(width[near] <= max_width) and abs(c) <= 0.5 * det.length - half_pad:
+            ok.append(c)
+    if not ok:
+        raise ObjectNotFoundError("no part of the object is narrow enough to grasp")
+    return float(min(ok, key=lambda c: abs(c - s)))

@@ -20,12 +20,20 @@ from pathlib import Path
 
 import numpy as np
 
-from comgrasp_pin.errors import EmptyGripperError, ObjectNotFoundError
+from comgrasp_pin.errors import EmptyGripperError, ObjectNotFoundError, PerceptionError
 from comgrasp_pin.estimator import estimate_com
 from comgrasp_pin.geometry import com_along_axis, invert_transform
-from comgrasp_pin.ik import Q_PARK, GraspPose, grasp_frame, solve_ik, solve_top_down, top_down_frame
+from comgrasp_pin.ik import (
+    Q_PARK,
+    GraspPose,
+    IKError,
+    grasp_frame,
+    solve_ik,
+    solve_top_down,
+    top_down_frame,
+)
 from comgrasp_pin.perception import SideView
-from comgrasp_pin.perception.top_down import PICK_AREA
+from comgrasp_pin.perception.top_down import PICK_AREA, nearest_graspable
 from comgrasp_pin.planner import PlannerConfig, com_grasp, decide, rod_axis_world
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.simulation import motion
@@ -322,7 +330,8 @@ def trial_grasp(world: World, offset: float = 0.0) -> TrialGrasp:
     watcher(sim, force=True)
     after = [sim.measure_torques(config.settle, config.window)]
     try:
-        side = look_from_side(world.rig, sim.data, robot, after[0].q, rod_length, centre_hint)
+        side = look_from_side(world.rig, sim.data, robot, after[0].q, rod_length, centre_hint,
+                          finger_q=sim.finger_q[0])  # fmt: skip
     except ObjectNotFoundError as exc:
         raise RodDroppedError(str(exc), _heavy_side(watcher, T_meas)) from exc
     slip_seen = watcher.slipping_or_tilted()
@@ -330,9 +339,8 @@ def trial_grasp(world: World, offset: float = 0.0) -> TrialGrasp:
     if len(poses) > 1:
         motion.move_to(sim, poses[1], duration=1.0)
         after.append(sim.measure_torques(config.settle, config.window))
-        side_rolled = look_from_side(
-            world.rig, sim.data, robot, after[1].q, rod_length, centre_hint
-        )
+        side_rolled = look_from_side(world.rig, sim.data, robot, after[1].q, rod_length,
+                                     centre_hint, finger_q=sim.finger_q[0])  # fmt: skip
         moved = abs(side_rolled.theta - side.theta) > np.radians(ROLL_SLIP_DEG)
         motion.move_to(sim, poses[0], duration=1.0)
 
@@ -448,33 +456,25 @@ def run_episode(
         world.sim.observers.append(recorder)
     timings: dict[str, float] = {}
     start = time.perf_counter()
+    trial, regrasped, success, final_offset = None, False, False, float("nan")
     try:
-        trial, regrasped = None, False
-        if method == "baseline":
-            _caption(recorder, "baseline: grasp at the geometric centre")
-            rod = look_from_above(world.rig, world.sim.data).grasp
-            motion.pick(world.sim, world.robot, rod, grip_force=config.grip_force)
-            reason = "geometric-centre grasp"
-        else:
-            _caption(recorder, "trial grasp at the geometric centre, measuring")
-            trial = _trial_with_retry(world)
-            timings["trial"] = time.perf_counter() - start
-            decision = decide(trial.theta, trial.slip_seen, trial.x_com_obj,
-                              trial.side_view.grasp_offset, config.planner)  # fmt: skip
-            reason = decision.reason
-            if decision.regrasp:
-                regrasped = True
-                _caption(recorder, f"regrasp: {decision.reason}")
-                axis_hint = rod_axis_world(trial.T_world_ee, trial.T_ee_obj)
-                _put_down(world, trial)
+        try:
+            if method == "baseline":
+                _caption(recorder, "baseline: grasp at the geometric centre")
                 rod = look_from_above(world.rig, world.sim.data).grasp
-                target = com_grasp(rod, axis_hint, decision.x_com_obj)
-                motion.pick(world.sim, world.robot, target, grip_force=config.grip_force)
-        final_offset = world.grasp_offset_true()
-        mark = time.perf_counter()
-        _caption(recorder, "carrying to the drop box")
-        success = _carry(world)
-        timings["carry"] = time.perf_counter() - mark
+                motion.pick(world.sim, world.robot, rod, grip_force=config.grip_force)
+                reason = "geometric-centre grasp"
+            else:
+                trial, regrasped, reason = _measure_and_regrasp(world, recorder)
+                timings["trial"] = time.perf_counter() - start
+            final_offset = world.grasp_offset_true()
+            mark = time.perf_counter()
+            _caption(recorder, "carrying to the drop box")
+            success = _carry(world)
+            timings["carry"] = time.perf_counter() - mark
+        except (RodDroppedError, PerceptionError, IKError) as exc:
+            # The robot lost the rod, or cannot see or reach it any more: a failed episode.
+            reason = f"{type(exc).__name__}: {exc}"
         if recorder is not None:
             video.parent.mkdir(parents=True, exist_ok=True)
             recorder.write_video(video)
@@ -485,6 +485,24 @@ def run_episode(
         world.close()
     timings["total"] = time.perf_counter() - start - sum(timings.values())
     return EpisodeResult(scene, method, success, regrasped, reason, trial, final_offset, timings)
+
+
+def _measure_and_regrasp(world: World, recorder) -> tuple[TrialGrasp, bool, str]:
+    """The regrasp method up to the carrying grasp: (trial, regrasped, reason)."""
+    _caption(recorder, "trial grasp at the geometric centre, measuring")
+    trial = _trial_with_retry(world)
+    decision = decide(trial.theta, trial.slip_seen, trial.x_com_obj,
+                      trial.side_view.grasp_offset, world.config.planner)  # fmt: skip
+    if not decision.regrasp:
+        return trial, False, decision.reason
+    _caption(recorder, f"regrasp: {decision.reason}")
+    axis_hint = rod_axis_world(trial.T_world_ee, trial.T_ee_obj)
+    _put_down(world, trial)
+    rod = look_from_above(world.rig, world.sim.data)
+    target = com_grasp(rod.grasp, axis_hint, decision.x_com_obj,
+                       lambda s: nearest_graspable(rod, s))  # fmt: skip
+    motion.pick(world.sim, world.robot, target, grip_force=world.config.grip_force)
+    return trial, True, decision.reason
 
 
 def _put_down(world: World, trial: TrialGrasp) -> None:
@@ -498,14 +516,16 @@ def _put_down(world: World, trial: TrialGrasp) -> None:
     sim, robot = world.sim, world.robot
     T_now = robot.ee_pose(sim.q_des)
     yaw = np.pi / 2 if T_now[1, 0] >= 0 else -np.pi / 2  # the nearer of the two
-    T_above = top_down_frame(*PUT_DOWN_XY, T_now[2, 3], yaw)
-    motion.move_to(sim, solve_ik(robot, T_above, sim.q_des), settle=0.2)
-
     x_axis, centre = trial.T_ee_obj[:3, 0], trial.T_ee_obj[:3, 3]
     ends = [centre + s * 0.5 * trial.rod_length * x_axis for s in (-1.0, 1.0)]
     low = max(ends, key=lambda e: e[2])  # ee z points down
     reach = float(np.hypot(low[0], low[2]))  # TCP to the low end, in the jaws' plane
     shift = low[0] - np.sign(low[0]) * reach  # TCP move along ee-x that lays the rod flat
+    # Flat, the rod's centre lies -grasp_offset along ee-x from the TCP: put it mid-table.
+    e_x = np.array([np.cos(yaw), np.sin(yaw)])
+    xy_touch = np.asarray(PUT_DOWN_XY) + (trial.side_view.grasp_offset - shift) * e_x
+    T_above = top_down_frame(*xy_touch, T_now[2, 3], yaw)
+    motion.move_to(sim, solve_ik(robot, T_above, sim.q_des), settle=0.2)
     T_touch = T_above.copy()
     T_touch[2, 3] = max(trial.grasp_z + low[2] + 0.01, trial.grasp_z)
     T_flat = T_above.copy()

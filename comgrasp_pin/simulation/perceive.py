@@ -23,6 +23,7 @@ from comgrasp_pin.simulation.cameras import CameraRig
 from comgrasp_pin.simulation.world import SIDE_CAMERA, TOP_CAMERA
 
 TABLE_Z = 0.0  # the workcell's table plane (m, world), known like the camera extrinsics
+OPEN_HALF_GAP = 0.045  # half the jaws' gap when open (URDF: pad faces at +-0.045 m)
 ARM_RADIUS = 0.075  # UR5 upper arm and forearm: about 0.06 m in radius, with a margin (m)
 WRIST_RADIUS = 0.06  # UR5 wrist housings: about 0.045-0.055 m, with a margin (m)
 
@@ -50,16 +51,24 @@ def look_from_side(
     rod_length: float | None = None,
     centre_hint: float | None = None,
     with_rgb: bool = True,
+    finger_q: float | None = None,
 ) -> SideView:
     """The held rod's pose in the ee frame, from the side camera at joint reading ``q``
     (``rod_length`` and ``centre_hint`` from the top view help when the rod leaves the
     image; see ``observe_held_rod``). The measurement needs depth only; ``with_rgb=False``
-    skips the colour render (the slip monitor's frames)."""
+    skips the colour render (the slip monitor's frames). ``finger_q``: the fingers' joint
+    reading (m), which gives the held handle's radius."""
     T_world_ee, T_ee_cam = side_camera_pose(robot, q)
     rgb = rig.rgb(data, SIDE_CAMERA) if with_rgb else None
     depth = rig.depth(data, SIDE_CAMERA)
     return observe_held_rod(rgb, depth, rig.intrinsics(SIDE_CAMERA), T_ee_cam, T_world_ee,
-                            TABLE_Z, rod_length, arm_capsules(robot, q), centre_hint)  # fmt: skip
+                            TABLE_Z, rod_length, arm_capsules(robot, q), centre_hint,
+                            None if finger_q is None else handle_radius(finger_q))  # fmt: skip
+
+
+def handle_radius(finger_q: float) -> float:
+    """Radius (m) of a round handle held with the fingers at ``finger_q`` (m closed each)."""
+    return max(OPEN_HALF_GAP - finger_q, 0.0)
 
 
 def arm_capsules(robot: RobotModel, q: np.ndarray):
@@ -99,7 +108,7 @@ class SlipWatcher:
         self._next = sim.time + self.dt
         try:
             view = look_from_side(self.rig, sim.data, self.robot, sim.q, self.rod_length,
-                                  self.centre_hint, with_rgb=False)  # fmt: skip
+                                  self.centre_hint, False, sim.finger_q[0])  # fmt: skip
         except PerceptionError:
             self.failed_frames += 1
             return
