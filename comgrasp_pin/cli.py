@@ -78,6 +78,14 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_views(args: argparse.Namespace) -> int:
+    from comgrasp_pin.simulation.views import save_camera_views
+
+    for path in save_camera_views(Path(args.out), args.object, args.seed):
+        print(f"wrote {path}")
+    return 0
+
+
 def _add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
     p.add_argument("--out", default=default_out, help="output folder (%(default)s)")
     p.add_argument("--objects", default=",".join(OBJECTS), help="comma-separated (%(default)s)")
@@ -122,6 +130,12 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--method", default="regrasp", choices=("baseline", "regrasp"))
     demo.add_argument("--out", default="results/demo", help="output folder (%(default)s)")
     demo.set_defaults(func=_cmd_demo)
+
+    views = sub.add_parser("views", help="both camera views with mask, rectangle, axis, grasp")
+    views.add_argument("--object", default="obj2", choices=OBJECTS)
+    views.add_argument("--seed", type=int, default=0)
+    views.add_argument("--out", default="results/views", help="output folder (%(default)s)")
+    views.set_defaults(func=_cmd_views)
     return parser
 
 
