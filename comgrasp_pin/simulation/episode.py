@@ -34,7 +34,7 @@ from comgrasp_pin.ik import (
 )
 from comgrasp_pin.perception import SideView
 from comgrasp_pin.perception.top_down import PICK_AREA, nearest_graspable
-from comgrasp_pin.planner import PlannerConfig, com_grasp, decide, rod_axis_world
+from comgrasp_pin.planner import PlannerConfig, com_grasp, decide
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.simulation import motion
 from comgrasp_pin.simulation.cameras import CameraRig
@@ -47,7 +47,9 @@ from comgrasp_pin.simulation.world import WorldConfig, build_model
 METHODS = ("baseline", "regrasp")
 SCENE_MARGIN = 0.05  # rods lie at least this far inside the pick area's edges (m)
 PUT_DOWN_XY = (0.55, 0.0)  # where a rod is put down to be grasped again: mid-table (m)
-RETRY_SHIFT = 0.12  # a dropped rod is grasped again this fraction of its length off-centre
+CAREFUL_LIFT = 0.04  # a careful trial grasp first lifts the rod this much (m) ...
+CAREFUL_ABORT_DEG = 6.0  # ... and puts it back down if it turns more than this (deg)
+RETRY_SHIFT = 0.1  # a dropped rod is grasped again this fraction of its length off-centre
 ROLL_SLIP_DEG = 0.5  # a tilt change above this at the rolled pose means the rod moved (deg)
 DROP_BOX_INNER = (0.05, 0.58, 0.24, 0.12)  # centre x, y and half sizes (m), inside the walls
 
@@ -284,7 +286,16 @@ def _heavy_side(watcher: SlipWatcher, T_world_ee: np.ndarray) -> np.ndarray | No
     return -np.sign(theta) * x_world / np.linalg.norm(x_world)
 
 
-def trial_grasp(world: World, offset: float = 0.0) -> TrialGrasp:
+class RodSlippedError(RodDroppedError):
+    """The rod turned in the jaws as a careful trial grasp began to lift it, and was put
+    back down; ``heavy_side_world`` tells where its CoM lies."""
+
+    def __init__(self, message: str, heavy_side_world: np.ndarray | None):
+        EmptyGripperError.__init__(self, f"the rod slipped as it was lifted: {message}")
+        self.heavy_side_world = heavy_side_world
+
+
+def trial_grasp(world: World, offset: float = 0.0, careful: bool = False) -> TrialGrasp:
     """The paper's measurement: grasp ``offset`` m along the rod from the perceived centre.
 
     With ``config.roll_deg`` > 0 a second static pose, the measurement pose rolled about
@@ -293,6 +304,10 @@ def trial_grasp(world: World, offset: float = 0.0) -> TrialGrasp:
     roll lowers the gravity moment about the jaw axis, so a rod that has settled does not
     slip; the side camera checks it and the single-pose (paper's) estimate is used if it
     moved. Both estimates are returned.
+
+    ``careful``: lift only CAREFUL_LIFT first and, if the rod turns by more than
+    CAREFUL_ABORT_DEG, put it back where it was and raise RodSlippedError (telling which
+    end went down), before the rod can fall.
     """
     sim, robot, config = world.sim, world.robot, world.config
     detection = look_from_above(world.rig, sim.data)
@@ -323,8 +338,28 @@ def trial_grasp(world: World, offset: float = 0.0) -> TrialGrasp:
 
     watcher = SlipWatcher(world.rig, robot, config.watch_dt, config.grip_force, rod_length,
                           centre_hint)  # fmt: skip
-    motion.pick(sim, robot, grasp, grip_force=config.grip_force, lift_height=config.lift_height,
-                lift_time=config.lift_time, callback=watcher)  # fmt: skip
+    if careful:
+        # Lift a little, slowly, and put the rod back down at once if it turns in the jaws.
+        grasp_z = grasp_frame(grasp)[2, 3]
+        pick = motion.pick(sim, robot, grasp, grip_force=config.grip_force,
+                           lift_height=grasp_z + CAREFUL_LIFT, lift_time=1.0,
+                           callback=watcher)  # fmt: skip
+        motion.hold(sim, 0.3, callback=watcher)
+        watcher(sim, force=True)
+        tilts = np.abs(watcher.monitor.thetas)
+        if tilts.size and tilts.max() > np.radians(CAREFUL_ABORT_DEG):
+            heavy = _heavy_side(watcher, T_meas)
+            motion.place(sim, robot, pick.T_world_ee_grasp, lower_time=0.8)
+            motion.move_to(sim, Q_PARK)
+            sim.hold(0.5)
+            raise RodSlippedError(f"the rod turned by {np.degrees(tilts.max()):.0f} deg", heavy)
+        T_up = robot.ee_pose(sim.q_des)
+        T_up[2, 3] = config.lift_height
+        motion.move_linear(sim, robot, T_up, config.lift_time, watcher)
+    else:
+        motion.pick(sim, robot, grasp, grip_force=config.grip_force,
+                    lift_height=config.lift_height, lift_time=config.lift_time,
+                    callback=watcher)  # fmt: skip
     motion.move_to(sim, poses[0], duration=0.3, callback=watcher)
     motion.hold(sim, 0.5, callback=watcher)
     watcher(sim, force=True)
@@ -403,14 +438,14 @@ def _rot_x(angle: float) -> np.ndarray:
     return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
 
 
-def _trial_with_retry(world: World, attempts: int = 3) -> TrialGrasp:
-    """The trial grasp; if the rod fell out of the jaws, go home, look again and grasp it
-    again where it now lies, shifted towards the end the side camera saw go down (by a
-    further RETRY_SHIFT of its length each time): the CoM is on that side."""
+def _trial_with_retry(world: World, attempts: int = 4) -> TrialGrasp:
+    """Careful trial grasps: if the rod turns as it is lifted (or falls), put it down, look
+    again and grasp it again where it now lies, shifted towards the end the side camera saw
+    go down (by a further RETRY_SHIFT of its length each time): the CoM is on that side."""
     offset = 0.0
     for attempt in range(attempts):
         try:
-            return trial_grasp(world, offset)
+            return trial_grasp(world, offset, careful=attempt < attempts - 1)
         except RodDroppedError as exc:
             if attempt == attempts - 1:
                 raise
@@ -496,8 +531,7 @@ def _measure_and_regrasp(world: World, recorder) -> tuple[TrialGrasp, bool, str]
     if not decision.regrasp:
         return trial, False, decision.reason
     _caption(recorder, f"regrasp: {decision.reason}")
-    axis_hint = rod_axis_world(trial.T_world_ee, trial.T_ee_obj)
-    _put_down(world, trial)
+    axis_hint = _put_down(world, trial)
     rod = look_from_above(world.rig, world.sim.data)
     target = com_grasp(rod.grasp, axis_hint, decision.x_com_obj,
                        lambda s: nearest_graspable(rod, s))  # fmt: skip
@@ -505,14 +539,15 @@ def _measure_and_regrasp(world: World, recorder) -> tuple[TrialGrasp, bool, str]
     return trial, True, decision.reason
 
 
-def _put_down(world: World, trial: TrialGrasp) -> None:
+def _put_down(world: World, trial: TrialGrasp) -> np.ndarray:
     """Lay the held rod down mid-table, along the table's long side (y), and go home.
 
     A rod hanging tilted in the jaws is laid down as a person would: lowered until its low
     end nearly touches the table, then the jaws move down and away from that end together,
     so that the rod pivots on it and comes to lie flat where it is (lowering it straight
     down would push it through the jaws and topple it). Uses only what the side camera
-    measured (axis, centre, length from the top view)."""
+    measured (axis, centre, length from the top view). Returns the world direction (3,) of
+    the rod's +x end as laid down (its end on the +ee-x side stays on that side)."""
     sim, robot = world.sim, world.robot
     T_now = robot.ee_pose(sim.q_des)
     yaw = np.pi / 2 if T_now[1, 0] >= 0 else -np.pi / 2  # the nearer of the two
@@ -535,6 +570,7 @@ def _put_down(world: World, trial: TrialGrasp) -> None:
     motion.place(sim, robot, T_flat, lower_time=2.0)
     motion.move_to(sim, Q_PARK)
     sim.hold(0.5)
+    return T_flat[:3, 0].copy()
 
 
 def _caption(recorder, text: str) -> None:
