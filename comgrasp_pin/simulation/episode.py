@@ -45,7 +45,7 @@ from comgrasp_pin.simulation.torque_sensor import TorqueSensorConfig
 from comgrasp_pin.simulation.world import WorldConfig, build_model
 
 METHODS = ("baseline", "regrasp")
-SCENE_MARGIN = 0.05  # rods lie at least this far inside the pick area's edges (m)
+SCENE_MARGIN = 0.09  # rods (heads up to 0.07 m across) lie this far inside the pick area (m)
 PUT_DOWN_XY = (0.55, 0.0)  # where a rod is put down to be grasped again: mid-table (m)
 CAREFUL_LIFT = 0.04  # a careful trial grasp first lifts the rod this much (m) ...
 CAREFUL_ABORT_DEG = 6.0  # ... and puts it back down if it turns more than this (deg)
@@ -147,7 +147,8 @@ class TrialGrasp:
         rolled_slip: the rod moved in the jaws at the rolled pose (two-pose estimate unused).
         mass_esti, mass_real: kg. grasp_offset: where the jaws hold the rod (true, m).
         length: the rod's true length (m); rod_length: as the top view measured it (m).
-        grasp_z: eelink height of the grasp (m).
+        grasp_z: eelink height of the grasp (m); rod_axis_z: height of the rod's axis on
+            the table, from the top view (m).
         estimate: the ComEstimate used; estimate_line: the single-pose one.
         q_meas: (k, 6) measurement configurations (rad); tau_before, tau_after: (k, 6)
             averaged torque readings there (N m).
@@ -169,6 +170,7 @@ class TrialGrasp:
     length: float
     rod_length: float
     grasp_z: float
+    rod_axis_z: float
     estimate: object
     estimate_line: object
     q_meas: np.ndarray
@@ -423,6 +425,7 @@ def trial_grasp(world: World, offset: float = 0.0, careful: bool = False) -> Tri
         length=world.scene.length,
         rod_length=rod_length,
         grasp_z=grasp_frame(grasp)[2, 3],
+        rod_axis_z=rod.z,
         estimate=est,
         estimate_line=est_line,
         q_meas=np.array([m.q for m in after]),
@@ -531,29 +534,34 @@ def _measure_and_regrasp(world: World, recorder) -> tuple[TrialGrasp, bool, str]
     if not decision.regrasp:
         return trial, False, decision.reason
     _caption(recorder, f"regrasp: {decision.reason}")
-    axis_hint = _put_down(world, trial)
+    p_pivot, low_is_plus = _put_down(world, trial)
     rod = look_from_above(world.rig, world.sim.data)
+    # The low end stayed at the pivot as the rod lay down: seen from the rod's new centre,
+    # it tells which way the rod's +x end points.
+    to_pivot = np.r_[p_pivot[:2] - [rod.grasp.x, rod.grasp.y], 0.0]
+    axis_hint = to_pivot if low_is_plus else -to_pivot
     target = com_grasp(rod.grasp, axis_hint, decision.x_com_obj,
                        lambda s: nearest_graspable(rod, s))  # fmt: skip
     motion.pick(world.sim, world.robot, target, grip_force=world.config.grip_force)
     return trial, True, decision.reason
 
 
-def _put_down(world: World, trial: TrialGrasp) -> np.ndarray:
+def _put_down(world: World, trial: TrialGrasp) -> tuple[np.ndarray, bool]:
     """Lay the held rod down mid-table, along the table's long side (y), and go home.
 
     A rod hanging tilted in the jaws is laid down as a person would: lowered until its low
     end nearly touches the table, then the jaws move down and away from that end together,
     so that the rod pivots on it and comes to lie flat where it is (lowering it straight
     down would push it through the jaws and topple it). Uses only what the side camera
-    measured (axis, centre, length from the top view). Returns the world direction (3,) of
-    the rod's +x end as laid down (its end on the +ee-x side stays on that side)."""
+    measured (axis, centre, length from the top view). Returns where the rod's low end met
+    the table (3,), the pivot it lay down about, and whether that end is its +x end."""
     sim, robot = world.sim, world.robot
     T_now = robot.ee_pose(sim.q_des)
     yaw = np.pi / 2 if T_now[1, 0] >= 0 else -np.pi / 2  # the nearer of the two
     x_axis, centre = trial.T_ee_obj[:3, 0], trial.T_ee_obj[:3, 3]
     ends = [centre + s * 0.5 * trial.rod_length * x_axis for s in (-1.0, 1.0)]
     low = max(ends, key=lambda e: e[2])  # ee z points down
+    low_is_plus = bool((low - centre) @ x_axis > 0)
     reach = float(np.hypot(low[0], low[2]))  # TCP to the low end, in the jaws' plane
     shift = low[0] - np.sign(low[0]) * reach  # TCP move along ee-x that lays the rod flat
     # Flat, the rod's centre lies -grasp_offset along ee-x from the TCP: put it mid-table.
@@ -561,16 +569,21 @@ def _put_down(world: World, trial: TrialGrasp) -> np.ndarray:
     xy_touch = np.asarray(PUT_DOWN_XY) + (trial.side_view.grasp_offset - shift) * e_x
     T_above = top_down_frame(*xy_touch, T_now[2, 3], yaw)
     motion.move_to(sim, solve_ik(robot, T_above, sim.q_des), settle=0.2)
+    # Flat, the rod's axis lies where it is now below the TCP (its point nearest the TCP):
+    # the TCP ends that far above the axis' height on the table.
+    near = centre - (centre @ x_axis) * x_axis
+    z_flat = max(trial.rod_axis_z + near[2] + 0.003, trial.rod_axis_z)
     T_touch = T_above.copy()
-    T_touch[2, 3] = max(trial.grasp_z + low[2] + 0.01, trial.grasp_z)
+    T_touch[2, 3] = max(z_flat + low[2] + 0.01, z_flat)
     T_flat = T_above.copy()
     T_flat[:3, 3] += shift * T_above[:3, 0]
-    T_flat[2, 3] = trial.grasp_z + 0.003
+    T_flat[2, 3] = z_flat
     motion.move_linear(sim, robot, T_touch, 1.5)
+    p_pivot = T_touch[:3, :3] @ low + T_touch[:3, 3]  # where the low end meets the table
     motion.place(sim, robot, T_flat, lower_time=2.0)
     motion.move_to(sim, Q_PARK)
     sim.hold(0.5)
-    return T_flat[:3, 0].copy()
+    return p_pivot, low_is_plus
 
 
 def _caption(recorder, text: str) -> None:
