@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -63,7 +64,9 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
     out = Path(args.out)
     video = out / f"episode_{args.object}_{args.method}_seed{args.seed}.mp4"
-    result = run_episode(args.object, args.seed, args.method, video=video)
+    if args.viewer and not os.environ.get("DISPLAY"):
+        raise SystemExit("--viewer needs a display (DISPLAY is not set); drop it for the video")
+    result = run_episode(args.object, args.seed, args.method, video=video, viewer=args.viewer)
     print(f"object {args.object}, method {args.method}, seed {args.seed}")
     if result.trial is not None:
         t = result.trial
@@ -129,6 +132,7 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--seed", type=int, default=0)
     demo.add_argument("--method", default="regrasp", choices=("baseline", "regrasp"))
     demo.add_argument("--out", default="results/demo", help="output folder (%(default)s)")
+    demo.add_argument("--viewer", action="store_true", help="also show MuJoCo's viewer (display)")
     demo.set_defaults(func=_cmd_demo)
 
     views = sub.add_parser("views", help="both camera views with mask, rectangle, axis, grasp")

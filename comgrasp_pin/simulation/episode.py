@@ -477,16 +477,20 @@ def run_episode(
     pos_real: float | None = None,
     config: EpisodeConfig | None = None,
     video: Path | None = None,
+    viewer: bool = False,
 ) -> EpisodeResult:
     """One pick-and-place of ``obj`` on the scene drawn from ``seed`` (same seed, same
     scene and same sensor noise: the result is reproducible). ``video``: write an MP4 and a
-    key-frame strip (PNG) of the episode there."""
+    key-frame strip (PNG) of the episode there. ``viewer``: show it in MuJoCo's interactive
+    viewer (needs a display), in real time."""
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
     config = config or EpisodeConfig()
     scene = Scene.sample(obj, seed, pos_real)
     world = World(scene, config, seed)
     recorder = None
+    if viewer:
+        world.sim.observers.append(_LiveViewer(world.sim))
     if video is not None:
         from comgrasp_pin.simulation.recorder import EpisodeRecorder
 
@@ -593,6 +597,27 @@ def _put_down(world: World, trial: TrialGrasp) -> tuple[np.ndarray, bool, np.nda
     motion.move_to(sim, Q_PARK)
     sim.hold(0.5)
     return p_pivot, low_is_plus, T_flat[:3, 3].copy()
+
+
+class _LiveViewer:
+    """A Simulation observer that mirrors the world in MuJoCo's passive viewer at 60 Hz,
+    paced to real time."""
+
+    def __init__(self, sim: Simulation):
+        import mujoco.viewer
+
+        self._handle = mujoco.viewer.launch_passive(sim.model, sim.data)
+        self._next = sim.time
+        self._start = (time.perf_counter(), sim.time)
+
+    def __call__(self, sim: Simulation) -> None:
+        if sim.time < self._next or not self._handle.is_running():
+            return
+        self._next += 1.0 / 60.0
+        self._handle.sync()
+        ahead = (sim.time - self._start[1]) - (time.perf_counter() - self._start[0])
+        if ahead > 0:
+            time.sleep(ahead)
 
 
 def _caption(recorder, text: str) -> None:
