@@ -12,11 +12,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from comgrasp_pin.errors import EmptyGripperError, ObjectNotFoundError
+from comgrasp_pin.errors import EmptyGripperError, ObjectNotFoundError, PerceptionError
 from comgrasp_pin.estimator import estimate_com
 from comgrasp_pin.geometry import com_along_axis, invert_transform
 from comgrasp_pin.ik import Q_PARK, GraspPose, grasp_frame, solve_ik, solve_top_down
 from comgrasp_pin.perception import SideView
+from comgrasp_pin.regressor import pose_regressor
 from comgrasp_pin.simulation import motion
 from comgrasp_pin.simulation.perceive import SlipWatcher, look_from_above, look_from_side
 from comgrasp_pin.simulation.scene import World
@@ -25,6 +26,7 @@ CAREFUL_LIFT = 0.04  # a careful trial grasp first lifts the rod this much (m) .
 CAREFUL_ABORT_DEG = 6.0  # ... and puts it back down if it turns more than this (deg)
 RETRY_SHIFT = 0.1  # a dropped rod is grasped again this fraction of its length off-centre
 ROLL_SLIP_DEG = 0.5  # a tilt change above this at the rolled pose means the rod moved (deg)
+MAX_CONDITION = 1e4  # the rod-frame two-pose problem is used below this condition number
 
 
 @dataclass(frozen=True)
@@ -40,7 +42,8 @@ class TrialGrasp:
             with pos_real; accuracy = 1 - 5 |pos_esti - pos_real| / length.
         pos_esti_line: the same for the paper's single-pose estimate (CoM line met with the
             rod axis), from the same measurements.
-        rolled_slip: the rod moved in the jaws at the rolled pose (two-pose estimate unused).
+        rolled_slip: the rod turned in the jaws at the rolled pose; the two poses were then
+            combined in the rod's frame, each with its own side view.
         mass_esti, mass_real: kg. grasp_offset: where the jaws hold the rod (true, m).
         length: the rod's true length (m); rod_length: as the top view measured it (m).
         grasp_z: eelink height of the grasp (m); rod_axis_z: height of the rod's axis on
@@ -122,9 +125,9 @@ def trial_grasp(world: World, offset: float = 0.0, careful: bool = False) -> Tri
     With ``config.roll_deg`` > 0 a second static pose, the measurement pose rolled about
     ee-x, is measured too: gravity then has a component along the jaw axis, which makes the
     CoM's height in the jaws observable, and the 3-D CoM is projected on the rod's axis. The
-    roll lowers the gravity moment about the jaw axis, so a rod that has settled does not
-    slip; the side camera checks it and the single-pose (paper's) estimate is used if it
-    moved. Both estimates are returned.
+    roll lowers the gravity moment about the jaw axis, so a settled rod rarely slips; the
+    side camera checks it, and if it turned, the two poses are combined in the rod's frame,
+    each with its own side view. The paper's single-pose estimate is returned as well.
 
     ``careful``: lift only CAREFUL_LIFT first and, if the rod turns by more than
     CAREFUL_ABORT_DEG, put it back where it was and raise RodSlippedError (telling which
@@ -191,13 +194,16 @@ def trial_grasp(world: World, offset: float = 0.0, careful: bool = False) -> Tri
     except ObjectNotFoundError as exc:
         raise RodDroppedError(str(exc), _heavy_side(watcher, T_meas)) from exc
     slip_seen = watcher.slipping_or_tilted()
-    moved = False
+    moved, side_rolled = False, None
     if len(poses) > 1:
         motion.move_to(sim, poses[1], duration=1.0)
         after.append(sim.measure_torques(config.settle, config.window))
-        side_rolled = look_from_side(world.rig, sim.data, robot, after[1].q, rod_length,
-                                     centre_hint, finger_q=sim.finger_q[0])  # fmt: skip
-        moved = abs(side_rolled.theta - side.theta) > np.radians(ROLL_SLIP_DEG)
+        try:
+            side_rolled = look_from_side(world.rig, sim.data, robot, after[1].q, rod_length,
+                                         centre_hint, finger_q=sim.finger_q[0])  # fmt: skip
+            moved = abs(side_rolled.theta - side.theta) > np.radians(ROLL_SLIP_DEG)
+        except PerceptionError:
+            moved = True
         motion.move_to(sim, poses[0], duration=1.0)
 
     n_std = config.sensor.noise_std / np.sqrt(after[0].n_samples)
@@ -218,6 +224,14 @@ def trial_grasp(world: World, offset: float = 0.0, careful: bool = False) -> Tri
     if len(poses) > 1 and not moved:
         est = estimate(len(poses))
         x_com_obj = com_along_axis(est, side.T_ee_obj)
+    elif len(poses) > 1 and side_rolled is not None:
+        # The rod turned in the jaws between the poses: the CoM is fixed in the rod, so the
+        # two poses still stack when written in the rod's frame, each with its own view.
+        dtau = [m.tau - b for m, b in zip(after, tau_before, strict=True)]
+        T_views = [side.T_ee_obj, _same_direction(side_rolled.T_ee_obj, side.T_ee_obj)]
+        com_obj, cond = com_in_rod_frame(robot, [m.q for m in after], dtau, T_views)
+        if cond < MAX_CONDITION:
+            x_com_obj = float(com_obj[0])
 
     truth = world.truth()
     T_world_ee = robot.ee_pose(after[0].q)
@@ -253,6 +267,32 @@ def trial_grasp(world: World, offset: float = 0.0, careful: bool = False) -> Tri
         T_world_ee=T_world_ee,
         side_view=side,
     )
+
+
+def com_in_rod_frame(robot, qs, dtaus, T_ee_objs) -> tuple[np.ndarray, float]:
+    """CoM in the rod's frame (3,) (m) from k static poses at which the rod sat in the jaws
+    at ``T_ee_objs`` (k, 4, 4), and the condition number of the stacked problem.
+
+    With theta_ee = (m, m c_ee) and c_ee = R c_obj + p per pose, dtau = Y theta_ee becomes
+    linear in (m, m c_obj): rows (Y_0 + Y_c p, Y_c R), stacked over the poses.
+    """
+    rows = []
+    for q, T in zip(qs, T_ee_objs, strict=True):
+        Y, _ = pose_regressor(robot, q)
+        rows.append(np.c_[Y[:, 0] + Y[:, 1:] @ T[:3, 3], Y[:, 1:] @ T[:3, :3]])
+    A, b = np.vstack(rows), np.concatenate(dtaus)
+    theta = np.linalg.lstsq(A, b, rcond=None)[0]
+    singular = np.linalg.svd(A, compute_uv=False)
+    return theta[1:] / theta[0], float(singular[0] / max(singular[-1], 1e-300))
+
+
+def _same_direction(T: np.ndarray, T_ref: np.ndarray) -> np.ndarray:
+    """``T`` turned half a turn about its z if its x points against ``T_ref``'s."""
+    if T[:3, 0] @ T_ref[:3, 0] >= 0:
+        return T
+    T = T.copy()
+    T[:3, :2] *= -1.0
+    return T
 
 
 def _rot_x(angle: float) -> np.ndarray:
