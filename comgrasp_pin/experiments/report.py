@@ -55,7 +55,8 @@ def accuracy_figure(rows: Sequence[dict], path: Path) -> Path:
         )
     ax.set_xlabel("tilt in the jaws θ (deg)")
     ax.set_ylabel("CoM accuracy 1 − 5|Δx|/l (%)")
-    ax.set_ylim(50, 101)
+    lowest = min([100 * float(r["accuracy"]) for r in rows], default=100.0)
+    ax.set_ylim(max(0.0, min(50.0, lowest - 5.0)), 101)  # never hide a bad grasp
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7, ncol=2, loc="lower left")
     fig.tight_layout()
