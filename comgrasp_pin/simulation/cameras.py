@@ -43,33 +43,33 @@ class CameraRig:
         T[:3, 3] = data.cam_xpos[cam]
         return T
 
-    def rgb(self, data: mujoco.MjData, camera: str) -> np.ndarray:
-        """(H, W, 3) uint8 RGB image."""
+    def _render(self, data: mujoco.MjData, camera: str, depth=False, segmentation=False):
         r = self._renderer
         r.disable_depth_rendering()
         r.disable_segmentation_rendering()
+        if depth:
+            r.enable_depth_rendering()
+        if segmentation:
+            r.enable_segmentation_rendering()
         r.update_scene(data, camera)
-        return r.render().copy()
+        image = r.render().copy()
+        r.disable_depth_rendering()
+        r.disable_segmentation_rendering()
+        return image
+
+    def rgb(self, data: mujoco.MjData, camera: str) -> np.ndarray:
+        """(H, W, 3) uint8 RGB image."""
+        return self._render(data, camera)
 
     def depth(self, data: mujoco.MjData, camera: str) -> np.ndarray:
         """(H, W) float z-depth along the optical axis (m); ``inf`` where nothing is seen."""
-        r = self._renderer
-        r.disable_segmentation_rendering()
-        r.enable_depth_rendering()
-        r.update_scene(data, camera)
-        depth = r.render().astype(float)
-        r.disable_depth_rendering()
+        depth = self._render(data, camera, depth=True).astype(float)
         depth[depth >= self.model.vis.map.zfar * self.model.stat.extent * 0.999] = np.inf
         return depth
 
     def segmentation(self, data: mujoco.MjData, camera: str) -> np.ndarray:
         """(H, W) int geom id per pixel, -1 for background (ground truth: tests only)."""
-        r = self._renderer
-        r.disable_depth_rendering()
-        r.enable_segmentation_rendering()
-        r.update_scene(data, camera)
-        seg = r.render()
-        r.disable_segmentation_rendering()
+        seg = self._render(data, camera, segmentation=True)
         ids = seg[:, :, 0].astype(int)
         ids[seg[:, :, 1] != int(mujoco.mjtObj.mjOBJ_GEOM)] = -1
         return ids

@@ -68,7 +68,7 @@ def move_to(
     if duration is None:
         duration = min_duration(q0, q_goal, v_max, a_max)
     follow(sim, Quintic(q0, q_goal, duration), callback)
-    _run(sim, int(round(settle / sim.model.opt.timestep)), callback)
+    hold(sim, settle, callback)
 
 
 def move_linear(
@@ -104,7 +104,7 @@ def move_linear(
 def open_gripper(sim: Simulation, duration: float = 0.3, callback: Callback = None) -> None:
     """Open the jaws with ``OPEN_FORCE`` and wait ``duration`` s."""
     sim.grip_force = -OPEN_FORCE
-    _run(sim, int(round(duration / sim.model.opt.timestep)), callback)
+    hold(sim, duration, callback)
 
 
 def close_gripper(
@@ -179,7 +179,7 @@ def pick(
     open_gripper(sim, 0.0)
     move_to(sim, q_pre, settle=0.1, callback=callback)
     move_linear(sim, robot, T_grasp, descend_time, callback)
-    _run(sim, int(round(0.1 / sim.model.opt.timestep)), callback)
+    hold(sim, 0.1, callback)
     q_grasp = sim.q_des.copy()
     finger_q = close_gripper(sim, grip_force, callback=callback)
     T_lift = T_grasp.copy()
