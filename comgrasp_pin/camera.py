@@ -36,6 +36,16 @@ class PinholeCamera:
         f = 0.5 * height / np.tan(np.deg2rad(fovy_deg) / 2.0)
         return cls(width, height, f, f, (width - 1) / 2.0, (height - 1) / 2.0)
 
+    def subsampled(self, stride: int) -> PinholeCamera:
+        """The camera of the image ``image[::stride, ::stride]``: pixel (u, v) of that image
+        is pixel (stride u, stride v) of the full one."""
+        if stride < 1:
+            raise ValueError(f"stride must be >= 1, got {stride}")
+        return PinholeCamera(
+            -(-self.width // stride), -(-self.height // stride),
+            self.fx / stride, self.fy / stride, self.cx / stride, self.cy / stride,
+        )  # fmt: skip
+
     @property
     def K(self) -> np.ndarray:
         """(3, 3) intrinsic matrix."""

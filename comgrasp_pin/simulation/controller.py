@@ -39,6 +39,7 @@ class ArmServo:
 
     def ctrl(self, q: np.ndarray, q_des: np.ndarray, tau_ff: np.ndarray, dt: float) -> np.ndarray:
         """Actuator command (rad) for one control step of length ``dt`` (s)."""
-        self.tau_i += self.ki * self.kp * (q_des - q) * dt
-        np.clip(self.tau_i, -self.tau_i_limit, self.tau_i_limit, out=self.tau_i)
-        return q_des + (tau_ff + self.tau_i) / self.kp
+        tau_i = self.tau_i
+        tau_i += (self.ki * self.kp * dt) * (q_des - q)
+        np.clip(tau_i, -self.tau_i_limit, self.tau_i_limit, out=tau_i)
+        return q_des + (tau_ff + tau_i) * (1.0 / self.kp)

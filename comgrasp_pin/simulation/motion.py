@@ -47,8 +47,9 @@ def hold(sim: Simulation, duration: float, callback: Callback = None) -> None:
 def follow(sim: Simulation, traj: Quintic, callback: Callback = None) -> None:
     """Track ``traj`` (started now) with the servo, one sample per physics step."""
     dt = sim.model.opt.timestep
-    for t in np.arange(1, int(np.ceil(traj.duration / dt)) + 1) * dt:
-        sim.q_des = traj.sample(t)[0]
+    qs = traj.sample(np.arange(1, int(np.ceil(traj.duration / dt)) + 1) * dt)[0]
+    for q in qs:
+        sim.q_des = q
         _run(sim, 1, callback)
 
 

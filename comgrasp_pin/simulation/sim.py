@@ -57,6 +57,9 @@ class Simulation:
         self._ee_site = m.site(EE_SITE).id
         kp = float(m.actuator_gainprm[self._arm_act[0], 0])
         self.servo = ArmServo(len(ARM_JOINTS), kp)
+        self._arm_qadr, self._arm_vadr, self._arm_act, self._tau_adr = (
+            _as_slice(a) for a in (self._arm_qadr, self._arm_vadr, self._arm_act, self._tau_adr)
+        )
         self.q_des = np.zeros(len(ARM_JOINTS))
         self.grip_force = 0.0
         self.sensor = JointTorqueSensor(len(ARM_JOINTS), sensor or TorqueSensorConfig(), seed)
@@ -109,13 +112,13 @@ class Simulation:
         m, d = self.model, self.data
         dt = m.opt.timestep
         d.ctrl[self._finger_act] = self.grip_force
+        qadr, vadr, act, tau_adr = self._arm_qadr, self._arm_vadr, self._arm_act, self._tau_adr
+        ctrl, read, observers = self.servo.ctrl, self.sensor.read, self.observers
         for _ in range(n):
-            tau_ff = d.qfrc_bias[self._arm_vadr]
-            q = d.qpos[self._arm_qadr]
-            d.ctrl[self._arm_act] = self.servo.ctrl(q, self.q_des, tau_ff, dt)
+            d.ctrl[act] = ctrl(d.qpos[qadr], self.q_des, d.qfrc_bias[vadr], dt)
             mujoco.mj_step(m, d)
-            self.tau_measured = self.sensor.read(d.sensordata[self._tau_adr], dt)
-            for observer in self.observers:
+            self.tau_measured = read(d.sensordata[tau_adr], dt)
+            for observer in observers:
                 observer(self)
 
     def hold(self, duration: float) -> None:
@@ -136,3 +139,10 @@ class Simulation:
         return TorqueMeasurement(
             taus.mean(axis=0), std_error, qs.mean(axis=0), n, n * self.model.opt.timestep
         )
+
+
+def _as_slice(index: np.ndarray) -> np.ndarray | slice:
+    """A contiguous index array as a slice (indexing by a slice is a view, with no copy)."""
+    if len(index) and np.array_equal(index, np.arange(index[0], index[0] + len(index))):
+        return slice(int(index[0]), int(index[0]) + len(index))
+    return index

@@ -31,21 +31,37 @@ class TorqueSensorConfig:
 
 
 class JointTorqueSensor:
-    """Turns the drives' true torques into readings; one instance per simulated arm."""
+    """Turns the drives' true torques into readings; one instance per simulated arm.
+
+    Noise is drawn in blocks of about ``_BLOCK_VALUES`` numbers (one draw per control step
+    would cost more than the physics step itself).
+    """
+
+    _BLOCK_VALUES = 24_576
 
     def __init__(self, n: int, config: TorqueSensorConfig, seed: int | None = None):
         self.config = config
         self._rng = np.random.default_rng(seed)
         self._drift = np.zeros(n)
         self._n = n
+        self._noise = np.empty((0, 2 * n))
+        self._next = 0
 
     def read(self, tau_true: np.ndarray, dt: float) -> np.ndarray:
         """One sample (N m) of the (n,) true torques, ``dt`` seconds after the last one."""
         c = self.config
+        if self._next >= len(self._noise):
+            self._noise = self._rng.standard_normal((max(1, self._BLOCK_VALUES // (2 * self._n)), 2 * self._n))
+            self._next = 0
+        draw = self._noise[self._next]
+        self._next += 1
+        reading = tau_true + c.bias
         if c.drift_std > 0:
-            self._drift += c.drift_std * np.sqrt(dt) * self._rng.standard_normal(self._n)
-        noise = c.noise_std * self._rng.standard_normal(self._n) if c.noise_std > 0 else 0.0
-        return tau_true + c.bias + self._drift + noise
+            self._drift += c.drift_std * np.sqrt(dt) * draw[self._n :]
+            reading += self._drift
+        if c.noise_std > 0:
+            reading += c.noise_std * draw[: self._n]
+        return reading
 
 
 @dataclass(frozen=True)
