@@ -51,7 +51,8 @@ class JointTorqueSensor:
         """One sample (N m) of the (n,) true torques, ``dt`` seconds after the last one."""
         c = self.config
         if self._next >= len(self._noise):
-            self._noise = self._rng.standard_normal((max(1, self._BLOCK_VALUES // (2 * self._n)), 2 * self._n))
+            rows = max(1, self._BLOCK_VALUES // (2 * self._n))
+            self._noise = self._rng.standard_normal((rows, 2 * self._n))
             self._next = 0
         draw = self._noise[self._next]
         self._next += 1
