@@ -19,6 +19,9 @@ PEAK_ACCELERATION = 10.0 / np.sqrt(3.0)  # max d2s/du2 of the quintic
 # 3.15 rad/s, and an acceleration that keeps a held rod's inertial load small.
 DEFAULT_V_MAX = 1.0
 DEFAULT_A_MAX = 2.0
+# With nothing in the jaws the arm may move faster: two thirds of the UR5's joint speed.
+EMPTY_V_MAX = 2.0
+EMPTY_A_MAX = 6.0
 
 
 def min_duration(

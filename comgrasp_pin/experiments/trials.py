@@ -24,6 +24,12 @@ REGRASP_COLUMNS = [
 ]  # fmt: skip
 ACCURACY_COM_RANGE = (0.0, 0.3)  # true CoM |pos_real| / length, uniform
 ACCURACY_GRASP_OFFSET = 0.25  # grasp offsets from the rectangle's centre, |offset| / length
+# Grasp-to-CoM distance as a fraction of the nominal holding lever (``holding_lever``),
+# uniform. Below about 0.6 the jaws hold the rod level; from 0.6 to 0.9 it turns to
+# 2-60 deg, depending on the object (measured), so the tilts span the paper's 0-30 deg and
+# beyond instead of piling up at 0 deg and past 50 deg as random grasps along the rod do.
+ACCURACY_LEVER_RANGE = (0.3, 0.9)
+PAD_EDGE = 0.012  # the box pads touch a rod at their edges, this far either side (m)
 
 
 def trial_seed(run_seed: int, obj: str, trial: int) -> int:
@@ -47,16 +53,46 @@ def _episode_config(task: dict):
     return EpisodeConfig(sensor=TorqueSensorConfig(noise_std=float(task.get("noise", 0.05))))
 
 
+def holding_lever(mass: float, grip_force: float, pad_friction: tuple[float, ...]) -> float:
+    """Grasp-to-CoM distance (m) at which the weight of a rod of ``mass`` (kg), held level,
+    reaches the nominal moment the jaws resist about their axis: 2 F (mu PAD_EDGE + mu_t),
+    with F the force of each finger (N) and (mu, mu_t) the pads' sliding and torsional
+    friction. Rods start to turn at 0.6-0.8 of it (the lift's acceleration adds load)."""
+    mu, mu_t = pad_friction[0], pad_friction[1]
+    return 2.0 * grip_force * (mu * PAD_EDGE + mu_t) / (mass * 9.81)
+
+
+def accuracy_grasp(obj: str, seed: int, config) -> tuple[float, float]:
+    """(true CoM, grasp offset) along the rod from its centre (m) for one accuracy grasp.
+
+    The true CoM is uniform within ACCURACY_COM_RANGE of the length, either side; the grasp
+    lies on the centre's side of it, ACCURACY_LEVER_RANGE holding levers away, and within
+    ACCURACY_GRASP_OFFSET of the length from the centre (on the handle). The experiment
+    designer uses the truth to spread the tilts; the robot never sees it.
+    """
+    from comgrasp_pin.simulation.objects import get_object
+
+    spec = get_object(obj)
+    rng = np.random.default_rng(seed + 17)
+    pos_real = rng.choice([-1.0, 1.0]) * rng.uniform(*ACCURACY_COM_RANGE) * spec.length
+    lever = rng.uniform(*ACCURACY_LEVER_RANGE) * holding_lever(
+        spec.mass, config.grip_force, config.world.pad_friction
+    )
+    side = -1.0 if pos_real > 0 else 1.0
+    limit = ACCURACY_GRASP_OFFSET * spec.length
+    return float(pos_real), float(np.clip(pos_real + side * lever, -limit, limit))
+
+
 def accuracy_trial(task: dict) -> dict:
     """One grasp of the accuracy experiment: random rod pose, random true CoM, grasp at the
-    rectangle's centre plus a random offset along the rod; measure and estimate."""
+    rectangle's centre plus an offset (``accuracy_grasp``); measure and estimate."""
     from comgrasp_pin.simulation.episode import Scene, World, trial_grasp
 
     seed = int(task["seed"])
-    scene = Scene.sample(task["object"], seed, com_range=ACCURACY_COM_RANGE)
-    rng = np.random.default_rng(seed + 17)
-    offset = rng.uniform(-ACCURACY_GRASP_OFFSET, ACCURACY_GRASP_OFFSET) * scene.length
-    world = World(scene, _episode_config(task), seed)
+    config = _episode_config(task)
+    pos_real, offset = accuracy_grasp(task["object"], seed, config)
+    scene = Scene.sample(task["object"], seed, pos_real=pos_real)
+    world = World(scene, config, seed)
     try:
         import time
 
@@ -103,4 +139,5 @@ def settings_summary() -> dict:
     out = asdict(config)
     out["accuracy_com_range"] = ACCURACY_COM_RANGE
     out["accuracy_grasp_offset"] = ACCURACY_GRASP_OFFSET
+    out["accuracy_lever_range"] = ACCURACY_LEVER_RANGE
     return out

@@ -41,5 +41,6 @@ class ArmServo:
         """Actuator command (rad) for one control step of length ``dt`` (s)."""
         tau_i = self.tau_i
         tau_i += (self.ki * self.kp * dt) * (q_des - q)
-        np.clip(tau_i, -self.tau_i_limit, self.tau_i_limit, out=tau_i)
+        np.minimum(tau_i, self.tau_i_limit, out=tau_i)  # np.clip costs more on 6 numbers
+        np.maximum(tau_i, -self.tau_i_limit, out=tau_i)
         return q_des + (tau_ff + tau_i) * (1.0 / self.kp)

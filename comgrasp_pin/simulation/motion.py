@@ -19,7 +19,14 @@ import pinocchio as pin
 from comgrasp_pin.ik import GraspPose, grasp_frame, solve_ik, solve_top_down, top_down_frame
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.simulation.sim import Simulation
-from comgrasp_pin.trajectory import DEFAULT_A_MAX, DEFAULT_V_MAX, Quintic, min_duration
+from comgrasp_pin.trajectory import (
+    DEFAULT_A_MAX,
+    DEFAULT_V_MAX,
+    EMPTY_A_MAX,
+    EMPTY_V_MAX,
+    Quintic,
+    min_duration,
+)
 
 Callback = Callable[[Simulation], None] | None
 
@@ -57,15 +64,22 @@ def move_to(
     sim: Simulation,
     q_goal: np.ndarray,
     duration: float | None = None,
-    v_max: float = DEFAULT_V_MAX,
-    a_max: float = DEFAULT_A_MAX,
+    v_max: float | None = None,
+    a_max: float | None = None,
     settle: float = 0.0,
     callback: Callback = None,
 ) -> None:
     """Joint-space quintic from the commanded configuration to ``q_goal`` (6,) (rad), in
-    ``duration`` s (default: the shortest within v_max, a_max), then hold ``settle`` s."""
+    ``duration`` s (default: the shortest within v_max, a_max), then hold ``settle`` s.
+    The default limits are the gentle DEFAULT_* ones while the jaws grip (an object may be
+    held), the faster EMPTY_* ones while they are open."""
     q0 = sim.q_des.copy()
     q_goal = np.asarray(q_goal, dtype=float)
+    gripping = sim.grip_force > 0.0
+    if v_max is None:
+        v_max = DEFAULT_V_MAX if gripping else EMPTY_V_MAX
+    if a_max is None:
+        a_max = DEFAULT_A_MAX if gripping else EMPTY_A_MAX
     if duration is None:
         duration = min_duration(q0, q_goal, v_max, a_max)
     follow(sim, Quintic(q0, q_goal, duration), callback)

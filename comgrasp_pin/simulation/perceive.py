@@ -101,7 +101,7 @@ class SlipWatcher:
         grip_force: float,
         rod_length: float | None = None,
         centre_hint: float | None = None,
-        stride: int = 2,
+        stride: int = 3,
     ):
         self.rig, self.robot, self.dt, self.grip_force = rig, robot, dt, grip_force
         self.stride = stride

@@ -158,7 +158,6 @@ def trial_grasp(world: World, offset: float = 0.0, careful: bool = False) -> Tri
             tau_before.append(robot.gravity_torques(q))
         else:
             raise ValueError(f"tau_before must be 'measured' or 'model', not {config.tau_before!r}")
-    motion.move_to(sim, poses[0], settle=0.1)
 
     watcher = SlipWatcher(world.rig, robot, config.watch_dt, config.grip_force, rod_length,
                           centre_hint)  # fmt: skip
@@ -175,7 +174,6 @@ def trial_grasp(world: World, offset: float = 0.0, careful: bool = False) -> Tri
             heavy = _heavy_side(watcher, T_meas)
             motion.place(sim, robot, pick.T_world_ee_grasp, lower_time=0.8)
             motion.move_to(sim, Q_PARK)
-            sim.hold(0.5)
             raise RodSlippedError(f"the rod turned by {np.degrees(tilts.max()):.0f} deg", heavy)
         T_up = robot.ee_pose(sim.q_des)
         T_up[2, 3] = config.lift_height
@@ -193,6 +191,8 @@ def trial_grasp(world: World, offset: float = 0.0, careful: bool = False) -> Tri
                           finger_q=sim.finger_q[0])  # fmt: skip
     except ObjectNotFoundError as exc:
         raise RodDroppedError(str(exc), _heavy_side(watcher, T_meas)) from exc
+    truth = world.truth()  # scoring only: the rod as it was when the side camera saw it
+    grasp_offset_true = world.grasp_offset_true()
     slip_seen = watcher.slipping_or_tilted()
     moved, side_rolled = False, None
     if len(poses) > 1:
@@ -233,7 +233,6 @@ def trial_grasp(world: World, offset: float = 0.0, careful: bool = False) -> Tri
         if cond < MAX_CONDITION:
             x_com_obj = float(com_obj[0])
 
-    truth = world.truth()
     T_world_ee = robot.ee_pose(after[0].q)
     T_obj_world = invert_transform(truth.T_world_obj)
 
@@ -254,7 +253,7 @@ def trial_grasp(world: World, offset: float = 0.0, careful: bool = False) -> Tri
         pos_real=truth.pos_real,
         mass_esti=est.mass,
         mass_real=truth.mass,
-        grasp_offset=world.grasp_offset_true(),
+        grasp_offset=grasp_offset_true,
         length=world.scene.length,
         rod_length=rod_length,
         grasp_z=grasp_frame(grasp)[2, 3],
@@ -313,7 +312,7 @@ def trial_with_retry(world: World, attempts: int = 4) -> TrialGrasp:
                 raise
             motion.open_gripper(world.sim)
             motion.move_to(world.sim, Q_PARK)
-            world.sim.hold(1.0)
+            world.sim.hold(0.5)  # the rod comes to rest on the table
             if exc.heavy_side_world is not None:
                 rod = look_from_above(world.rig, world.sim.data)
                 d = np.array([np.cos(rod.grasp.yaw), np.sin(rod.grasp.yaw), 0.0])
