@@ -70,64 +70,113 @@ TILTS_DEG = (0.0, 10.0, -20.0, 35.0)
 OFFSETS = (0.0, 0.03, -0.04)
 
 
+def _held_rod_scene(ur5, name):
+    """(sim, rig, place) with ``OBJECTS[name]`` held in the jaws at the measurement pose;
+    ``place(tilt_deg, offset)`` sets the rod kinematically and returns its true T_ee_obj."""
+    q = solve_ik(ur5, top_down_frame(0.55, 0.0, 0.45, 0.4), Q_PARK)
+    obj = OBJECTS[name]
+    model = build_model(extras=[lambda s, o=obj: add_object(s, o, np.eye(4), parent="eelink")])
+    sim = Simulation(model)
+    sim.reset_arm(q, finger_q=0.045 - obj.thickness / 2)
+    body = model.body("object").id
+
+    def place(tilt_deg, offset):
+        # Rod frame in the ee frame: rotated by the tilt about ee-y, held `offset` from its
+        # centre (the jaws at obj x = offset).
+        a = np.radians(tilt_deg)
+        R = np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]])
+        T_ee_obj = np.eye(4)
+        T_ee_obj[:3, :3] = R
+        T_ee_obj[:3, 3] = -R @ np.array([offset, 0.0, 0.0])
+        quat = np.zeros(4)
+        mujoco.mju_mat2Quat(quat, R.ravel())
+        model.body_pos[body] = T_ee_obj[:3, 3]
+        model.body_quat[body] = quat
+        mujoco.mj_forward(model, sim.data)
+        return T_ee_obj
+
+    return sim, CameraRig(model), place
+
+
+def _side_view_errors(view, T_ee_obj, offset):
+    """(tilt error (rad), axis error (m), grasp-position error (m)) against the truth."""
+    R = T_ee_obj[:3, :3]
+    # True tilt (the view's axis has positive ee-x: compared modulo a half turn).
+    theta_true = np.arctan2(-R[2, 0], R[0, 0])
+    # Distance of the true axis point nearest the TCP from the seen axis.
+    p_true = T_ee_obj[:3, 3] + offset * R[:, 0]
+    seen_o, seen_x = view.T_ee_obj[:3, 3], view.T_ee_obj[:3, 0]
+    d = p_true - seen_o
+    axis_err = np.linalg.norm(d - (d @ seen_x) * seen_x)
+    sign = np.sign(seen_x @ R[:, 0])
+    grasp_err = abs(view.grasp_offset - sign * offset)
+    return abs(_wrap_half_turn(view.theta - theta_true)), axis_err, grasp_err
+
+
 @pytest.fixture(scope="module")
 def side_errors(ur5):
     """Tilt, axis and grasp-position errors of rods held in the jaws (rendered only)."""
-    T_meas = top_down_frame(0.55, 0.0, 0.45, 0.4)
-    q = solve_ik(ur5, T_meas, Q_PARK)
     errors = []
-    for name in ("obj1", "obj2", "obj4", "obj6"):
+    for name in ("obj1", "obj2", "obj4", "obj5", "obj6"):  # round handles (obj3 is a flat bar)
         obj = OBJECTS[name]
-        model = build_model(extras=[lambda s, o=obj: add_object(s, o, np.eye(4), parent="eelink")])
-        sim = Simulation(model)
-        sim.reset_arm(q, finger_q=0.045 - obj.thickness / 2)
-        rig = CameraRig(model)
-        body = model.body("object").id
+        sim, rig, place = _held_rod_scene(ur5, name)
         for tilt in TILTS_DEG:
             for offset in OFFSETS:
-                # Rod frame in the ee frame: rotated by the tilt about ee-y, held `offset`
-                # from its centre (the jaws at obj x = offset).
-                a = np.radians(tilt)
-                R = np.array([[np.cos(a), 0, np.sin(a)], [0, 1, 0], [-np.sin(a), 0, np.cos(a)]])
-                T_ee_obj = np.eye(4)
-                T_ee_obj[:3, :3] = R
-                T_ee_obj[:3, 3] = -R @ np.array([offset, 0.0, 0.0])
-                quat = np.zeros(4)
-                mujoco.mju_mat2Quat(quat, R.ravel())
-                model.body_pos[body] = T_ee_obj[:3, 3]
-                model.body_quat[body] = quat
-                mujoco.mj_forward(model, sim.data)
+                T_ee_obj = place(tilt, offset)
                 view = look_from_side(
                     rig, sim.data, ur5, sim.q, rod_length=obj.length, finger_q=sim.finger_q[0]
                 )
-                # True tilt in the view's convention (axis with positive ee-x).
-                theta_true = np.arctan2(-R[2, 0], R[0, 0])
-                # Distance of the true axis point nearest the TCP from the seen axis.
-                p_true = T_ee_obj[:3, 3] + offset * R[:, 0]
-                seen_o, seen_x = view.T_ee_obj[:3, 3], view.T_ee_obj[:3, 0]
-                d = p_true - seen_o
-                axis_err = np.linalg.norm(d - (d @ seen_x) * seen_x)
-                centre_err = np.linalg.norm(seen_o - T_ee_obj[:3, 3])
-                sign = np.sign(seen_x @ R[:, 0])
-                grasp_err = abs(view.grasp_offset - sign * offset)
-                errors.append((name, tilt, offset, abs(view.theta - theta_true), axis_err,
-                               grasp_err, centre_err))  # fmt: skip
+                errors.append((name, tilt, offset, *_side_view_errors(view, T_ee_obj, offset)))
         rig.close()
     return errors
 
 
 def test_side_view_tilt_axis_and_grasp_position(side_errors):
+    assert len(side_errors) >= 48
     worst_theta = np.degrees(max(e[3] for e in side_errors))
     worst_axis = max(e[4] for e in side_errors)
     worst_grasp = max(e[5] for e in side_errors)
     assert worst_theta < 0.5, sorted(side_errors, key=lambda e: -e[3])[:3]
     assert worst_axis < 2e-3, sorted(side_errors, key=lambda e: -e[4])[:3]
-    # The grasp position needs the rod's ends: when one is cut by the image border or lies
-    # in the robot's own shadow, the other end and the top view's length are used, and a
-    # few per cent of views (thick, long rods, steeply tilted) miss the 3 mm target.
-    grasp = np.array([e[5] for e in side_errors])
-    assert np.median(grasp) < 1e-3 and np.mean(grasp < 3e-3) >= 0.85, sorted(grasp)[-5:]
-    assert worst_grasp < 0.02, sorted(side_errors, key=lambda e: -e[5])[:3]
+    # Every view, also where an end leaves the image, hides behind the robot, or is a
+    # round cap seen from behind (thick, long rods, steeply tilted).
+    assert worst_grasp < 3e-3, sorted(side_errors, key=lambda e: -e[5])[:3]
+
+
+def test_side_view_neither_end_seen_uses_the_centre_hint(ur5):
+    """An axe hanging at -34 deg: its head leaves the image and its handle's end reaches
+    behind the arm. The grasp position then comes from where the rod's centre was when it
+    was grasped (top view: here 2 mm off), within the bounds the ends seen set."""
+    obj = OBJECTS["obj6"]
+    sim, rig, place = _held_rod_scene(ur5, "obj6")
+    offset = 0.033
+    T_ee_obj = place(-34.3, offset)
+    kwargs = dict(rod_length=obj.length, finger_q=sim.finger_q[0])
+    try:
+        with pytest.raises(ObjectCutByBorderError, match="neither end"):
+            look_from_side(rig, sim.data, ur5, sim.q, **kwargs)
+        view = look_from_side(rig, sim.data, ur5, sim.q, centre_hint=-offset + 0.002, **kwargs)
+    finally:
+        rig.close()
+    theta_err, axis_err, grasp_err = _side_view_errors(view, T_ee_obj, offset)
+    assert np.degrees(theta_err) < 0.5 and axis_err < 2e-3 and grasp_err < 3e-3
+
+
+def test_side_view_of_a_rod_hanging_steeply(ur5):
+    """Regression (accuracy trial obj6, seed trial_seed(0, 'obj6', 2)): the axe hung at
+    65 deg in the jaws, 7 cm off its centre, when the side view measured it (and fell out
+    later, at the rolled pose). The view must give that tilt and grasp position."""
+    obj = OBJECTS["obj6"]
+    sim, rig, place = _held_rod_scene(ur5, "obj6")
+    offset = -0.0716
+    try:
+        T_ee_obj = place(-114.5, offset)
+        view = look_from_side(rig, sim.data, ur5, sim.q, rod_length=obj.length,
+                              centre_hint=-offset, finger_q=sim.finger_q[0])  # fmt: skip
+    finally:
+        rig.close()
+    theta_err, axis_err, grasp_err = _side_view_errors(view, T_ee_obj, offset)
+    assert np.degrees(theta_err) < 0.5 and axis_err < 2e-3 and grasp_err < 3e-3
 
 
 @pytest.fixture(scope="module")

@@ -32,6 +32,7 @@ TABLE_MARGIN = 0.003  # points less than this above the table are the table (m)
 MIN_PIXELS = 60
 MAX_AXIS_FROM_TCP = 0.035  # a held rod's axis passes this close to the TCP (m)
 MIN_EXTENT = 0.05  # a held rod is at least this long in view (m)
+MAX_CYLINDER_MISFIT = 5e-4  # a round handle's points lie this close to the fitted cylinder (m)
 # The gripper's own volume in the ee frame (from the URDF): fingers and pads (with margin),
 # palm, and the wrist above it.
 _FINGERS = (0.016, 0.06, -0.085, 0.018)  # |x| <, |y| <, z from, z to
@@ -130,11 +131,13 @@ def observe_held_rod(
     # Tilt lives in the ee x-z plane; the jaws fix the axis at y = 0.
     x_axis, offset_xz, handle = _centre_line(points[:, [0, 2]])
     if handle.sum() >= MIN_PIXELS:
-        x_fit, offset_fit = _fit_cylinder(points[handle], x_axis, offset_xz, handle_radius)
-        # Trust the refinement only near the slice estimate (it can lock on a wrong side).
+        x_fit, offset_fit, misfit = _fit_cylinder(points[handle], x_axis, offset_xz, handle_radius)
+        # Trust the refinement only near the slice estimate (it can lock on a wrong side)
+        # and where the handle is round (a flat bar is no cylinder).
         if (
             x_fit @ x_axis > np.cos(np.radians(5.0))
             and np.linalg.norm(offset_fit - offset_xz) < 0.01
+            and misfit < MAX_CYLINDER_MISFIT
         ):
             x_axis, offset_xz = x_fit, offset_fit
     x_axis = np.array([x_axis[0], 0.0, x_axis[1]])
@@ -146,10 +149,15 @@ def observe_held_rod(
             "nothing is held between the jaws: what the side camera sees "
             f"({100 * (hi - lo):.0f} cm long) does not pass through them"
         )
+    rho = np.linalg.norm(points - offset - np.outer(along, x_axis), axis=1)
+    radius = handle_radius if handle_radius else float(np.median(rho[handle]))
+    (lo, lo_sharp), (hi, hi_sharp) = (
+        _end_profile(along, rho, e, s, radius) for e, s in ((lo, -1.0), (hi, 1.0))
+    )
     T_cam_ee = np.linalg.inv(T_ee_cam)
     mid = _centre_along(
-        x_axis, lo, hi, along, offset, depth, p, mask, camera, T_cam_ee, rod_length,
-        centre_hint, excluded,
+        x_axis, (lo, hi), (lo_sharp, hi_sharp), along, offset, depth, p, candidate, mask,
+        camera, T_cam_ee, rod_length, centre_hint, excluded,
     )  # fmt: skip
     centre = offset + mid * x_axis
     y_axis = np.array([0.0, 1.0, 0.0])
@@ -168,29 +176,79 @@ def observe_held_rod(
                     camera.project(ends_cam), camera.project(tcp_cam[None])[0])  # fmt: skip
 
 
+HEAD_BAND = 0.015  # the last this much of an end shows whether it carries a head (m)
+HEAD_RATIO = 1.2  # an end standing this many handle radii off the axis is a head
+ROUND_BAND = 1.2  # a round end's visible cap lies within this many radii of its extreme
+ROUND_MIN_POINTS = 15
 PEEK = 0.012  # look this far beyond an end to tell whether it is really the end (m)
+END_SLACK = 0.003  # a point of the rod this little beyond an end found is at that end (m)
 LENGTH_TOLERANCE = 0.01  # seen and known lengths this close agree (m)
 BORDER_NEAR = 0.03  # an end this close to where the rod meets the image border is cut (m)
 
 
+def _end_profile(along, rho, end, outwards, radius) -> tuple[float, bool]:
+    """An end of the rod from the profile of the visible points near it.
+
+    Args:
+        along, rho: (N,) the points' coordinate along the axis and distance from it (m).
+        end: the extreme coordinate seen at this end (m); outwards: +1 (hi end) or -1 (lo).
+        radius: the handle's radius (m).
+    Returns (the end's coordinate (m), sharp): a sharp end is located to a fraction of a
+    millimetre, because it carries a head (it stands off the axis farther than the handle:
+    its flat face is seen edge-on) or it is a round cap fitted by ``_round_end``. A plain
+    handle end too thin for the cap fit may fall short by up to its radius.
+    """
+    near_end = outwards * (end - along) < HEAD_BAND
+    if np.percentile(rho[near_end], 90) > HEAD_RATIO * radius:
+        return end, True
+    tip = _round_end(along, rho, end, outwards, radius)
+    return (end, False) if tip is None else (tip, True)
+
+
+def _round_end(along, rho, end, outwards, radius) -> float | None:
+    """The tip of a round (hemispherical) end whose visible extreme is ``end`` (m, along
+    the axis); None if the end does not show as a cap of the handle's ``radius``.
+
+    The side camera sees a cap at the rod's end from behind and at a grazing angle, so the
+    extreme of the visible points falls short of the tip (by up to half the radius). The
+    visible cap points (``along``, distance ``rho`` from the axis; the cylinder's points
+    lie at rho = radius) are on a sphere centred on the axis: each gives its centre as
+    along - outwards * sqrt(radius^2 - rho^2). If they agree, the tip lies ``radius``
+    beyond that centre.
+    """
+    cap = (outwards * (end - along) < ROUND_BAND * radius) & (rho < 0.85 * radius)
+    if np.count_nonzero(cap) < ROUND_MIN_POINTS:
+        return None
+    centres = along[cap] - outwards * np.sqrt(radius**2 - rho[cap] ** 2)
+    centre = np.median(centres)
+    if np.median(np.abs(centres - centre)) > max(0.05 * radius, 5e-4):
+        return None
+    return float(outwards * max(outwards * end, outwards * centre + radius))
+
+
 def _centre_along(
-    x_axis, lo, hi, along, offset, depth, points, mask, camera, T_cam_ee, rod_length,
-    centre_hint, excluded,
+    x_axis, ends, sharp, along, offset, depth, points, candidate, mask, camera, T_cam_ee,
+    rod_length, centre_hint, excluded,
 ) -> float:  # fmt: skip
     """Where the rod's centre lies along ``x_axis`` (coordinate, m), from its trusted ends.
 
-    An end is trusted when the point just beyond it is in the image, nothing nearer to the
-    camera covers it, and it is not in a region left out as the robot's own (else the rod
-    may go on out of view, behind the gripper, or into the self-filter).
+    ``ends``: (lo, hi) coordinates of the ends seen; ``sharp``: whether each is located
+    precisely (see ``_end_profile``). An end is trusted when the point just beyond it is
+    in the image, nothing nearer to the camera covers it, and it is not in a region left
+    out as the robot's own (else the rod may go on out of view, behind the gripper, or
+    into the self-filter). With the rod's length known, the centre is found from the
+    trusted end that is best located.
     """
+    lo, hi = ends
     along_border = points[border_pixels(mask)] @ x_axis
     trusted = [
         _end_is_seen(
-            offset + e * x_axis, s * x_axis, depth, points, mask, camera, T_cam_ee, excluded
+            offset + e * x_axis, s * x_axis, depth, points, candidate, camera, T_cam_ee,
+            excluded,
         )
         and not np.any(np.abs(along_border - e) < BORDER_NEAR)
         for e, s in ((lo, -1.0), (hi, 1.0))
-    ]
+    ]  # fmt: skip
     if rod_length is None:
         if all(trusted):
             return 0.5 * (lo + hi)
@@ -203,21 +261,26 @@ def _centre_along(
         centres = np.arange(lo + 0.5 * rod_length, hi - 0.5 * rod_length, 0.001)
         counts = [np.count_nonzero(np.abs(along - c) <= 0.5 * rod_length) for c in centres]
         return float(centres[np.asarray(counts) >= max(counts)].mean())
-    if all(trusted) and hi - lo > rod_length - LENGTH_TOLERANCE:
+    if all(trusted) and hi - lo > rod_length - LENGTH_TOLERANCE and sharp[0] == sharp[1]:
         return 0.5 * (lo + hi)
-    if trusted[0] and (not trusted[1] or abs(lo) > abs(hi)):
-        return lo + 0.5 * rod_length
-    if trusted[1]:
-        return hi - 0.5 * rod_length
+    # One end: the trusted one; of two, the sharp one, else the farther from the jaws (the
+    # nearer may be partly hidden by the fingers).
+    rank = [(t, sh, abs(e)) for t, sh, e in zip(trusted, sharp, ends, strict=True)]
+    best = int(np.argmax([rank[0] > rank[1], rank[1] > rank[0]]))
+    if trusted[best]:
+        return ends[best] - (-1.0, 1.0)[best] * 0.5 * rod_length
     if centre_hint is not None:
-        return float(centre_hint)
+        # The rod reaches at least as far as seen at either end.
+        return float(np.clip(centre_hint, hi - 0.5 * rod_length, lo + 0.5 * rod_length))
     raise ObjectCutByBorderError("neither end of the held rod is seen whole (side camera)")
 
 
-def _end_is_seen(end, outwards, depth, points, mask, camera, T_cam_ee, excluded) -> bool:
+def _end_is_seen(end, outwards, depth, points, candidate, camera, T_cam_ee, excluded) -> bool:
+    """Whether the rod really ends at ``end`` (3-D point on the axis, ee frame, m;
+    ``outwards``: unit axis direction): the point PEEK beyond it is in the image and shows
+    background behind it, or the rod's own end covering it in perspective."""
     beyond = end + PEEK * outwards
-    if excluded(beyond[None])[0]:
-        return False
+    in_robot = bool(excluded(beyond[None])[0])
     p_cam = T_cam_ee[:3, :3] @ beyond + T_cam_ee[:3, 3]
     if p_cam[2] <= 0:
         return False
@@ -225,13 +288,15 @@ def _end_is_seen(end, outwards, depth, points, mask, camera, T_cam_ee, excluded)
     if not (2 <= u < camera.width - 2 and 2 <= v < camera.height - 2):
         return False
     row, col = int(round(v)), int(round(u))
-    if mask[row, col]:
-        # The rod itself: a wide head seen in perspective (its point lies within the ends
-        # found), or the rod going on beyond this end (it was cut off by the border).
-        return bool((points[row, col] - end) @ outwards <= 0.0)
+    if candidate[row, col]:
+        # What may be the rod (the mask before its opening): a wide head seen in
+        # perspective (its point lies within the end found), or the rod going on beyond
+        # this end (it was cut off by the border).
+        return bool((points[row, col] - end) @ outwards < END_SLACK)
     # Seen if what lies there is farther (background); hidden if something else, nearer,
-    # covers it (the gripper).
-    return bool(depth[row, col] > p_cam[2] - 0.01)
+    # covers it (the gripper). Within the robot's own volume, where the self-filter would
+    # have removed the rod, only if it is clearly farther (the rod would be in front).
+    return bool(depth[row, col] > p_cam[2] + (0.01 if in_robot else -0.01))
 
 
 def _centre_line(xz: np.ndarray, bin_width: float = 0.01):
@@ -279,7 +344,8 @@ def _fit_cylinder(
     and biases the tilt. Fitting |(p - a) x u| = r (axis angle, its offset, radius r) by
     Gauss-Newton, with points far off the cylinder (heads, weights) left out, removes it.
     ``radius`` (m), when known (half the jaws' opening), is held fixed.
-    Returns (direction (2,), point nearest the TCP (2,)) in the x-z plane.
+    Returns (direction (2,), point nearest the TCP (2,)) in the x-z plane, and the median
+    distance of the points from the cylinder (m).
     """
     angle = np.arctan2(direction[1], direction[0])
     normal = np.array([-direction[1], direction[0]])
@@ -315,7 +381,7 @@ def _fit_cylinder(
     if u[0] < 0:
         u = -u
     n = np.array([-np.sin(params[0]), np.cos(params[0])])
-    return u, params[1] * n
+    return u, params[1] * n, float(np.median(res_all))
 
 
 def _in_capsule(p: np.ndarray, p0: np.ndarray, p1: np.ndarray, radius: float) -> np.ndarray:
