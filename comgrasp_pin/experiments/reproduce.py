@@ -115,6 +115,10 @@ geometric centre). Rows: bins of |θ|; cells: mean accuracy (%) and number of gr
 
 {report.accuracy_table(acc)}
 
+### Against the paper and the aims
+
+{report.accuracy_verdict(acc)}
+
 ## Experiment 2: pick-and-place success, regrasp planner against the geometric-centre grasp
 
 Success = the rod ends inside the drop box. In brackets: successes/trials and the 95 %
@@ -123,6 +127,8 @@ Wilson interval (%).
 ![regrasp](regrasp.png)
 
 {report.regrasp_table(reg)}
+
+{report.regrasp_verdict(reg)}
 
 ## Settings
 

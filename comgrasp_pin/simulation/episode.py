@@ -86,7 +86,7 @@ class EpisodeResult:
 def _carry(world: World) -> bool:
     motion.carry_to_drop_box(world.sim, world.robot)
     motion.move_to(world.sim, Q_PARK)
-    world.sim.hold(0.5)
+    world.sim.hold(0.3)
     return world.in_drop_box()
 
 
@@ -134,9 +134,11 @@ def run_episode(
             _caption(recorder, "carrying to the drop box")
             success = _carry(world)
             timings["carry"] = time.perf_counter() - mark
+            if not success:
+                reason += f"; the rod ended {world.where_is_the_rod()}"
         except (RodDroppedError, PerceptionError, IKError) as exc:
             # The robot lost the rod, or cannot see or reach it any more: a failed episode.
-            reason = f"{type(exc).__name__}: {exc}"
+            reason = f"{type(exc).__name__}: {exc}; the rod ended {world.where_is_the_rod()}"
         if recorder is not None:
             video.parent.mkdir(parents=True, exist_ok=True)
             recorder.write_video(video)

@@ -56,7 +56,7 @@ class EpisodeConfig:
     sensor: TorqueSensorConfig = field(default_factory=TorqueSensorConfig)
     tau_before: str = "measured"
     estimator: str = "lstsq"
-    watch_dt: float = 0.1
+    watch_dt: float = 0.2
     planner: PlannerConfig = field(default_factory=PlannerConfig)
     world: WorldConfig = field(default_factory=WorldConfig)
 
@@ -133,6 +133,18 @@ class World:
         x, y, hx, hy = DROP_BOX_INNER
         p = self.truth().p_world_com
         return bool(abs(p[0] - x) < hx and abs(p[1] - y) < hy and p[2] < 0.12)
+
+    def where_is_the_rod(self) -> str:
+        """Where the rod's CoM is, in words (for the record of a failed episode)."""
+        x, y, z = self.truth().p_world_com
+        if self.in_drop_box():
+            return "in the drop box"
+        if z < -0.05:
+            return "on the floor"
+        x0, x1, y0, y1 = PICK_AREA
+        if z < 0.08 and x0 <= x <= x1 and y0 <= y <= y1:
+            return "on the table"
+        return f"at ({x:.2f}, {y:.2f}, {z:.2f}) m"
 
     def close(self) -> None:
         self.rig.close()
