@@ -42,3 +42,57 @@ def test_tables_and_figures(tmp_path):
         regrasp_figure(_regrasp_rows(), tmp_path / "r.png"),
     ):
         assert fig.stat().st_size > 10_000
+
+
+def _acc_row(obj, theta, acc, **extra):
+    length = 0.4
+    row = {
+        "object": obj, "theta_deg": theta, "theta_true_deg": theta, "accuracy": acc,
+        "length_m": length, "pos_real_m": 0.0, "pos_esti_m": (1 - acc) * length / 5,
+        "com_std_m": 1e-4, "rolled_slip": 0,
+    }  # fmt: skip
+    row.update(extra)
+    return row
+
+
+def test_error_source_names_the_dominant_error():
+    from comgrasp_pin.experiments.report import error_source
+
+    assert error_source(_acc_row("obj1", 20.0, 0.9, theta_true_deg=23.0)) == "perception (tilt)"
+    # A tilt that differs by a half turn is the same line: not a perception error.
+    assert error_source(_acc_row("obj1", 80.0, 0.9, theta_true_deg=-100.0)) != "perception (tilt)"
+    assert error_source(_acc_row("obj1", 20.0, 0.9, rolled_slip=1)) == (
+        "slip during the measurement"
+    )
+    # A 2-sigma torque-noise band of 2 cm covers a miss of 8 mm.
+    assert error_source(_acc_row("obj1", 20.0, 0.9, com_std_m=0.01)) == "torque noise"
+    assert error_source(_acc_row("obj1", 50.0, 0.9)) == "rod geometry at the tilt"
+
+
+def test_accuracy_verdict_compares_every_bin_with_the_paper():
+    from comgrasp_pin.experiments.report import accuracy_verdict
+
+    rows = [_acc_row("obj1", 1.0, 0.995), _acc_row("obj1", 21.0, 0.97)]
+    rows += [{"object": "obj1", "error": "RodDroppedError: dropped"}]
+    text = accuracy_verdict(rows)
+    # Paper obj1 at the 20-25 deg bin centre (22.5 deg): 78.7 + (73.6 - 78.7) * 1.9 / 4.9.
+    paper_at = 78.7 + (73.6 - 78.7) * (22.5 - 20.6) / (25.5 - 20.6)
+    assert f"{97.0 - max(paper_at, 0):+.1f} points" not in text  # the worst bin is the low one
+    assert "| obj1 | 3 (1) | 99.5 % (1) | 97.0 % (1) |" in text
+    assert "| yes |" in text
+    assert "RodDroppedError × 1" in text
+    worse = accuracy_verdict([_acc_row("obj6", 1.0, 0.90)])
+    assert "| no |" in worse and "1 of 1 grasps are below 95 %" in worse
+
+
+def test_regrasp_verdict_counts_reasons():
+    from comgrasp_pin.experiments.report import regrasp_verdict
+
+    rows = _regrasp_rows()
+    failed = next(r for r in rows if r["method"] == "baseline" and not r["success"])
+    failed["reason"] = "geometric-centre grasp; the rod ended on the table"
+    text = regrasp_verdict(rows)
+    assert "Regrasp overall: 9/11 (81.8 %" in text
+    assert "below: obj1 82 %" in text
+    assert "- regrasp: boom × 1" in text
+    assert "- baseline: geometric-centre grasp, rod ended on the table × 1" in text
