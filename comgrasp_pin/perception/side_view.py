@@ -183,6 +183,7 @@ ROUND_MIN_POINTS = 15
 PEEK = 0.012  # look this far beyond an end to tell whether it is really the end (m)
 END_SLACK = 0.003  # a point of the rod this little beyond an end found is at that end (m)
 LENGTH_TOLERANCE = 0.01  # seen and known lengths this close agree (m)
+LENGTH_EXCESS = 0.004  # seen this much longer than known, something joined the rod (m)
 BORDER_NEAR = 0.03  # an end this close to where the rod meets the image border is cut (m)
 
 
@@ -255,7 +256,7 @@ def _centre_along(
         raise ObjectCutByBorderError(
             "an end of the held rod is out of view or hidden; pass rod_length (top view)"
         )
-    if hi - lo > rod_length + LENGTH_TOLERANCE:
+    if hi - lo > rod_length + LENGTH_EXCESS:
         # Something beyond the rod joined the mask: the rod is the length-L window that
         # holds the most points.
         centres = np.arange(lo + 0.5 * rod_length, hi - 0.5 * rod_length, 0.001)
