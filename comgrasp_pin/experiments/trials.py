@@ -15,7 +15,7 @@ ACCURACY_COLUMNS = [
     "object", "trial", "method", "seed", "length_m", "pos_real_m", "pos_esti_m", "theta_deg",
     "accuracy", "mass_real_kg", "mass_esti_kg", "theta_true_deg", "grasp_offset_m",
     "com_std_m", "residual_rms_Nm", "slip_seen", "pos_esti_line_m", "accuracy_line",
-    "rolled_slip", "wall_s",
+    "rolled_slip", "dropped_at_roll", "wall_s",
 ]  # fmt: skip
 REGRASP_COLUMNS = [
     "object", "trial", "method", "seed", "success", "regrasped", "reason", "length_m",
@@ -118,6 +118,7 @@ def accuracy_trial(task: dict) -> dict:
         "pos_esti_line_m": t.pos_esti_line,
         "accuracy_line": t.accuracy_line,
         "rolled_slip": int(t.rolled_slip),
+        "dropped_at_roll": int(t.dropped_at_roll),
         "wall_s": wall,
     }
 

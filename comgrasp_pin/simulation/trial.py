@@ -44,6 +44,8 @@ class TrialGrasp:
             rod axis), from the same measurements.
         rolled_slip: the rod turned in the jaws at the rolled pose; the two poses were then
             combined in the rod's frame, each with its own side view.
+        dropped_at_roll: the side camera found nothing in the jaws at the rolled pose: the
+            rod fell after the first pose was measured; the single-pose estimate stands.
         mass_esti, mass_real: kg. grasp_offset: where the jaws hold the rod (true, m).
         length: the rod's true length (m); rod_length: as the top view measured it (m).
         grasp_z: eelink height of the grasp (m); rod_axis_z: height of the rod's axis on
@@ -62,6 +64,7 @@ class TrialGrasp:
     pos_esti: float
     pos_esti_line: float
     rolled_slip: bool
+    dropped_at_roll: bool
     pos_real: float
     mass_esti: float
     mass_real: float
@@ -194,7 +197,7 @@ def trial_grasp(world: World, offset: float = 0.0, careful: bool = False) -> Tri
     truth = world.truth()  # scoring only: the rod as it was when the side camera saw it
     grasp_offset_true = world.grasp_offset_true()
     slip_seen = watcher.slipping_or_tilted()
-    moved, side_rolled = False, None
+    moved, side_rolled, dropped = False, None, False
     if len(poses) > 1:
         motion.move_to(sim, poses[1], duration=1.0)
         after.append(sim.measure_torques(config.settle, config.window))
@@ -202,6 +205,8 @@ def trial_grasp(world: World, offset: float = 0.0, careful: bool = False) -> Tri
             side_rolled = look_from_side(world.rig, sim.data, robot, after[1].q, rod_length,
                                          centre_hint, finger_q=sim.finger_q[0])  # fmt: skip
             moved = abs(side_rolled.theta - side.theta) > np.radians(ROLL_SLIP_DEG)
+        except ObjectNotFoundError:
+            moved = dropped = True
         except PerceptionError:
             moved = True
         motion.move_to(sim, poses[0], duration=1.0)
@@ -250,6 +255,7 @@ def trial_grasp(world: World, offset: float = 0.0, careful: bool = False) -> Tri
         pos_esti=along_true_rod(x_com_obj),
         pos_esti_line=along_true_rod(x_line),
         rolled_slip=moved,
+        dropped_at_roll=dropped,
         pos_real=truth.pos_real,
         mass_esti=est.mass,
         mass_real=truth.mass,
@@ -299,6 +305,13 @@ def _rot_x(angle: float) -> np.ndarray:
     return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
 
 
+def _heavy_side_seen(trial: TrialGrasp) -> np.ndarray:
+    """Direction (world, horizontal) from the jaws towards the estimated CoM along the rod."""
+    x_world = trial.T_world_ee[:3, :3] @ trial.T_ee_obj[:3, 0] * np.array([1.0, 1.0, 0.0])
+    side = np.sign(trial.x_com_obj - trial.side_view.grasp_offset) or 1.0
+    return side * x_world / max(np.linalg.norm(x_world), 1e-9)
+
+
 def trial_with_retry(world: World, attempts: int = 4) -> TrialGrasp:
     """Careful trial grasps: if the rod turns as it is lifted (or falls), put it down, look
     again and grasp it again where it now lies, shifted towards the end the side camera saw
@@ -306,7 +319,10 @@ def trial_with_retry(world: World, attempts: int = 4) -> TrialGrasp:
     offset = 0.0
     for attempt in range(attempts):
         try:
-            return trial_grasp(world, offset, careful=attempt < attempts - 1)
+            trial = trial_grasp(world, offset, careful=attempt < attempts - 1)
+            if trial.dropped_at_roll:
+                raise RodDroppedError("it fell out at the rolled pose", _heavy_side_seen(trial))
+            return trial
         except RodDroppedError as exc:
             if attempt == attempts - 1:
                 raise
