@@ -81,3 +81,42 @@ def test_pinhole_round_trip():
     np.testing.assert_allclose(K.project(np.array([[0, 0, 1.0]])), [[319.5, 239.5]])
     with pytest.raises(ValueError):
         K.project(np.array([[0, 0, -1.0]]))
+
+
+def test_a_reused_renderer_draws_the_new_world_exactly():
+    """CameraRig hands a closed rig's renderer to the next world with the same assets: its
+    images must be those of a renderer made for that world."""
+    import mujoco
+
+    from comgrasp_pin.simulation import build_model, cameras
+    from comgrasp_pin.simulation.objects import OBJECTS, add_object
+    from comgrasp_pin.simulation.world import SIDE_CAMERA, TOP_CAMERA
+
+    def world(name, pose):
+        model = build_model(extras=[lambda spec: add_object(spec, OBJECTS[name], pose)])
+        data = mujoco.MjData(model)
+        mujoco.mj_forward(model, data)
+        return model, data
+
+    model_a, data_a = world("obj1", (0.5, 0.1, 0.3))
+    model_b, data_b = world("obj6", (0.6, -0.1, -0.7))
+    first = CameraRig(model_a, 160, 120)
+    renderer = first._renderer
+    first.rgb(data_a, TOP_CAMERA)
+    first.close()
+    reused = CameraRig(model_b, 160, 120)
+    fresh = CameraRig(model_b, 160, 120)  # the pool is empty now: a new renderer
+    assert reused._renderer is renderer and fresh._renderer is not renderer
+    try:
+        for camera in (TOP_CAMERA, SIDE_CAMERA):
+            for image in ("rgb", "depth", "segmentation"):
+                np.testing.assert_array_equal(
+                    getattr(reused, image)(data_b, camera), getattr(fresh, image)(data_b, camera)
+                )
+        # World b's rod (the axe, not world a's stick) is in the top view.
+        rod = [model_b.geom(f"object_{i}").id for i in range(len(OBJECTS["obj6"].parts))]
+        assert np.isin(reused.segmentation(data_b, TOP_CAMERA), rod).sum() > 100
+    finally:
+        fresh.close()
+        reused.close()
+    assert len(cameras._IDLE_RENDERERS[cameras._assets_key(model_b, 160, 120)]) >= 2

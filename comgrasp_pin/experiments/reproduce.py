@@ -132,8 +132,8 @@ Wilson interval (%).
 
 ## Settings
 
-- torque sensor: white noise σ = {noise} N·m per 1 kHz sample (averaged over
-  {settings["window"]} s after {settings["settle"]} s of settling), τ_before
+- torque sensor: white noise σ = {noise} N·m per sample at {1 / settings["world"]["sim_dt"]:.0f} Hz
+  (averaged over {settings["window"]} s after {settings["settle"]} s of settling), τ_before
   {settings["tau_before"]}; estimator `{settings["estimator"]}`
 - grip force {settings["grip_force"]} N per finger; pad friction
   {settings["world"]["pad_friction"]} (sliding, torsional, rolling), condim

@@ -15,20 +15,49 @@ from comgrasp_pin.camera import PinholeCamera
 _R_MJ_OPTICAL = np.diag([1.0, -1.0, -1.0])
 
 
+# Renderers not in use, by image size and the model's rendering assets. Building one costs
+# 0.2-0.3 s (uploading the robot's meshes to OpenGL), as much as a whole accuracy trial's
+# physics; the worlds of an experiment differ only in their rod (built from primitives, not
+# assets), so a process re-points a finished world's renderer at the next one.
+_IDLE_RENDERERS: dict[tuple, list[mujoco.Renderer]] = {}
+
+
+def _assets_key(model: mujoco.MjModel, width: int, height: int) -> tuple:
+    return (width, height, model.nmesh, model.nmeshvert, model.nmeshface, model.ntex,
+            model.ntexdata, model.nhfield, model.nskin, model.nflex)  # fmt: skip
+
+
+def _take_renderer(model: mujoco.MjModel, width: int, height: int) -> mujoco.Renderer:
+    """A renderer for ``model``: an idle one with the same assets, re-pointed at it (its
+    OpenGL context stays), or a new one."""
+    idle = _IDLE_RENDERERS.get(_assets_key(model, width, height))
+    if idle:
+        renderer = idle.pop()
+        renderer._model = model  # the attributes mujoco.Renderer renders the model from
+        renderer._scene = mujoco.MjvScene(model, maxgeom=renderer._scene.maxgeom)
+        return renderer
+    return mujoco.Renderer(model, height, width)
+
+
 class CameraRig:
     """Renders RGB, metric depth and ground-truth segmentation of the model's cameras.
 
-    One offscreen context per rig; keep one rig per simulation and reuse it.
+    One offscreen renderer per rig, handed back by ``close`` for the next rig of a model
+    with the same assets (tests/test_cameras.py checks that the images are the same).
     """
 
     def __init__(self, model: mujoco.MjModel, width: int = 640, height: int = 480):
         self.model = model
         self.width = width
         self.height = height
-        self._renderer = mujoco.Renderer(model, height, width)
+        self._renderer = _take_renderer(model, width, height)
 
     def close(self) -> None:
-        self._renderer.close()
+        """Hand the renderer back for reuse; the rig must not render afterwards."""
+        if self._renderer is not None:
+            key = _assets_key(self.model, self.width, self.height)
+            _IDLE_RENDERERS.setdefault(key, []).append(self._renderer)
+            self._renderer = None
 
     def intrinsics(self, camera: str) -> PinholeCamera:
         """Pinhole intrinsics of ``camera`` at the rig's image size."""

@@ -1,7 +1,7 @@
 """The arm's joint servo: MuJoCo position actuators plus gravity feed-forward and integral action.
 
 MuJoCo's position actuator exerts ``kp (ctrl - q) - kv qdot`` (its damping is integrated
-implicitly, so a stiff servo is stable at 1 kHz). Writing
+implicitly, so a stiff servo is stable at 500 Hz). Writing
 
     ctrl = q_des + (tau_ff + tau_i) / kp
 

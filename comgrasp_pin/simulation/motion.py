@@ -92,7 +92,7 @@ def move_linear(
     T_world_goal: np.ndarray,
     duration: float,
     callback: Callback = None,
-    ik_dt: float = 0.01,
+    ik_dt: float = 0.02,
 ) -> None:
     """Straight-line ee motion (position, and orientation by SE(3) interpolation) from the
     commanded pose to ``T_world_goal`` (4, 4) with a minimum-jerk time law; IK every

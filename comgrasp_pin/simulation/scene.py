@@ -52,7 +52,7 @@ class EpisodeConfig:
     lift_time: float = 1.5
     roll_deg: float = 20.0
     settle: float = 0.5
-    window: float = 0.5
+    window: float = 1.0
     sensor: TorqueSensorConfig = field(default_factory=TorqueSensorConfig)
     tau_before: str = "measured"
     estimator: str = "lstsq"

@@ -26,7 +26,7 @@ class Simulation:
     """Steps the physics with the arm servo in the loop.
 
     Every ``step`` runs the servo once and ``mj_step`` once (``config.sim_dt``), so the
-    controller and the torque sensor run at 1/sim_dt (1 kHz by default).
+    controller and the torque sensor run at 1/sim_dt (500 Hz by default, a UR5's control rate).
 
     Attributes:
         model, data: the MuJoCo model and data.
