@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from comgrasp_pin.errors import PerceptionError
-from comgrasp_pin.ik import Q_PARK, IKError, solve_ik, top_down_frame
+from comgrasp_pin.ik import Q_PARK, IKError, grasp_height, solve_ik, top_down_frame
 from comgrasp_pin.perception.top_down import nearest_graspable
 from comgrasp_pin.planner import com_grasp, decide
 from comgrasp_pin.simulation import motion
@@ -39,6 +39,7 @@ from comgrasp_pin.simulation.trial import (  # noqa: F401  (re-exported)
 
 METHODS = ("baseline", "regrasp")
 PUT_DOWN_XY = (0.55, 0.0)  # where a rod is put down to be grasped again: mid-table (m)
+PIVOT_GRIP = 4.0  # force of each finger while a rod pivots on its low end to lie flat (N)
 
 
 @dataclass(frozen=True)
@@ -207,14 +208,20 @@ def _put_down(world: World, trial: TrialGrasp) -> tuple[np.ndarray, bool, np.nda
     # Flat, the rod's axis lies where it is now below the TCP (its point nearest the TCP):
     # the TCP ends that far above the axis' height on the table.
     near = centre - (centre @ x_axis) * x_axis
-    z_flat = max(trial.rod_axis_z + near[2] + 0.003, trial.rod_axis_z)
+    # (never lower than a grasp of the rod lying there: the pads must not jam on the table)
+    z_flat = max(trial.rod_axis_z + near[2] + 0.003, grasp_height(trial.rod_axis_z))
     T_touch = T_above.copy()
     T_touch[2, 3] = max(z_flat + low[2] + 0.01, z_flat)
     T_flat = T_above.copy()
     T_flat[:3, 3] += shift * T_above[:3, 0]
     T_flat[2, 3] = z_flat
-    motion.move_linear(sim, robot, T_touch, 1.5)
+    # Slowly: a rod held near its slip limit turns if the descent brakes hard (0.4 m in 3 s
+    # peaks at 0.27 m/s^2).
+    motion.move_linear(sim, robot, T_touch, 3.0)
     p_pivot = T_touch[:3, :3] @ low + T_touch[:3, 3]  # where the low end meets the table
+    # Loosen the grip so that the rod turns in the jaws as it lays down, as a hand would;
+    # held firmly, it would be pushed into the table until it slipped out.
+    sim.grip_force = min(PIVOT_GRIP, sim.grip_force)
     motion.place(sim, robot, T_flat, lower_time=2.0)
     motion.move_to(sim, Q_PARK)
     sim.hold(0.5)
