@@ -99,7 +99,8 @@ def _add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
         help="per object and method (default 50, the paper's; 3 with --quick)",
     )
     p.add_argument("--seed", type=int, default=0, help="run seed (%(default)s)")
-    p.add_argument("--workers", type=int, default=1, help="parallel processes (%(default)s)")
+    p.add_argument("--workers", type=int, default=os.cpu_count() or 1,
+                   help="parallel processes (default: one per core, %(default)s here)")  # fmt: skip
     p.add_argument("--noise", type=float, default=0.05,
                    help="torque sensor noise per sample, N m (%(default)s)")  # fmt: skip
     p.add_argument("--resume", action="store_true", help="continue the CSV in --out")

@@ -96,3 +96,14 @@ def test_regrasp_verdict_counts_reasons():
     assert "below: obj1 82 %" in text
     assert "- regrasp: boom × 1" in text
     assert "- baseline: geometric-centre grasp, rod ended on the table × 1" in text
+
+
+def test_regrasp_figure_with_every_trial_a_success(tmp_path):
+    # Wilson's upper bound for 6/6 rounds to just below 1: the error bar must not go negative.
+    rows = [
+        {"object": o, "trial": k, "method": m, "success": 1}
+        for o in ("obj1", "obj2")
+        for k in range(6)
+        for m in ("baseline", "regrasp")
+    ]
+    assert regrasp_figure(rows, tmp_path / "r.png").stat().st_size > 10_000

@@ -110,8 +110,8 @@ def regrasp_figure(rows: Sequence[dict], path: Path) -> Path:
             lo, hi = wilson_interval(s, n)
             p = s / n if n else np.nan
             rate.append(100 * p)
-            err_lo.append(100 * (p - lo))
-            err_hi.append(100 * (hi - p))
+            err_lo.append(max(0.0, 100 * (p - lo)))  # >= 0 also where rounding bites
+            err_hi.append(max(0.0, 100 * (hi - p)))
         ax.bar(x + offset, rate, 0.38, color=colour, label=f"{method} (ours)")
         ax.errorbar(x + offset, rate, yerr=[err_lo, err_hi], fmt="none", ecolor="k", capsize=3)
         ref = [
