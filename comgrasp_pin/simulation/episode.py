@@ -161,27 +161,25 @@ def _measure_and_regrasp(world: World, recorder) -> tuple[TrialGrasp, bool, str]
     if not decision.regrasp:
         return trial, False, decision.reason
     _caption(recorder, f"regrasp: {decision.reason}")
-    p_pivot, low_is_plus, p_release = _put_down(world, trial)
+    p_pivot, low_is_plus = _put_down(world, trial)
     rod = look_from_above(world.rig, world.sim.data)
     # The low end stayed at the pivot as the rod lay down: seen from the rod's new centre,
     # it tells which way the rod's +x end points.
     centre = np.array([rod.grasp.x, rod.grasp.y])
     to_pivot = np.r_[p_pivot[:2] - centre, 0.0]
     axis_hint = to_pivot if low_is_plus else -to_pivot
-    # The CoM lies (x_com - grasp_offset) along the rod from the point the jaws held, and
-    # that point lies where they let go: measured from it, the side camera's estimate of
-    # the rod's centre (which may be off by millimetres) drops out.
-    d = np.array([np.cos(rod.grasp.yaw), np.sin(rod.grasp.yaw)])
-    held_s = (p_release[:2] - centre) @ d
-    sign = 1.0 if d @ axis_hint[:2] >= 0 else -1.0
-    x_com_from_centre = sign * (held_s + sign * (decision.x_com_obj - decision.grasp_offset_obj))
+    # The CoM lies x_com along the rod from its centre (the side view measures both within
+    # millimetres), and the top view sees the centre where the rod now lies; measured from
+    # where the jaws let go instead, the rod sliding in the jaws as it pivots flat would
+    # carry over (centimetres).
+    x_com_from_centre = decision.x_com_obj
     target = com_grasp(rod.grasp, axis_hint, x_com_from_centre,
                        lambda s: nearest_graspable(rod, s))  # fmt: skip
     motion.pick(world.sim, world.robot, target, grip_force=world.config.grip_force)
     return trial, True, decision.reason
 
 
-def _put_down(world: World, trial: TrialGrasp) -> tuple[np.ndarray, bool, np.ndarray]:
+def _put_down(world: World, trial: TrialGrasp) -> tuple[np.ndarray, bool]:
     """Lay the held rod down mid-table, along the table's long side (y), and go home.
 
     A rod hanging tilted in the jaws is laid down as a person would: lowered until its low
@@ -189,8 +187,7 @@ def _put_down(world: World, trial: TrialGrasp) -> tuple[np.ndarray, bool, np.nda
     so that the rod pivots on it and comes to lie flat where it is (lowering it straight
     down would push it through the jaws and topple it). Uses only what the side camera
     measured (axis, centre, length from the top view). Returns where the rod's low end met
-    the table (3,), the pivot it lay down about, whether that end is its +x end, and where
-    the jaws let go (3,)."""
+    the table (3,), the pivot it lay down about, and whether that end is its +x end."""
     sim, robot = world.sim, world.robot
     T_now = robot.ee_pose(sim.q_des)
     yaw = np.pi / 2 if T_now[1, 0] >= 0 else -np.pi / 2  # the nearer of the two
@@ -225,7 +222,7 @@ def _put_down(world: World, trial: TrialGrasp) -> tuple[np.ndarray, bool, np.nda
     motion.place(sim, robot, T_flat, lower_time=2.0)
     motion.move_to(sim, Q_PARK)
     sim.hold(0.5)
-    return p_pivot, low_is_plus, T_flat[:3, 3].copy()
+    return p_pivot, low_is_plus
 
 
 class _LiveViewer:
