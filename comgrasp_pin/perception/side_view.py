@@ -4,8 +4,8 @@ Segmentation again leans on depth and on what the robot knows about itself: pixe
 lifted to the ee frame (T_ee_cam comes from the robot description), and the rod is what lies
 in the slab between the jaws (|y_ee| small) outside the gripper's own volume (fingers, pads,
 palm, wrist) and, when the table is near, above it. The jaws centre the rod, so its axis
-passes through y_ee = 0; a robust 3-D line fit on the visible surface gives its direction,
-the extreme points along it give its ends, hence its geometric centre, length and tilt.
+passes through y_ee = 0: its direction in the x-z plane comes from ``rod_axis``, its ends
+and centre from ``rod_ends``, hence its geometric centre, where the jaws hold it, and tilt.
 """
 
 from __future__ import annotations
@@ -17,14 +17,10 @@ import cv2
 import numpy as np
 
 from comgrasp_pin.camera import PinholeCamera
-from comgrasp_pin.errors import ObjectCutByBorderError, ObjectNotFoundError
-from comgrasp_pin.perception._points import (
-    blobs,
-    border_pixels,
-    check_images,
-    fit_line,
-    points_in,
-)
+from comgrasp_pin.errors import ObjectNotFoundError
+from comgrasp_pin.perception._points import blobs, check_images, points_in
+from comgrasp_pin.perception.rod_axis import centre_line, fit_cylinder
+from comgrasp_pin.perception.rod_ends import centre_along, end_profile
 
 SLAB_HALF_WIDTH = 0.08  # |y_ee| of the region the held object may occupy (m)
 REACH = 0.40  # distance from the TCP beyond which nothing is the held object (m)
@@ -129,9 +125,9 @@ def observe_held_rod(
     mask = blobs(candidate, MIN_PIXELS, "side-camera image")
     points = p[mask]
     # Tilt lives in the ee x-z plane; the jaws fix the axis at y = 0.
-    x_axis, offset_xz, handle = _centre_line(points[:, [0, 2]])
+    x_axis, offset_xz, handle = centre_line(points[:, [0, 2]])
     if handle.sum() >= MIN_PIXELS:
-        x_fit, offset_fit, misfit = _fit_cylinder(points[handle], x_axis, offset_xz, handle_radius)
+        x_fit, offset_fit, misfit = fit_cylinder(points[handle], x_axis, offset_xz, handle_radius)
         # Trust the refinement only near the slice estimate (it can lock on a wrong side)
         # and where the handle is round (a flat bar is no cylinder).
         if (
@@ -152,10 +148,10 @@ def observe_held_rod(
     rho = np.linalg.norm(points - offset - np.outer(along, x_axis), axis=1)
     radius = handle_radius if handle_radius else float(np.median(rho[handle]))
     (lo, lo_sharp), (hi, hi_sharp) = (
-        _end_profile(along, rho, e, s, radius) for e, s in ((lo, -1.0), (hi, 1.0))
+        end_profile(along, rho, e, s, radius) for e, s in ((lo, -1.0), (hi, 1.0))
     )
     T_cam_ee = np.linalg.inv(T_ee_cam)
-    mid = _centre_along(
+    mid = centre_along(
         x_axis, (lo, hi), (lo_sharp, hi_sharp), along, offset, depth, p, candidate, mask,
         camera, T_cam_ee, rod_length, centre_hint, excluded,
     )  # fmt: skip
@@ -174,215 +170,6 @@ def observe_held_rod(
     rect = cv2.minAreaRect(np.vstack(contours))
     return SideView(T_ee_obj, theta, float(hi - lo), grasp_offset, mask, rect,
                     camera.project(ends_cam), camera.project(tcp_cam[None])[0])  # fmt: skip
-
-
-HEAD_BAND = 0.015  # the last this much of an end shows whether it carries a head (m)
-HEAD_RATIO = 1.2  # an end standing this many handle radii off the axis is a head
-ROUND_BAND = 1.2  # a round end's visible cap lies within this many radii of its extreme
-ROUND_MIN_POINTS = 15
-PEEK = 0.012  # look this far beyond an end to tell whether it is really the end (m)
-END_SLACK = 0.003  # a point of the rod this little beyond an end found is at that end (m)
-LENGTH_TOLERANCE = 0.01  # seen and known lengths this close agree (m)
-LENGTH_EXCESS = 0.004  # seen this much longer than known, something joined the rod (m)
-BORDER_NEAR = 0.03  # an end this close to where the rod meets the image border is cut (m)
-
-
-def _end_profile(along, rho, end, outwards, radius) -> tuple[float, bool]:
-    """An end of the rod from the profile of the visible points near it.
-
-    Args:
-        along, rho: (N,) the points' coordinate along the axis and distance from it (m).
-        end: the extreme coordinate seen at this end (m); outwards: +1 (hi end) or -1 (lo).
-        radius: the handle's radius (m).
-    Returns (the end's coordinate (m), sharp): a sharp end is located to a fraction of a
-    millimetre, because it carries a head (it stands off the axis farther than the handle:
-    its flat face is seen edge-on) or it is a round cap fitted by ``_round_end``. A plain
-    handle end too thin for the cap fit may fall short by up to its radius.
-    """
-    near_end = outwards * (end - along) < HEAD_BAND
-    if np.percentile(rho[near_end], 90) > HEAD_RATIO * radius:
-        return end, True
-    tip = _round_end(along, rho, end, outwards, radius)
-    return (end, False) if tip is None else (tip, True)
-
-
-def _round_end(along, rho, end, outwards, radius) -> float | None:
-    """The tip of a round (hemispherical) end whose visible extreme is ``end`` (m, along
-    the axis); None if the end does not show as a cap of the handle's ``radius``.
-
-    The side camera sees a cap at the rod's end from behind and at a grazing angle, so the
-    extreme of the visible points falls short of the tip (by up to half the radius). The
-    visible cap points (``along``, distance ``rho`` from the axis; the cylinder's points
-    lie at rho = radius) are on a sphere centred on the axis: each gives its centre as
-    along - outwards * sqrt(radius^2 - rho^2). If they agree, the tip lies ``radius``
-    beyond that centre.
-    """
-    cap = (outwards * (end - along) < ROUND_BAND * radius) & (rho < 0.85 * radius)
-    if np.count_nonzero(cap) < ROUND_MIN_POINTS:
-        return None
-    centres = along[cap] - outwards * np.sqrt(radius**2 - rho[cap] ** 2)
-    centre = np.median(centres)
-    if np.median(np.abs(centres - centre)) > max(0.05 * radius, 5e-4):
-        return None
-    return float(outwards * max(outwards * end, outwards * centre + radius))
-
-
-def _centre_along(
-    x_axis, ends, sharp, along, offset, depth, points, candidate, mask, camera, T_cam_ee,
-    rod_length, centre_hint, excluded,
-) -> float:  # fmt: skip
-    """Where the rod's centre lies along ``x_axis`` (coordinate, m), from its trusted ends.
-
-    ``ends``: (lo, hi) coordinates of the ends seen; ``sharp``: whether each is located
-    precisely (see ``_end_profile``). An end is trusted when the point just beyond it is
-    in the image, nothing nearer to the camera covers it, and it is not in a region left
-    out as the robot's own (else the rod may go on out of view, behind the gripper, or
-    into the self-filter). With the rod's length known, the centre is found from the
-    trusted end that is best located.
-    """
-    lo, hi = ends
-    along_border = points[border_pixels(mask)] @ x_axis
-    trusted = [
-        _end_is_seen(
-            offset + e * x_axis, s * x_axis, depth, points, candidate, camera, T_cam_ee,
-            excluded,
-        )
-        and not np.any(np.abs(along_border - e) < BORDER_NEAR)
-        for e, s in ((lo, -1.0), (hi, 1.0))
-    ]  # fmt: skip
-    if rod_length is None:
-        if all(trusted):
-            return 0.5 * (lo + hi)
-        raise ObjectCutByBorderError(
-            "an end of the held rod is out of view or hidden; pass rod_length (top view)"
-        )
-    if hi - lo > rod_length + LENGTH_EXCESS:
-        # Something beyond the rod joined the mask: the rod is the length-L window that
-        # holds the most points.
-        centres = np.arange(lo + 0.5 * rod_length, hi - 0.5 * rod_length, 0.001)
-        counts = [np.count_nonzero(np.abs(along - c) <= 0.5 * rod_length) for c in centres]
-        return float(centres[np.asarray(counts) >= max(counts)].mean())
-    if all(trusted) and hi - lo > rod_length - LENGTH_TOLERANCE and sharp[0] == sharp[1]:
-        return 0.5 * (lo + hi)
-    # One end: the trusted one; of two, the sharp one, else the farther from the jaws (the
-    # nearer may be partly hidden by the fingers).
-    rank = [(t, sh, abs(e)) for t, sh, e in zip(trusted, sharp, ends, strict=True)]
-    best = int(np.argmax([rank[0] > rank[1], rank[1] > rank[0]]))
-    if trusted[best]:
-        return ends[best] - (-1.0, 1.0)[best] * 0.5 * rod_length
-    if centre_hint is not None:
-        # The rod reaches at least as far as seen at either end.
-        return float(np.clip(centre_hint, hi - 0.5 * rod_length, lo + 0.5 * rod_length))
-    raise ObjectCutByBorderError("neither end of the held rod is seen whole (side camera)")
-
-
-def _end_is_seen(end, outwards, depth, points, candidate, camera, T_cam_ee, excluded) -> bool:
-    """Whether the rod really ends at ``end`` (3-D point on the axis, ee frame, m;
-    ``outwards``: unit axis direction): the point PEEK beyond it is in the image and shows
-    background behind it, or the rod's own end covering it in perspective."""
-    beyond = end + PEEK * outwards
-    in_robot = bool(excluded(beyond[None])[0])
-    p_cam = T_cam_ee[:3, :3] @ beyond + T_cam_ee[:3, 3]
-    if p_cam[2] <= 0:
-        return False
-    u, v = camera.project(p_cam[None])[0]
-    if not (2 <= u < camera.width - 2 and 2 <= v < camera.height - 2):
-        return False
-    row, col = int(round(v)), int(round(u))
-    if candidate[row, col]:
-        # What may be the rod (the mask before its opening): a wide head seen in
-        # perspective (its point lies within the end found), or the rod going on beyond
-        # this end (it was cut off by the border).
-        return bool((points[row, col] - end) @ outwards < END_SLACK)
-    # Seen if what lies there is farther (background); hidden if something else, nearer,
-    # covers it (the gripper). Within the robot's own volume, where the self-filter would
-    # have removed the rod, only if it is clearly farther (the rod would be in front).
-    return bool(depth[row, col] > p_cam[2] + (0.01 if in_robot else -0.01))
-
-
-def _centre_line(xz: np.ndarray, bin_width: float = 0.01):
-    """The rod's axis in the ee x-z plane, from slice centres.
-
-    The visible points are cut in slices across the rod; the median of each slice is a
-    point of the centre line, and a line is fitted to those slice centres with outlier
-    rejection. Heads and weights, which stand off the handle's axis over a few slices
-    only, then do not pull the axis (a plain PCA of all points would).
-    Returns (unit direction (2,) with positive x, the point nearest the TCP (2,), (N,) bool
-    mask of the points in the slices kept: the handle).
-    """
-    _, direction = fit_line(np.c_[xz, np.zeros(len(xz))])
-    direction = direction[:2] / np.linalg.norm(direction[:2])
-    point = xz.mean(axis=0)
-    in_kept = np.ones(len(xz), dtype=bool)
-    for _ in range(2):
-        normal = np.array([-direction[1], direction[0]])
-        along, across = xz @ direction, xz @ normal
-        bins = np.floor(along / bin_width).astype(int)
-        labels = [b for b in np.unique(bins) if np.count_nonzero(bins == b) >= 5]
-        if len(labels) < 3:
-            break
-        c = np.array([(np.median(along[bins == b]), np.median(across[bins == b])) for b in labels])
-        keep = np.ones(len(c), dtype=bool)
-        for _ in range(3):
-            slope, intercept = np.polyfit(c[keep, 0], c[keep, 1], 1)
-            residual = np.abs(c[:, 1] - (slope * c[:, 0] + intercept))
-            keep = residual <= max(3.0 * np.median(residual[keep]), 0.002)
-        point = intercept * normal
-        direction = (direction + slope * normal) / np.hypot(1.0, slope)
-        in_kept = np.isin(bins, np.array(labels)[keep])
-    if direction[0] < 0:
-        direction = -direction
-    return direction, point - (point @ direction) * direction, in_kept
-
-
-def _fit_cylinder(
-    points: np.ndarray, direction: np.ndarray, point: np.ndarray, radius: float | None = None
-):
-    """Refine the axis (in the plane y = 0) by fitting a cylinder to the visible surface.
-
-    The camera sees one side of the rod, so the visible points stand off the axis towards
-    the camera; the slice centres inherit that offset, which changes along a tilted rod
-    and biases the tilt. Fitting |(p - a) x u| = r (axis angle, its offset, radius r) by
-    Gauss-Newton, with points far off the cylinder (heads, weights) left out, removes it.
-    ``radius`` (m), when known (half the jaws' opening), is held fixed.
-    Returns (direction (2,), point nearest the TCP (2,)) in the x-z plane, and the median
-    distance of the points from the cylinder (m).
-    """
-    angle = np.arctan2(direction[1], direction[0])
-    normal = np.array([-direction[1], direction[0]])
-    params = np.array([angle, point @ normal, 0.0])
-
-    def residuals(prm, pts):
-        u = np.array([np.cos(prm[0]), 0.0, np.sin(prm[0])])
-        n = np.array([-np.sin(prm[0]), 0.0, np.cos(prm[0])])
-        rel = pts - prm[1] * n
-        return np.linalg.norm(rel - np.outer(rel @ u, u), axis=1) - prm[2]
-
-    params[2] = np.median(residuals(params, points)) if radius is None else radius
-    free = 2 if radius is not None else 3
-    keep = np.ones(len(points), dtype=bool)
-    for _ in range(8):
-        res = residuals(params, points[keep])
-        jac = np.empty((len(res), free))
-        for k, h in enumerate((1e-6, 1e-7, 1e-7)[:free]):
-            step = np.zeros(3)
-            step[k] = h
-            jac[:, k] = (residuals(params + step, points[keep]) - res) / h
-        # Levenberg-Marquardt step: damped, accepted only if it lowers the cost.
-        jtj, jtr = jac.T @ jac, jac.T @ res
-        for damping in (1e-6, 1e-3, 1e-1, 1.0):
-            delta = np.linalg.solve(jtj + damping * np.diag(np.diag(jtj)), jtr)
-            trial = params - np.r_[delta, np.zeros(3 - free)]
-            if np.sum(residuals(trial, points[keep]) ** 2) < np.sum(res**2):
-                params = trial
-                break
-        res_all = np.abs(residuals(params, points))
-        keep = res_all < 3.0 * np.median(res_all[keep]) + 0.002
-    u = np.array([np.cos(params[0]), np.sin(params[0])])
-    if u[0] < 0:
-        u = -u
-    n = np.array([-np.sin(params[0]), np.cos(params[0])])
-    return u, params[1] * n, float(np.median(res_all))
 
 
 def _in_capsule(p: np.ndarray, p0: np.ndarray, p1: np.ndarray, radius: float) -> np.ndarray:

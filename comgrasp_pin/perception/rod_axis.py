@@ -1,0 +1,96 @@
+"""The axis of a held rod in the jaws' plane (ee x-z), from the side camera's points.
+
+Slice centres give a first line that heads and weights do not pull; a cylinder fitted to
+the handle's visible surface removes the offset of seeing only its near side. Ee frame, m.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from comgrasp_pin.perception._points import fit_line
+
+
+def centre_line(xz: np.ndarray, bin_width: float = 0.01):
+    """The rod's axis in the ee x-z plane, from slice centres.
+
+    The visible points are cut in slices across the rod; the median of each slice is a
+    point of the centre line, and a line is fitted to those slice centres with outlier
+    rejection. Heads and weights, which stand off the handle's axis over a few slices
+    only, then do not pull the axis (a plain PCA of all points would).
+    Returns (unit direction (2,) with positive x, the point nearest the TCP (2,), (N,) bool
+    mask of the points in the slices kept: the handle).
+    """
+    _, direction = fit_line(np.c_[xz, np.zeros(len(xz))])
+    direction = direction[:2] / np.linalg.norm(direction[:2])
+    point = xz.mean(axis=0)
+    in_kept = np.ones(len(xz), dtype=bool)
+    for _ in range(2):
+        normal = np.array([-direction[1], direction[0]])
+        along, across = xz @ direction, xz @ normal
+        bins = np.floor(along / bin_width).astype(int)
+        labels = [b for b in np.unique(bins) if np.count_nonzero(bins == b) >= 5]
+        if len(labels) < 3:
+            break
+        c = np.array([(np.median(along[bins == b]), np.median(across[bins == b])) for b in labels])
+        keep = np.ones(len(c), dtype=bool)
+        for _ in range(3):
+            slope, intercept = np.polyfit(c[keep, 0], c[keep, 1], 1)
+            residual = np.abs(c[:, 1] - (slope * c[:, 0] + intercept))
+            keep = residual <= max(3.0 * np.median(residual[keep]), 0.002)
+        point = intercept * normal
+        direction = (direction + slope * normal) / np.hypot(1.0, slope)
+        in_kept = np.isin(bins, np.array(labels)[keep])
+    if direction[0] < 0:
+        direction = -direction
+    return direction, point - (point @ direction) * direction, in_kept
+
+
+def fit_cylinder(
+    points: np.ndarray, direction: np.ndarray, point: np.ndarray, radius: float | None = None
+):
+    """Refine the axis (in the plane y = 0) by fitting a cylinder to the visible surface.
+
+    The camera sees one side of the rod, so the visible points stand off the axis towards
+    the camera; the slice centres inherit that offset, which changes along a tilted rod
+    and biases the tilt. Fitting |(p - a) x u| = r (axis angle, its offset, radius r) by
+    Gauss-Newton, with points far off the cylinder (heads, weights) left out, removes it.
+    ``radius`` (m), when known (half the jaws' opening), is held fixed.
+    Returns (direction (2,), point nearest the TCP (2,)) in the x-z plane, and the median
+    distance of the points from the cylinder (m).
+    """
+    angle = np.arctan2(direction[1], direction[0])
+    normal = np.array([-direction[1], direction[0]])
+    params = np.array([angle, point @ normal, 0.0])
+
+    def residuals(prm, pts):
+        u = np.array([np.cos(prm[0]), 0.0, np.sin(prm[0])])
+        n = np.array([-np.sin(prm[0]), 0.0, np.cos(prm[0])])
+        rel = pts - prm[1] * n
+        return np.linalg.norm(rel - np.outer(rel @ u, u), axis=1) - prm[2]
+
+    params[2] = np.median(residuals(params, points)) if radius is None else radius
+    free = 2 if radius is not None else 3
+    keep = np.ones(len(points), dtype=bool)
+    for _ in range(8):
+        res = residuals(params, points[keep])
+        jac = np.empty((len(res), free))
+        for k, h in enumerate((1e-6, 1e-7, 1e-7)[:free]):
+            step = np.zeros(3)
+            step[k] = h
+            jac[:, k] = (residuals(params + step, points[keep]) - res) / h
+        # Levenberg-Marquardt step: damped, accepted only if it lowers the cost.
+        jtj, jtr = jac.T @ jac, jac.T @ res
+        for damping in (1e-6, 1e-3, 1e-1, 1.0):
+            delta = np.linalg.solve(jtj + damping * np.diag(np.diag(jtj)), jtr)
+            trial = params - np.r_[delta, np.zeros(3 - free)]
+            if np.sum(residuals(trial, points[keep]) ** 2) < np.sum(res**2):
+                params = trial
+                break
+        res_all = np.abs(residuals(params, points))
+        keep = res_all < 3.0 * np.median(res_all[keep]) + 0.002
+    u = np.array([np.cos(params[0]), np.sin(params[0])])
+    if u[0] < 0:
+        u = -u
+    n = np.array([-np.sin(params[0]), np.cos(params[0])])
+    return u, params[1] * n, float(np.median(res_all))
