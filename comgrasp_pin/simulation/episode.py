@@ -39,6 +39,7 @@ from comgrasp_pin.simulation.trial import (  # noqa: F401  (re-exported)
 
 METHODS = ("baseline", "regrasp")
 PUT_DOWN_XY = (0.55, 0.0)  # where a rod is put down to be grasped again: mid-table (m)
+PUT_DOWN_V_MAX, PUT_DOWN_A_MAX = 0.5, 0.5  # joint limits carrying a rod to be put down
 PIVOT_GRIP = 4.0  # force of each finger while a rod pivots on its low end to lie flat (N)
 
 
@@ -201,7 +202,9 @@ def _put_down(world: World, trial: TrialGrasp) -> tuple[np.ndarray, bool]:
     e_x = np.array([np.cos(yaw), np.sin(yaw)])
     xy_touch = np.asarray(PUT_DOWN_XY) + (trial.side_view.grasp_offset - shift) * e_x
     T_above = top_down_frame(*xy_touch, T_now[2, 3], yaw)
-    motion.move_to(sim, solve_ik(robot, T_above, sim.q_des), settle=0.2)
+    # Gently: the rod may be held close to its slip limit (that is why it is put down).
+    motion.move_to(sim, solve_ik(robot, T_above, sim.q_des), v_max=PUT_DOWN_V_MAX,
+                   a_max=PUT_DOWN_A_MAX, settle=0.2)  # fmt: skip
     # Flat, the rod's axis lies where it is now below the TCP (its point nearest the TCP):
     # the TCP ends that far above the axis' height on the table.
     near = centre - (centre @ x_axis) * x_axis

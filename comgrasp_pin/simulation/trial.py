@@ -23,8 +23,8 @@ from comgrasp_pin.simulation.perceive import SlipWatcher, look_from_above, look_
 from comgrasp_pin.simulation.scene import World
 
 CAREFUL_LIFT = 0.04  # a careful trial grasp first lifts the rod this much (m) ...
-CAREFUL_ABORT_DEG = 6.0  # ... and puts it back down if it turns more than this (deg)
-RETRY_SHIFT = 0.1  # a dropped rod is grasped again this fraction of its length off-centre
+CAREFUL_ABORT_DEG = 3.0  # ... and puts it back down if it turns more than this (deg)
+RETRY_SHIFT = 0.15  # a turning rod is grasped again this fraction of its length further
 ROLL_SLIP_DEG = 0.5  # a tilt change above this at the rolled pose means the rod moved (deg)
 MAX_CONDITION = 1e4  # the rod-frame two-pose problem is used below this condition number
 
@@ -314,10 +314,17 @@ def _heavy_side_seen(trial: TrialGrasp) -> np.ndarray:
 
 def trial_with_retry(world: World, attempts: int = 4) -> TrialGrasp:
     """Careful trial grasps: if the rod turns as it is lifted (or falls), put it down, look
-    again and grasp it again where it now lies, shifted towards the end the side camera saw
-    go down (by a further RETRY_SHIFT of its length each time): the CoM is on that side."""
-    offset = 0.0
+    again and grasp it again where it now lies, towards the end the side camera saw go
+    down: the CoM is on that side. The grasp point steps RETRY_SHIFT of the rod's length
+    that way until the rod turns the other way, then bisects between the two last points.
+    Positions are kept along one world direction, so a rod seen turned by half a turn
+    (its yaw is only known modulo pi) does not confuse them."""
+    u = None  # world direction (3,) along which positions s are counted
+    s, below, above = 0.0, None, None  # the CoM is beyond ``below`` and short of ``above``
     for attempt in range(attempts):
+        rod = look_from_above(world.rig, world.sim.data)
+        d = np.array([np.cos(rod.grasp.yaw), np.sin(rod.grasp.yaw), 0.0])
+        offset = s if u is None else s * float(np.sign(d @ u) or 1.0)
         try:
             trial = trial_grasp(world, offset, careful=attempt < attempts - 1)
             if trial.dropped_at_roll:
@@ -329,9 +336,16 @@ def trial_with_retry(world: World, attempts: int = 4) -> TrialGrasp:
             motion.open_gripper(world.sim)
             motion.move_to(world.sim, Q_PARK)
             world.sim.hold(0.5)  # the rod comes to rest on the table
-            if exc.heavy_side_world is not None:
-                rod = look_from_above(world.rig, world.sim.data)
-                d = np.array([np.cos(rod.grasp.yaw), np.sin(rod.grasp.yaw), 0.0])
-                step = RETRY_SHIFT * rod.length * np.sign(d @ exc.heavy_side_world)
-                offset += step
+            if exc.heavy_side_world is None:
+                continue
+            if u is None:
+                u = np.asarray(exc.heavy_side_world, dtype=float)
+            if exc.heavy_side_world @ u > 0:
+                below = s
+            else:
+                above = s
+            if below is not None and above is not None:
+                s = 0.5 * (below + above)
+            else:
+                s += (1.0 if above is None else -1.0) * RETRY_SHIFT * rod.length
     raise AssertionError("unreachable")
