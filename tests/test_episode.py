@@ -53,4 +53,4 @@ def test_same_seed_same_result():
     assert a.success == b.success and a.final_grasp_offset == b.final_grasp_offset
 
 
-SEED_OBJ1 = 2
+SEED_OBJ1 = 7  # the rod turns in the trial grasp: laid flat by pivoting, grasped again
