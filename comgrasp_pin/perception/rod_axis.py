@@ -10,6 +10,8 @@ import numpy as np
 
 from comgrasp_pin.perception._points import fit_line
 
+MAX_FIT_POINTS = 3000
+
 
 def centre_line(xz: np.ndarray, bin_width: float = 0.01):
     """The rod's axis in the ee x-z plane, from slice centres.
@@ -59,6 +61,9 @@ def fit_cylinder(
     Returns (direction (2,), point nearest the TCP (2,)) in the x-z plane, and the median
     distance of the points from the cylinder (m).
     """
+    # Three parameters need no more than a few thousand points (a full-resolution view
+    # of a thick handle has tens of thousands): every k-th point, spread along the rod.
+    points = points[:: max(1, len(points) // MAX_FIT_POINTS)]
     angle = np.arctan2(direction[1], direction[0])
     normal = np.array([-direction[1], direction[0]])
     params = np.array([angle, point @ normal, 0.0])
