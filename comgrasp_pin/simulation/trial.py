@@ -167,15 +167,17 @@ def trial_grasp(world: World, offset: float = 0.0, careful: bool = False) -> Tri
     if careful:
         # Lift a little, slowly, and put the rod back down at once if it turns in the jaws.
         grasp_z = grasp_frame(grasp)[2, 3]
-        pick = motion.pick(sim, robot, grasp, grip_force=config.grip_force,
-                           lift_height=grasp_z + CAREFUL_LIFT, lift_time=1.0,
-                           callback=watcher)  # fmt: skip
+        motion.pick(sim, robot, grasp, grip_force=config.grip_force,
+                    lift_height=grasp_z + CAREFUL_LIFT, lift_time=1.0,
+                    callback=watcher)  # fmt: skip
         motion.hold(sim, 0.3, callback=watcher)
         watcher(sim, force=True)
         tilts = np.abs(watcher.monitor.thetas)
         if tilts.size and tilts.max() > np.radians(CAREFUL_ABORT_DEG):
             heavy = _heavy_side(watcher, T_meas)
-            motion.place(sim, robot, pick.T_world_ee_grasp, lower_time=0.8)
+            # Let go where it is (its low end is on the table already): lowering the jaws
+            # back to the grasp height would push that end into the table.
+            motion.place(sim, robot, robot.ee_pose(sim.q_des), lower_time=0.1)
             motion.move_to(sim, Q_PARK)
             raise RodSlippedError(f"the rod turned by {np.degrees(tilts.max()):.0f} deg", heavy)
         T_up = robot.ee_pose(sim.q_des)
