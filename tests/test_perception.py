@@ -252,3 +252,34 @@ def test_slip_monitor():
         monitor.add(0.0, 0.0)  # out of order
     with pytest.raises(ValueError):
         SlipMonitor().verdict()
+
+
+def _detection_with_widths(profile):
+    """A RodDetection whose 1 cm slices have the widths ``profile(position)`` (m)."""
+    from comgrasp_pin.ik import GraspPose
+    from comgrasp_pin.perception import RodDetection
+
+    pos = np.arange(-0.195, 0.2, 0.01)
+    widths = np.c_[pos, [profile(p) for p in pos]]
+    mask, rect, axis_px = np.zeros((4, 4), bool), ((0, 0), (1, 1), 0.0), np.zeros((2, 2))
+    return RodDetection(
+        GraspPose(0.5, 0.0, 0.01, 0.0), 0.40, widths, 0.0, 0.02, mask, rect, axis_px
+    )
+
+
+def test_graspable_points_keep_the_pads_off_wide_heads():
+    from comgrasp_pin.perception.top_down import nearest_graspable, nearest_on_handle
+
+    # A 2 cm handle with a 6 cm head (the jaws fit around it) from 0.12 m to the end.
+    torch = _detection_with_widths(lambda p: 0.06 if p > 0.12 else 0.02)
+    assert nearest_graspable(torch, 0.031) == 0.031  # not rounded to a 1 cm slice
+    assert nearest_graspable(torch, 0.15) == pytest.approx(0.15)  # the head fits the jaws
+    # On the handle: both pads (22 mm either side of the grasp) short of the head.
+    s = nearest_on_handle(torch, 0.15)
+    assert 0.12 - 0.022 - 0.01 <= s <= 0.12 - 0.022 + 1e-9
+    assert nearest_on_handle(torch, -0.1) == -0.1
+    # A 12 cm head across the rod: too wide for the jaws either way.
+    mallet = _detection_with_widths(lambda p: 0.12 if p > 0.12 else 0.05)
+    assert nearest_graspable(mallet, 0.16) <= 0.12 - 0.022 + 1e-9
+    with pytest.raises(ObjectNotFoundError):
+        nearest_graspable(_detection_with_widths(lambda p: 0.1), 0.0)

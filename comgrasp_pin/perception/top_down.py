@@ -119,10 +119,19 @@ def nearest_graspable(
     jaws fit: the rod is narrower than ``max_width`` over ``half_pad`` either side."""
     pos, width = det.widths[:, 0], det.widths[:, 1]
     ok = []
-    for c in pos:
+    for c in (s, *pos):  # ``s`` itself first: the slices are 1 cm apart
         near = np.abs(pos - c) <= half_pad
         if np.all(width[near] <= max_width) and abs(c) <= 0.5 * det.length - half_pad:
             ok.append(c)
     if not ok:
         raise ObjectNotFoundError("no part of the object is narrow enough to grasp")
     return float(min(ok, key=lambda c: abs(c - s)))
+
+
+def nearest_on_handle(det: RodDetection, s: float, half_pad: float = 0.022) -> float:
+    """The position along the rod (m from its centre, towards +yaw) nearest ``s`` where both
+    pads lie on the handle: within ``half_pad`` either side the rod is no wider than its
+    width at the centre (the handle) plus a quarter and 4 mm. A grasp on a head's shoulder
+    stops the jaws on the head and barely holds the handle."""
+    handle = det.widths[np.argmin(np.abs(det.widths[:, 0])), 1]
+    return nearest_graspable(det, s, max_width=1.25 * handle + 0.004, half_pad=half_pad)

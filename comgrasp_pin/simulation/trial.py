@@ -17,6 +17,7 @@ from comgrasp_pin.estimator import estimate_com
 from comgrasp_pin.geometry import com_along_axis, invert_transform
 from comgrasp_pin.ik import Q_PARK, GraspPose, grasp_frame, solve_ik, solve_top_down
 from comgrasp_pin.perception import SideView
+from comgrasp_pin.perception.top_down import nearest_on_handle
 from comgrasp_pin.regressor import pose_regressor
 from comgrasp_pin.simulation import motion
 from comgrasp_pin.simulation.perceive import SlipWatcher, look_from_above, look_from_side
@@ -327,6 +328,7 @@ def trial_with_retry(world: World, attempts: int = 4) -> TrialGrasp:
         rod = look_from_above(world.rig, world.sim.data)
         d = np.array([np.cos(rod.grasp.yaw), np.sin(rod.grasp.yaw), 0.0])
         offset = s if u is None else s * float(np.sign(d @ u) or 1.0)
+        offset = nearest_on_handle(rod, offset)
         try:
             trial = trial_grasp(world, offset, careful=attempt < attempts - 1)
             if trial.dropped_at_roll:
