@@ -254,6 +254,20 @@ def test_slip_monitor():
         SlipMonitor().verdict()
 
 
+def test_slip_monitor_ignores_one_bad_frame():
+    monitor = SlipMonitor()
+    for k, theta_deg in enumerate([-13.2, 0.0, 0.3, 0.1, 0.0, 0.0, 0.0]):  # seen in a trial
+        monitor.add(0.2 * k, np.radians(theta_deg))
+    verdict = monitor.verdict()
+    assert not verdict.slip_seen and verdict.change_deg < 1.0
+    assert abs(np.degrees(monitor.settled_tilt())) < 0.1
+    monitor.add(1.4, np.radians(20.0))  # the rod starts to turn: one frame is not enough
+    assert abs(np.degrees(monitor.settled_tilt())) < 0.1
+    monitor.add(1.6, np.radians(30.0))
+    assert np.degrees(monitor.settled_tilt()) == pytest.approx(20.0)
+    assert monitor.verdict().slip_seen
+
+
 def _detection_with_widths(profile):
     """A RodDetection whose 1 cm slices have the widths ``profile(position)`` (m)."""
     from comgrasp_pin.ik import GraspPose

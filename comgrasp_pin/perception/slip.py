@@ -50,6 +50,22 @@ class SlipMonitor:
         rate = 0.0
         if recent.sum() >= 2 and np.ptp(t[recent]) > 0:
             rate = abs(np.polyfit(t[recent], th[recent], 1)[0])
-        change = float(np.max(np.abs(th - th[0])))
+        steady = _despike(th)  # one bad frame is not slip
+        change = float(np.max(np.abs(steady - steady[0])))
         return SlipVerdict(rate > self.rate_deg_s, change > self.change_deg, float(rate), change,
                            float(self.thetas[-1]))  # fmt: skip
+
+    def settled_tilt(self) -> float:
+        """The tilt now (rad), robust to one bad frame: the median of the last three."""
+        if not self.times:
+            raise ValueError("no tilt samples yet")
+        return float(np.median(self.thetas[-3:]))
+
+
+def _despike(x: np.ndarray) -> np.ndarray:
+    """Each sample replaced by the median of itself and its two neighbours (the first and
+    last by the median of the first and last three): single outliers vanish."""
+    if len(x) < 3:
+        return x
+    middle = np.median(np.stack([x[:-2], x[1:-1], x[2:]]), axis=0)
+    return np.r_[np.median(x[:3]), middle, np.median(x[-3:])]

@@ -104,12 +104,14 @@ class RodDroppedError(EmptyGripperError):
 
 
 def _heavy_side(watcher: SlipWatcher, T_world_ee: np.ndarray) -> np.ndarray | None:
-    """Direction (world, horizontal) of the rod's end that went down, from the tilt samples:
-    a positive tilt raises the ee +x end, so the heavy end lies towards -x."""
-    thetas = np.array(watcher.monitor.thetas)
-    if thetas.size == 0 or np.max(np.abs(thetas)) < np.radians(2.0):
+    """Direction (world, horizontal) of the rod's end that went down, from the tilt the side
+    camera saw last (robust to one bad frame): a positive tilt raises the ee +x end, so the
+    heavy end lies towards -x. None if no tilt was seen."""
+    if not watcher.monitor.times:
         return None
-    theta = thetas[np.argmax(np.abs(thetas))]
+    theta = watcher.monitor.settled_tilt()
+    if abs(theta) < np.radians(2.0):
+        return None
     x_world = T_world_ee[:3, 0] * np.array([1.0, 1.0, 0.0])
     return -np.sign(theta) * x_world / np.linalg.norm(x_world)
 
@@ -173,14 +175,14 @@ def trial_grasp(world: World, offset: float = 0.0, careful: bool = False) -> Tri
                     callback=watcher)  # fmt: skip
         motion.hold(sim, 0.3, callback=watcher)
         watcher(sim, force=True)
-        tilts = np.abs(watcher.monitor.thetas)
-        if tilts.size and tilts.max() > np.radians(CAREFUL_ABORT_DEG):
+        tilt = abs(watcher.monitor.settled_tilt()) if watcher.monitor.times else 0.0
+        if tilt > np.radians(CAREFUL_ABORT_DEG):
             heavy = _heavy_side(watcher, T_meas)
             # Let go where it is (its low end is on the table already): lowering the jaws
             # back to the grasp height would push that end into the table.
             motion.place(sim, robot, robot.ee_pose(sim.q_des), lower_time=0.1)
             motion.move_to(sim, Q_PARK)
-            raise RodSlippedError(f"the rod turned by {np.degrees(tilts.max()):.0f} deg", heavy)
+            raise RodSlippedError(f"the rod turned by {np.degrees(tilt):.0f} deg", heavy)
         T_up = robot.ee_pose(sim.q_des)
         T_up[2, 3] = config.lift_height
         motion.move_linear(sim, robot, T_up, config.lift_time, watcher)
