@@ -263,8 +263,10 @@ def test_slip_monitor_ignores_one_bad_frame():
     assert abs(np.degrees(monitor.settled_tilt())) < 0.1
     monitor.add(1.4, np.radians(20.0))  # the rod starts to turn: one frame is not enough
     assert abs(np.degrees(monitor.settled_tilt())) < 0.1
+    assert abs(np.degrees(monitor.largest_tilt())) < 0.4
     monitor.add(1.6, np.radians(30.0))
     assert np.degrees(monitor.settled_tilt()) == pytest.approx(20.0)
+    assert np.degrees(monitor.largest_tilt()) == pytest.approx(20.0)  # median of 0, 20, 30
     assert monitor.verdict().slip_seen
 
 

@@ -55,6 +55,13 @@ class SlipMonitor:
         return SlipVerdict(rate > self.rate_deg_s, change > self.change_deg, float(rate), change,
                            float(self.thetas[-1]))  # fmt: skip
 
+    def largest_tilt(self) -> float:
+        """The tilt of largest size seen so far (rad, signed), robust to one bad frame."""
+        if not self.times:
+            raise ValueError("no tilt samples yet")
+        steady = _despike(np.array(self.thetas))
+        return float(steady[np.argmax(np.abs(steady))])
+
     def settled_tilt(self) -> float:
         """The tilt now (rad), robust to one bad frame: the median of the last three."""
         if not self.times:

@@ -24,6 +24,9 @@ from comgrasp_pin.simulation.perceive import SlipWatcher, look_from_above, look_
 from comgrasp_pin.simulation.scene import World
 
 CAREFUL_LIFT = 0.04  # a careful trial grasp first lifts the rod this much (m) ...
+# ... briskly: its peak acceleration (10/sqrt(3) 0.04 / 0.6^2 = 0.64 m/s^2) exceeds that of
+# the lift that follows (EpisodeConfig.lift_time), so a grasp that passes holds through it.
+CAREFUL_LIFT_TIME = 0.6
 CAREFUL_ABORT_DEG = 3.0  # ... and puts it back down if it turns more than this (deg)
 RETRY_SHIFT = 0.15  # a turning rod is grasped again this fraction of its length further
 ROLL_SLIP_DEG = 0.5  # a tilt change above this at the rolled pose means the rod moved (deg)
@@ -104,12 +107,12 @@ class RodDroppedError(EmptyGripperError):
 
 
 def _heavy_side(watcher: SlipWatcher, T_world_ee: np.ndarray) -> np.ndarray | None:
-    """Direction (world, horizontal) of the rod's end that went down, from the tilt the side
-    camera saw last (robust to one bad frame): a positive tilt raises the ee +x end, so the
-    heavy end lies towards -x. None if no tilt was seen."""
+    """Direction (world, horizontal) of the rod's end that went down, from the largest tilt
+    the side camera saw (robust to one bad frame): a positive tilt raises the ee +x end, so
+    the heavy end lies towards -x. None if no tilt was seen."""
     if not watcher.monitor.times:
         return None
-    theta = watcher.monitor.settled_tilt()
+    theta = watcher.monitor.largest_tilt()
     if abs(theta) < np.radians(2.0):
         return None
     x_world = T_world_ee[:3, 0] * np.array([1.0, 1.0, 0.0])
@@ -171,11 +174,11 @@ def trial_grasp(world: World, offset: float = 0.0, careful: bool = False) -> Tri
         # Lift a little, slowly, and put the rod back down at once if it turns in the jaws.
         grasp_z = grasp_frame(grasp)[2, 3]
         motion.pick(sim, robot, grasp, grip_force=config.grip_force,
-                    lift_height=grasp_z + CAREFUL_LIFT, lift_time=1.0,
+                    lift_height=grasp_z + CAREFUL_LIFT, lift_time=CAREFUL_LIFT_TIME,
                     callback=watcher)  # fmt: skip
         motion.hold(sim, 0.3, callback=watcher)
         watcher(sim, force=True)
-        tilt = abs(watcher.monitor.settled_tilt()) if watcher.monitor.times else 0.0
+        tilt = abs(watcher.monitor.largest_tilt()) if watcher.monitor.times else 0.0
         if tilt > np.radians(CAREFUL_ABORT_DEG):
             heavy = _heavy_side(watcher, T_meas)
             # Let go where it is (its low end is on the table already): lowering the jaws
