@@ -30,6 +30,11 @@ CAREFUL_LIFT_TIME = 0.6
 CAREFUL_ABORT_DEG = 3.0  # ... and puts it back down if it turns more than this (deg)
 RETRY_SHIFT = 0.15  # a turning rod is grasped again this fraction of its length further
 ROLL_SLIP_DEG = 0.5  # a tilt change above this at the rolled pose means the rod moved (deg)
+# Below this tilt the rod that turned at the rolled pose keeps the one-pose estimate: the
+# vertical CoM line meets a nearly level axis where the CoM is (off by its height times
+# tan(theta)), while the moved second view adds its own error (measured: equal below 10 deg,
+# the two-pose estimate better above).
+ROD_FRAME_MIN_TILT = np.radians(12.0)
 MAX_CONDITION = 1e4  # the rod-frame two-pose problem is used below this condition number
 
 
@@ -47,7 +52,8 @@ class TrialGrasp:
         pos_esti_line: the same for the paper's single-pose estimate (CoM line met with the
             rod axis), from the same measurements.
         rolled_slip: the rod turned in the jaws at the rolled pose; the two poses were then
-            combined in the rod's frame, each with its own side view.
+            combined in the rod's frame, each with its own side view (at tilts of at least
+            ROD_FRAME_MIN_TILT; below it the one-pose estimate is kept).
         dropped_at_roll: the side camera found nothing in the jaws at the rolled pose: the
             rod fell after the first pose was measured; the single-pose estimate stands.
         mass_esti, mass_real: kg. grasp_offset: where the jaws hold the rod (true, m).
@@ -237,7 +243,7 @@ def trial_grasp(world: World, offset: float = 0.0, careful: bool = False) -> Tri
     if len(poses) > 1 and not moved:
         est = estimate(len(poses))
         x_com_obj = com_along_axis(est, side.T_ee_obj)
-    elif len(poses) > 1 and side_rolled is not None:
+    elif len(poses) > 1 and side_rolled is not None and abs(side.theta) >= ROD_FRAME_MIN_TILT:
         # The rod turned in the jaws between the poses: the CoM is fixed in the rod, so the
         # two poses still stack when written in the rod's frame, each with its own view.
         dtau = [m.tau - b for m, b in zip(after, tau_before, strict=True)]
