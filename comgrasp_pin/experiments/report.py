@@ -125,9 +125,7 @@ def regrasp_figure(rows: Sequence[dict], path: Path) -> Path:
         ref = [
             paper.SUCCESS_PERCENT.get(o, (np.nan, np.nan))[method == "baseline"] for o in objects
         ]
-        ax.plot(
-            x + offset, ref, "k_", ms=18, mew=2, label=f"{method} (paper)" if offset < 0 else None
-        )
+        ax.plot(x + offset, ref, "k_", ms=18, mew=2, label="paper" if offset < 0 else None)
     ax.set_xticks(x, objects)
     ax.set_ylabel("pick-and-place success (%)")
     ax.set_ylim(0, 105)
