@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections import Counter
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -172,7 +173,6 @@ def error_source(row: dict) -> str:
     noise); otherwise the rod's geometry (a thick handle or a CoM off the rod's axis seen at
     a steep tilt, where a small error of the perceived axis moves the projection).
     """
-    length = float(row["length_m"])
     miss = abs(float(row["pos_esti_m"]) - float(row["pos_real_m"]))
     theta_error = abs(float(row["theta_deg"]) - float(row["theta_true_deg"])) % 180.0
     if min(theta_error, 180.0 - theta_error) > 1.0:
@@ -182,7 +182,7 @@ def error_source(row: dict) -> str:
     com_std = float(row.get("com_std_m") or "nan")
     if np.isfinite(com_std) and 2.0 * com_std >= miss:
         return "torque noise"
-    return "rod geometry at the tilt" if length > 0 else "unknown"
+    return "rod geometry at the tilt"
 
 
 def accuracy_verdict(rows: Sequence[dict]) -> str:
@@ -221,10 +221,7 @@ def accuracy_verdict(rows: Sequence[dict]) -> str:
         f"to 30°. {len(poor)} of {len(ok)} grasps are below {100 * SHORTFALL:g} %"
         + (":" if poor else ".")
     )
-    counts: dict[str, int] = {}
-    for r in poor:
-        counts[error_source(r)] = counts.get(error_source(r), 0) + 1
-    for source, n in sorted(counts.items(), key=lambda kv: -kv[1]):
+    for source, n in Counter(error_source(r) for r in poor).most_common():
         lines.append(f"- {source}: {n}")
     errors: dict[str, int] = {}
     for r in rows:

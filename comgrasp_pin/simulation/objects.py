@@ -28,7 +28,6 @@ import numpy as np
 
 OBJECT_FRICTION = (0.6, 0.005, 1e-4)
 OBJECT_CONDIM = 3
-OBJECT_SOLREF = (0.004, 1.0)  # stiff contacts, as the scene's (see scene.xml): no sinking in
 TABLE_Z = 0.0
 
 _WOOD = (0.62, 0.45, 0.28, 1.0)
@@ -270,7 +269,6 @@ def add_object(
         geom = body.add_geom(name=f"{name}_{i}", rgba=list(part.rgba), mass=0.0)
         geom.friction = list(OBJECT_FRICTION)
         geom.condim = OBJECT_CONDIM
-        geom.solref = list(OBJECT_SOLREF)
         if part.shape == "box":
             geom.type = mujoco.mjtGeom.mjGEOM_BOX
             geom.size = [part.half_x, part.half_y, part.half_z]

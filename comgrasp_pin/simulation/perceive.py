@@ -30,12 +30,11 @@ WRIST_RADIUS = 0.06  # UR5 wrist housings: about 0.045-0.055 m, with a margin (m
 __all__ = ["SideView", "SlipWatcher", "look_from_above", "look_from_side"]
 
 
-def look_from_above(rig: CameraRig, data: mujoco.MjData, with_rgb: bool = False) -> RodDetection:
-    """Detect the rod on the table with the top-down camera. The detection needs depth
-    only; ``with_rgb`` renders the colour image too (checked against the depth image)."""
-    rgb = rig.rgb(data, TOP_CAMERA) if with_rgb else None
+def look_from_above(rig: CameraRig, data: mujoco.MjData) -> RodDetection:
+    """Detect the rod on the table with the top-down camera (the detection needs depth
+    only: no colour image is rendered)."""
     depth = rig.depth(data, TOP_CAMERA)
-    return detect_rod_top_down(rgb, depth, rig.intrinsics(TOP_CAMERA),
+    return detect_rod_top_down(None, depth, rig.intrinsics(TOP_CAMERA),
                                rig.T_world_cam(data, TOP_CAMERA))  # fmt: skip
 
 
@@ -52,22 +51,20 @@ def look_from_side(
     q: np.ndarray,
     rod_length: float | None = None,
     centre_hint: float | None = None,
-    with_rgb: bool = False,
     finger_q: float | None = None,
     stride: int = 1,
 ) -> SideView:
     """The held rod's pose in the ee frame, from the side camera at joint reading ``q``
     (``rod_length`` and ``centre_hint`` from the top view help when the rod leaves the
-    image; see ``observe_held_rod``). The measurement needs depth only; ``with_rgb=False``
-    skips the colour render (the slip monitor's frames). ``finger_q``: the fingers' joint
+    image; see ``observe_held_rod``). The measurement needs depth only: no colour image is
+    rendered. ``finger_q``: the fingers' joint
     reading (m), which gives the held handle's radius. ``stride`` > 1 measures on every
     stride-th pixel of each row and column (stride^2 times fewer points: the slip monitor's
     frames, which need the tilt only)."""
     T_world_ee, T_ee_cam = side_camera_pose(robot, q)
     camera = rig.intrinsics(SIDE_CAMERA).subsampled(stride)
-    rgb = rig.rgb(data, SIDE_CAMERA)[::stride, ::stride] if with_rgb else None
     depth = rig.depth(data, SIDE_CAMERA)[::stride, ::stride]
-    return observe_held_rod(rgb, depth, camera, T_ee_cam, T_world_ee,
+    return observe_held_rod(None, depth, camera, T_ee_cam, T_world_ee,
                             TABLE_Z, rod_length, arm_capsules(robot, q), centre_hint,
                             None if finger_q is None else handle_radius(finger_q))  # fmt: skip
 
@@ -116,7 +113,7 @@ class SlipWatcher:
         self._next = sim.time + self.dt
         try:
             view = look_from_side(self.rig, sim.data, self.robot, sim.q, self.rod_length,
-                                  self.centre_hint, False, sim.finger_q[0],
+                                  self.centre_hint, sim.finger_q[0],
                                   stride=self.stride)  # fmt: skip
         except PerceptionError:
             self.failed_frames += 1

@@ -16,7 +16,7 @@ from comgrasp_pin.errors import EmptyGripperError, ObjectNotFoundError, Percepti
 from comgrasp_pin.estimator import estimate_com
 from comgrasp_pin.geometry import com_along_axis, invert_transform
 from comgrasp_pin.ik import Q_PARK, GraspPose, grasp_frame, solve_ik, solve_top_down
-from comgrasp_pin.perception import SideView
+from comgrasp_pin.perception import RodDetection, SideView
 from comgrasp_pin.perception.top_down import nearest_on_handle
 from comgrasp_pin.regressor import pose_regressor
 from comgrasp_pin.simulation import motion
@@ -134,7 +134,9 @@ class RodSlippedError(RodDroppedError):
         self.heavy_side_world = heavy_side_world
 
 
-def trial_grasp(world: World, offset: float = 0.0, careful: bool = False) -> TrialGrasp:
+def trial_grasp(
+    world: World, offset: float = 0.0, careful: bool = False, detection: RodDetection | None = None
+) -> TrialGrasp:
     """The paper's measurement: grasp ``offset`` m along the rod from the perceived centre.
 
     With ``config.roll_deg`` > 0 a second static pose, the measurement pose rolled about
@@ -146,10 +148,12 @@ def trial_grasp(world: World, offset: float = 0.0, careful: bool = False) -> Tri
 
     ``careful``: lift only CAREFUL_LIFT first and, if the rod turns by more than
     CAREFUL_ABORT_DEG, put it back where it was and raise RodSlippedError (telling which
-    end went down), before the rod can fall.
+    end went down), before the rod can fall. ``detection``: the top view of the rod as it
+    lies now, if the caller has looked already.
     """
     sim, robot, config = world.sim, world.robot, world.config
-    detection = look_from_above(world.rig, sim.data)
+    if detection is None:
+        detection = look_from_above(world.rig, sim.data)
     rod, rod_length = detection.grasp, detection.length
     d = np.array([np.cos(rod.yaw), np.sin(rod.yaw)])
     grasp = GraspPose(rod.x + offset * d[0], rod.y + offset * d[1], rod.z, rod.yaw)
@@ -341,7 +345,7 @@ def trial_with_retry(world: World, attempts: int = 4) -> TrialGrasp:
         offset = s if u is None else s * float(np.sign(d @ u) or 1.0)
         offset = nearest_on_handle(rod, offset)
         try:
-            trial = trial_grasp(world, offset, careful=attempt < attempts - 1)
+            trial = trial_grasp(world, offset, careful=attempt < attempts - 1, detection=rod)
             if trial.dropped_at_roll:
                 raise RodDroppedError("it fell out at the rolled pose", _heavy_side_seen(trial))
             return trial
