@@ -22,8 +22,8 @@ import numpy as np
 import pinocchio as pin
 
 import comgrasp_pin as cg
-from comgrasp_pin import _lsq_ipopt
-from comgrasp_pin.regressor import stacked_regressor
+from comgrasp_pin.estimation import ipopt as _lsq_ipopt
+from comgrasp_pin.estimation.regressor import stacked_regressor
 
 MASS, COM_EE = 0.7, np.array([0.04, -0.03, 0.15])
 

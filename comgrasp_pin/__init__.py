@@ -7,10 +7,10 @@ from comgrasp_pin.errors import (
     SolverError,
     UnobservableError,
 )
-from comgrasp_pin.estimator import ComEstimate, estimate_com
-from comgrasp_pin.estimator_batch import ComEstimateBatch, estimate_com_batch
+from comgrasp_pin.estimation.batch import ComEstimateBatch, estimate_com_batch
+from comgrasp_pin.estimation.estimator import ComEstimate, estimate_com
+from comgrasp_pin.estimation.pose_planning import plan_wrist_poses
 from comgrasp_pin.geometry import com_along_axis
-from comgrasp_pin.pose_planning import plan_wrist_poses
 from comgrasp_pin.robot import RobotModel
 
 __all__ = [

@@ -1,18 +1,44 @@
-"""Where the package's assets and example-robot-data's robot descriptions live on disk."""
+"""Where the robot description (``urdf/``), the world description (``sim/``) and
+example-robot-data's meshes live on disk.
+
+``urdf/`` and ``sim/`` sit at the top of the repository, the only copies. A wheel carries
+them inside the package (``comgrasp_pin/urdf``, ``comgrasp_pin/sim``; pyproject maps them
+there), so a non-editable ``pip install .`` finds them from any folder; a source checkout or
+an editable install finds them beside the package.
+"""
 
 from __future__ import annotations
 
 from functools import cache
-from importlib import metadata, resources
+from importlib import metadata
 from pathlib import Path
 
+_PACKAGE = Path(__file__).resolve().parent
+DATA_FOLDERS = ("urdf", "sim")
 
-def asset_path(*parts: str) -> Path:
-    """Path of a file shipped in ``comgrasp_pin/assets`` (works for wheel and editable installs)."""
-    path = Path(str(resources.files("comgrasp_pin").joinpath("assets", *parts)))
-    if not path.exists():
-        raise FileNotFoundError(f"package asset not found: {path}")
-    return path
+
+def data_path(folder: str, name: str) -> Path:
+    """Path of ``name`` in the top-level ``folder`` ("urdf" or "sim")."""
+    if folder not in DATA_FOLDERS:
+        raise ValueError(f"folder must be one of {DATA_FOLDERS}, got {folder!r}")
+    for root in (_PACKAGE, _PACKAGE.parent):  # installed wheel, then source checkout
+        path = root / folder / name
+        if path.exists():
+            return path
+    raise FileNotFoundError(
+        f"{folder}/{name} not found beside the package ({_PACKAGE}) nor in the repository "
+        f"({_PACKAGE.parent}); reinstall comgrasp_pin"
+    )
+
+
+def urdf_path(name: str = "ur5_gripper.urdf") -> Path:
+    """Path of a robot description in ``urdf/``."""
+    return data_path("urdf", name)
+
+
+def sim_path(name: str = "scene.xml") -> Path:
+    """Path of a world description in ``sim/``."""
+    return data_path("sim", name)
 
 
 @cache

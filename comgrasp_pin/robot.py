@@ -12,9 +12,9 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from comgrasp_pin._paths import asset_path, example_robot_data_dir
+from comgrasp_pin._paths import example_robot_data_dir, urdf_path
 
-UR5_URDF = "urdf/ur5_gripper.urdf"
+UR5_URDF = "ur5_gripper.urdf"  # in the top-level urdf/
 UR5_EE_FRAME = "eelink"
 
 _WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -79,9 +79,9 @@ class RobotModel:
 
     @classmethod
     def ur5(cls) -> RobotModel:
-        """The project's UR5 with parallel gripper (``assets/urdf``), ee frame ``eelink``."""
+        """The project's UR5 with parallel gripper (``urdf/ur5_gripper.urdf``), ee frame ``eelink``."""
         return cls.from_urdf(
-            asset_path(UR5_URDF), UR5_EE_FRAME, package_dirs=[example_robot_data_dir().parent]
+            urdf_path(UR5_URDF), UR5_EE_FRAME, package_dirs=[example_robot_data_dir().parent]
         )
 
     @property

@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from comgrasp_pin.ik import solve_ik, solve_top_down
-from comgrasp_pin.planner import PlannerConfig
-from comgrasp_pin.simulation import motion
+from comgrasp_pin.motion.ik import solve_ik, solve_top_down
+from comgrasp_pin.planning.regrasp import PlannerConfig
+from comgrasp_pin.simulation import skills as motion
 from comgrasp_pin.simulation.episode import EpisodeConfig, Scene, World, run_episode
-from comgrasp_pin.simulation.perceive import look_from_above
+from comgrasp_pin.simulation.eyes import look_from_above
 
 G = np.array([0.0, 0.0, -9.81])
 

@@ -9,8 +9,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import comgrasp_pin as cg
-from comgrasp_pin import _lsq_ipopt
-from comgrasp_pin.regressor import perpendicular_basis
+from comgrasp_pin.estimation import ipopt as _lsq_ipopt
+from comgrasp_pin.estimation.regressor import perpendicular_basis
 
 ROBOTS = {"ur5": cg.RobotModel.ur5, "panda": panda, "ur10": ur10}
 MASS, COM_EE = 0.7, np.array([0.04, -0.03, 0.15])

@@ -7,10 +7,10 @@ import time
 import numpy as np
 import pytest
 
-from comgrasp_pin.ik import Q_HOME, GraspPose, link_points, scene_clearance
+from comgrasp_pin.motion.ik import Q_HOME, GraspPose, link_points, scene_clearance
 from comgrasp_pin.simulation import Simulation, WorldConfig, build_spec
-from comgrasp_pin.simulation.motion import DROP_BOX_XY, carry_to_drop_box, pick
 from comgrasp_pin.simulation.objects import add_object, get_object, object_state, tilt_angle
+from comgrasp_pin.simulation.skills import DROP_BOX_XY, carry_to_drop_box, pick
 
 YAW = 0.4
 XY = (0.55, -0.05)

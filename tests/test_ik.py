@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from comgrasp_pin.ik import (
+from comgrasp_pin.motion.ik import (
     Q_HOME,
     GraspPose,
     IKError,
@@ -15,7 +15,7 @@ from comgrasp_pin.ik import (
     solve_top_down,
     top_down_frame,
 )
-from comgrasp_pin.trajectory import Quintic
+from comgrasp_pin.motion.trajectory import Quintic
 
 
 def _random_grasps(n, seed=0):

@@ -6,13 +6,13 @@ import pytest
 
 from comgrasp_pin.camera import PinholeCamera
 from comgrasp_pin.errors import InvalidDepthError, ObjectCutByBorderError, ObjectNotFoundError
-from comgrasp_pin.ik import Q_PARK, solve_ik, top_down_frame
+from comgrasp_pin.motion.ik import Q_PARK, solve_ik, top_down_frame
 from comgrasp_pin.perception import SlipMonitor, detect_rod_top_down
 from comgrasp_pin.simulation import Simulation, build_model
 from comgrasp_pin.simulation.cameras import CameraRig
 from comgrasp_pin.simulation.episode import random_table_pose
+from comgrasp_pin.simulation.eyes import look_from_side
 from comgrasp_pin.simulation.objects import OBJECTS, add_object, pose_on_table
-from comgrasp_pin.simulation.perceive import look_from_side
 from comgrasp_pin.simulation.world import TOP_CAMERA
 
 OBJECT_NAMES = sorted(OBJECTS)
@@ -272,7 +272,7 @@ def test_slip_monitor_ignores_one_bad_frame():
 
 def _detection_with_widths(profile):
     """A RodDetection whose 1 cm slices have the widths ``profile(position)`` (m)."""
-    from comgrasp_pin.ik import GraspPose
+    from comgrasp_pin.motion.ik import GraspPose
     from comgrasp_pin.perception import RodDetection
 
     pos = np.arange(-0.195, 0.2, 0.01)

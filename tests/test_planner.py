@@ -1,8 +1,8 @@
 import numpy as np
 import pytest
 
-from comgrasp_pin.ik import GraspPose, top_down_frame
-from comgrasp_pin.planner import com_grasp, decide, rod_axis_world
+from comgrasp_pin.motion.ik import GraspPose, top_down_frame
+from comgrasp_pin.planning.regrasp import com_grasp, decide, rod_axis_world
 
 
 def test_decisions():

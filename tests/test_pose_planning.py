@@ -5,7 +5,7 @@ import pytest
 from _payload import panda, payload_torques
 
 import comgrasp_pin as cg
-from comgrasp_pin.regressor import stacked_regressor
+from comgrasp_pin.estimation.regressor import stacked_regressor
 
 MASS, COM_EE, SIGMA = 0.6, np.array([0.02, 0.03, 0.12]), 0.05
 

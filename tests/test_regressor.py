@@ -5,7 +5,7 @@ import pinocchio as pin
 import pytest
 from _payload import panda, payload_torques, ur10
 
-from comgrasp_pin.regressor import (
+from comgrasp_pin.estimation.regressor import (
     G0,
     GRAVITY_WORLD,
     gravity_in_ee,

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import comgrasp_pin as cg
-from comgrasp_pin._paths import asset_path, example_robot_urdf
+from comgrasp_pin._paths import example_robot_urdf, urdf_path
 
 G = 9.81
 
@@ -125,7 +125,7 @@ def _urdf_statics_by_hand(path, q_by_joint):
 
 def test_ur5_gravity_matches_sum_over_links_from_urdf():
     robot = cg.RobotModel.ur5()
-    path = asset_path("urdf/ur5_gripper.urdf")
+    path = urdf_path("ur5_gripper.urdf")
     g = np.array([0.0, 0.0, -G])
     rng = np.random.default_rng(1)
     for _ in range(10):
@@ -165,7 +165,7 @@ def test_any_arm_from_example_robot_data():
 
 def test_unknown_frame_lists_frames():
     with pytest.raises(ValueError, match="eelink"):
-        cg.RobotModel.from_urdf(asset_path("urdf/ur5_gripper.urdf"), "no_such_frame")
+        cg.RobotModel.from_urdf(urdf_path("ur5_gripper.urdf"), "no_such_frame")
 
 
 @pytest.mark.parametrize("q", [np.zeros(5), np.zeros((2, 6)), np.array([0, 0, np.nan, 0, 0, 0])])

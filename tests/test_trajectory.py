@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from comgrasp_pin.trajectory import Quintic, min_duration
+from comgrasp_pin.motion.trajectory import Quintic, min_duration
 
 
 def test_rest_to_rest_and_derivatives_match_finite_differences():

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from comgrasp_pin.estimator import estimate_com
-from comgrasp_pin.regressor import stacked_regressor
+from comgrasp_pin.estimation.estimator import estimate_com
+from comgrasp_pin.estimation.regressor import stacked_regressor
 from comgrasp_pin.robot import RobotModel
 
 

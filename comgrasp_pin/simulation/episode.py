@@ -18,11 +18,11 @@ from pathlib import Path
 import numpy as np
 
 from comgrasp_pin.errors import PerceptionError
-from comgrasp_pin.ik import Q_PARK, IKError, grasp_height, solve_ik, top_down_frame
+from comgrasp_pin.motion.ik import Q_PARK, IKError, grasp_height, solve_ik, top_down_frame
 from comgrasp_pin.perception.top_down import nearest_graspable
-from comgrasp_pin.planner import com_grasp, decide
-from comgrasp_pin.simulation import motion
-from comgrasp_pin.simulation.perceive import look_from_above
+from comgrasp_pin.planning.regrasp import com_grasp, decide
+from comgrasp_pin.simulation import skills as motion
+from comgrasp_pin.simulation.eyes import look_from_above
 from comgrasp_pin.simulation.scene import (  # noqa: F401  (re-exported)
     EpisodeConfig,
     Scene,

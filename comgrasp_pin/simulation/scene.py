@@ -12,9 +12,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from comgrasp_pin.geometry import invert_transform
-from comgrasp_pin.ik import Q_PARK
+from comgrasp_pin.motion.ik import Q_PARK
 from comgrasp_pin.perception.top_down import PICK_AREA
-from comgrasp_pin.planner import PlannerConfig
+from comgrasp_pin.planning.regrasp import PlannerConfig
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.simulation.cameras import CameraRig
 from comgrasp_pin.simulation.objects import add_object, get_object, object_state

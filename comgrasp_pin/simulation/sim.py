@@ -7,7 +7,7 @@ from collections.abc import Callable
 import mujoco
 import numpy as np
 
-from comgrasp_pin.simulation.controller import ArmServo
+from comgrasp_pin.simulation.servo import ArmServo
 from comgrasp_pin.simulation.torque_sensor import (
     JointTorqueSensor,
     TorqueMeasurement,

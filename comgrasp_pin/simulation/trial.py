@@ -13,14 +13,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from comgrasp_pin.errors import EmptyGripperError, ObjectNotFoundError, PerceptionError
-from comgrasp_pin.estimator import estimate_com
+from comgrasp_pin.estimation.estimator import estimate_com
+from comgrasp_pin.estimation.regressor import pose_regressor
 from comgrasp_pin.geometry import com_along_axis, invert_transform
-from comgrasp_pin.ik import Q_PARK, GraspPose, grasp_frame, solve_ik, solve_top_down
+from comgrasp_pin.motion.ik import Q_PARK, GraspPose, grasp_frame, solve_ik, solve_top_down
 from comgrasp_pin.perception import RodDetection, SideView
 from comgrasp_pin.perception.top_down import nearest_on_handle
-from comgrasp_pin.regressor import pose_regressor
-from comgrasp_pin.simulation import motion
-from comgrasp_pin.simulation.perceive import SlipWatcher, look_from_above, look_from_side
+from comgrasp_pin.simulation import skills as motion
+from comgrasp_pin.simulation.eyes import SlipWatcher, look_from_above, look_from_side
 from comgrasp_pin.simulation.scene import World
 
 CAREFUL_LIFT = 0.04  # a careful trial grasp first lifts the rod this much (m) ...

@@ -8,7 +8,7 @@ import cv2
 
 from comgrasp_pin.perception import draw_side_view, draw_top_view
 from comgrasp_pin.simulation.episode import EpisodeConfig, Scene, World, trial_grasp
-from comgrasp_pin.simulation.perceive import look_from_above
+from comgrasp_pin.simulation.eyes import look_from_above
 from comgrasp_pin.simulation.world import SIDE_CAMERA, TOP_CAMERA
 
 

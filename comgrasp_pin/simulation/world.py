@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from comgrasp_pin._paths import asset_path, example_robot_data_dir
+from comgrasp_pin._paths import example_robot_data_dir, sim_path, urdf_path
 from comgrasp_pin.robot import UR5_URDF
 
 ARM_JOINTS = (
@@ -89,12 +89,12 @@ class WorldConfig:
 
 
 def robot_spec() -> mujoco.MjSpec:
-    """The robot alone, compiled by MuJoCo's URDF reader from ``assets/urdf``.
+    """The robot alone, compiled by MuJoCo's URDF reader from ``urdf/``.
 
     Mesh URIs ``package://example-robot-data/...`` are resolved to the installed package.
     Static bodies are kept (``fusestatic`` off) so that ``eelink`` and ``side_camera`` exist.
     """
-    urdf = asset_path(UR5_URDF).read_text()
+    urdf = urdf_path(UR5_URDF).read_text()
     urdf = urdf.replace("package://example-robot-data/", f"{example_robot_data_dir()}/")
     compiler = '<mujoco><compiler fusestatic="false" discardvisual="false" strippath="false"/>'
     urdf = urdf.replace("</robot>", compiler + "</mujoco></robot>")
@@ -108,7 +108,7 @@ def build_spec(
     """The scene with the robot, drives, sensors and cameras; ``extras`` edit it further
     (each is called with the spec, e.g. to add an object)."""
     config = config or WorldConfig()
-    spec = mujoco.MjSpec.from_file(str(asset_path("sim/scene.xml")))
+    spec = mujoco.MjSpec.from_file(str(sim_path("scene.xml")))
     spec.option.timestep = config.sim_dt
     spec.option.noslip_iterations = config.noslip_iterations
     spec.option.impratio = config.impratio

@@ -2,7 +2,7 @@
 
 Each skill only commands the servo (``sim.q_des``) and the gripper (``sim.grip_force``) and
 steps the physics; physics decides what the object does. Kinematics come from Pinocchio
-(``RobotModel``, ``comgrasp_pin.ik``). All poses in the world frame, SI units.
+(``RobotModel``, ``comgrasp_pin.motion.ik``). All poses in the world frame, SI units.
 
 Every skill takes an optional ``callback(sim)`` run after each physics step (logging, slip
 watching); it must not step the simulation itself.
@@ -16,10 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from comgrasp_pin.ik import GraspPose, grasp_frame, solve_ik, solve_top_down, top_down_frame
-from comgrasp_pin.robot import RobotModel
-from comgrasp_pin.simulation.sim import Simulation
-from comgrasp_pin.trajectory import (
+from comgrasp_pin.motion.ik import GraspPose, grasp_frame, solve_ik, solve_top_down, top_down_frame
+from comgrasp_pin.motion.trajectory import (
     DEFAULT_A_MAX,
     DEFAULT_V_MAX,
     EMPTY_A_MAX,
@@ -27,6 +25,8 @@ from comgrasp_pin.trajectory import (
     Quintic,
     min_duration,
 )
+from comgrasp_pin.robot import RobotModel
+from comgrasp_pin.simulation.sim import Simulation
 
 Callback = Callable[[Simulation], None] | None
 

@@ -15,7 +15,7 @@ import itertools
 import numpy as np
 
 from comgrasp_pin.errors import InvalidInputError
-from comgrasp_pin.regressor import pose_regressor
+from comgrasp_pin.estimation.regressor import pose_regressor
 from comgrasp_pin.robot import RobotModel
 
 N_WRIST = 3

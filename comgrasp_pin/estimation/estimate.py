@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from comgrasp_pin.errors import EmptyGripperError
-from comgrasp_pin.regressor import G0
+from comgrasp_pin.estimation.regressor import G0
 
 MIN_MASS_KG = 1e-3
 """Without torque_std, a payload below this mass (kg) is taken as an empty gripper."""

@@ -29,10 +29,15 @@ import math
 import numpy as np
 import pinocchio as pin
 
-from comgrasp_pin._lsq_ipopt import solve_lsq
-from comgrasp_pin.com_estimate import MIN_MASS_KG, ComEstimate, assemble_estimate
 from comgrasp_pin.errors import InvalidInputError, UnobservableError
-from comgrasp_pin.regressor import G0, gravity_in_ee, perpendicular_basis, stacked_regressor
+from comgrasp_pin.estimation.estimate import MIN_MASS_KG, ComEstimate, assemble_estimate
+from comgrasp_pin.estimation.ipopt import solve_lsq
+from comgrasp_pin.estimation.regressor import (
+    G0,
+    gravity_in_ee,
+    perpendicular_basis,
+    stacked_regressor,
+)
 from comgrasp_pin.robot import RobotModel
 
 METHODS = ("lstsq", "ipopt")

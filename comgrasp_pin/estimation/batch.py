@@ -12,10 +12,10 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from comgrasp_pin.com_estimate import MASS_SIGMAS, MIN_MASS_KG
 from comgrasp_pin.errors import EmptyGripperError, InvalidInputError, UnobservableError
-from comgrasp_pin.estimator import RCOND, _validate
-from comgrasp_pin.regressor import G0
+from comgrasp_pin.estimation.estimate import MASS_SIGMAS, MIN_MASS_KG
+from comgrasp_pin.estimation.estimator import RCOND, _validate
+from comgrasp_pin.estimation.regressor import G0
 from comgrasp_pin.robot import RobotModel
 
 _WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
