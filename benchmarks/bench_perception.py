@@ -23,18 +23,21 @@ import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 
 import comgrasp_pin as cg  # noqa: E402
-from comgrasp_pin.motion.ik import Q_PARK, solve_ik, top_down_frame  # noqa: E402
+from comgrasp_pin.motion.ik import solve_ik, top_down_frame
 from comgrasp_pin.perception import detect_rod_top_down, observe_held_rod  # noqa: E402
 from comgrasp_pin.simulation import Simulation, build_model  # noqa: E402
 from comgrasp_pin.simulation.cameras import CameraRig  # noqa: E402
-from comgrasp_pin.simulation.episode import random_table_pose  # noqa: E402
+from comgrasp_pin.simulation.scene import random_table_pose  # noqa: E402
 from comgrasp_pin.simulation.eyes import (  # noqa: E402
-    TABLE_Z,
     arm_capsules,
     handle_radius,
     side_camera_pose,
 )
 from comgrasp_pin.simulation.objects import OBJECTS, add_object, pose_on_table  # noqa: E402
+from comgrasp_pin.workcell import (
+    Q_PARK,  # noqa: E402
+    TABLE_Z,  # noqa: E402
+)
 
 
 def _timed(fn):

@@ -7,10 +7,15 @@ from comgrasp_pin.errors import (
     SolverError,
     UnobservableError,
 )
-from comgrasp_pin.estimation.batch import ComEstimateBatch, estimate_com_batch
-from comgrasp_pin.estimation.estimator import ComEstimate, estimate_com
-from comgrasp_pin.estimation.pose_planning import plan_wrist_poses
-from comgrasp_pin.geometry import com_along_axis
+from comgrasp_pin.estimation import (
+    ComEstimate,
+    ComEstimateBatch,
+    com_along_axis,
+    com_in_rod_frame,
+    estimate_com,
+    estimate_com_batch,
+    plan_wrist_poses,
+)
 from comgrasp_pin.robot import RobotModel
 
 __all__ = [
@@ -23,6 +28,7 @@ __all__ = [
     "SolverError",
     "UnobservableError",
     "com_along_axis",
+    "com_in_rod_frame",
     "estimate_com",
     "estimate_com_batch",
     "plan_wrist_poses",

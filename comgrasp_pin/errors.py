@@ -45,3 +45,28 @@ class ObjectCutByBorderError(PerceptionError):
 
 class InvalidDepthError(PerceptionError):
     """The depth image is missing, of the wrong shape, or has no valid values where needed."""
+
+
+class IKError(ComGraspError):
+    """No joint configuration reaches the target within tolerance and joint limits."""
+
+
+class RodDroppedError(EmptyGripperError):
+    """The rod fell out of the jaws during a trial grasp.
+
+    ``heavy_side_world``: (3,) unit horizontal direction (world) of the end that went down
+    first, from the side camera's tilt samples or the estimate, or None if nothing told.
+    """
+
+    template = "the rod was dropped in the trial grasp: {}"
+
+    def __init__(self, message: str, heavy_side_world=None):
+        super().__init__(self.template.format(message))
+        self.heavy_side_world = heavy_side_world
+
+
+class RodSlippedError(RodDroppedError):
+    """The rod turned in the jaws as a careful trial grasp began to lift it, and was put
+    back down; ``heavy_side_world`` tells where its CoM lies."""
+
+    template = "the rod slipped as it was lifted: {}"

@@ -1,6 +1,6 @@
-"""Frames and lines: transform checks and the CoM position along a rod's axis.
+"""Frames and lines: the grasp pose type, transform checks, top-down frames, closest points.
 
-Names follow DESIGN section 3: ``T_a_b`` is the pose of frame b in frame a (4x4).
+Names follow docs/design.md section 2: ``T_a_b`` is the pose of frame b in frame a (4x4).
 """
 
 from __future__ import annotations
@@ -9,11 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from comgrasp_pin.errors import InvalidInputError, UnobservableError
-
-MIN_AXIS_GRAVITY_ANGLE = 0.05
-"""Smallest angle (rad, about 2.9 deg) between the rod axis and the CoM line (gravity) for
-which ``com_along_axis`` intersects them; the error of x_CoM^O grows as 1 / sin(angle)."""
+from comgrasp_pin.errors import InvalidInputError
 
 
 @dataclass(frozen=True)
@@ -67,39 +63,3 @@ def closest_point_on_line(
     w = p_line - p_other
     b = d_line @ d_other
     return float((b * (d_other @ w) - d_line @ w) / (1.0 - b * b))
-
-
-def com_along_axis(est, T_ee_obj: np.ndarray, min_angle: float = MIN_AXIS_GRAVITY_ANGLE) -> float:
-    """x_CoM^O (m): where the payload's CoM lies along the rod axis, from the rod's centre.
-
-    The rod axis is the obj x-axis through the obj origin, given in the ee frame by
-    ``T_ee_obj`` (4, 4). With one pose (``est.unobservable_ee`` set) the CoM is only known to
-    lie on the vertical line com_ee + s * unobservable_ee; the answer is the point of the rod
-    axis closest to that line (their intersection when they meet). With a full 3-D CoM it is
-    the projection of com_ee on the axis. Paper eq. 8 is the one-pose case with gravity along
-    ee-z, intersecting the CoM line with the plane z^O = 0 instead of with the axis: the two
-    agree whenever obj-y is horizontal (a rod tilted only about the jaw axis).
-
-    Args:
-        est: a ``ComEstimate`` (uses ``com_ee`` and ``unobservable_ee``).
-        T_ee_obj: (4, 4) pose of the object frame in the ee frame.
-        min_angle: smallest accepted angle (rad) between rod axis and gravity (one pose).
-    Raises:
-        InvalidInputError for a bad transform; UnobservableError when the rod axis is
-        within ``min_angle`` of gravity (the vertical CoM line then does not fix a point).
-    """
-    T_ee_obj = check_transform(T_ee_obj, "T_ee_obj")
-    origin_ee, axis_ee = T_ee_obj[:3, 3], T_ee_obj[:3, 0]
-    com_ee = np.asarray(est.com_ee, dtype=float)
-    if est.unobservable_ee is None:
-        return float(axis_ee @ (com_ee - origin_ee))
-    down_ee = np.asarray(est.unobservable_ee, dtype=float)
-    sin_angle = np.linalg.norm(np.cross(axis_ee, down_ee))
-    if sin_angle < np.sin(min_angle):
-        angle = np.degrees(np.arcsin(min(sin_angle, 1.0)))
-        raise UnobservableError(
-            f"the rod axis is {angle:.2f} deg from gravity (minimum {np.degrees(min_angle):.2f}"
-            " deg): the vertical CoM line does not fix a point along it; measure at a pose "
-            "where the rod is not vertical"
-        )
-    return closest_point_on_line(origin_ee, axis_ee, com_ee, down_ee)

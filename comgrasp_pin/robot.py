@@ -79,7 +79,7 @@ class RobotModel:
 
     @classmethod
     def ur5(cls) -> RobotModel:
-        """The project's UR5 with parallel gripper (``urdf/ur5_gripper.urdf``), ee frame ``eelink``."""
+        """The project's UR5 with gripper (``urdf/ur5_gripper.urdf``), ee frame ``eelink``."""
         return cls.from_urdf(
             urdf_path(UR5_URDF), UR5_EE_FRAME, package_dirs=[example_robot_data_dir().parent]
         )

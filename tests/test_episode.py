@@ -3,11 +3,12 @@
 import numpy as np
 import pytest
 
+from comgrasp_pin.config import EpisodeConfig, RegraspConfig
 from comgrasp_pin.motion.ik import solve_ik, solve_top_down
-from comgrasp_pin.planning.regrasp import PlannerConfig
-from comgrasp_pin.simulation import skills as motion
-from comgrasp_pin.simulation.episode import EpisodeConfig, Scene, World, run_episode
+from comgrasp_pin.simulation import skills
+from comgrasp_pin.simulation.episode import run_episode
 from comgrasp_pin.simulation.eyes import look_from_above
+from comgrasp_pin.simulation.scene import Scene, World
 
 G = np.array([0.0, 0.0, -9.81])
 
@@ -21,10 +22,11 @@ def test_held_rod_torque_matches_analytic_payload_torque(ur5):
     T_meas = T_pre.copy()
     T_meas[2, 3] = 0.45
     q_meas = solve_ik(robot, T_meas, q_pre)
-    motion.move_to(sim, q_meas, settle=0.1)
+    motion = world.config.motion
+    skills.move_to(sim, motion, q_meas, settle=0.1)
     before = sim.measure_torques(0.5, 0.5)
-    motion.pick(sim, robot, rod, grip_force=15.0, lift_height=0.45)
-    motion.move_to(sim, q_meas, duration=0.3)
+    skills.pick(sim, robot, motion, rod, 15.0, 0.45, 1.0)
+    skills.move_to(sim, motion, q_meas, duration=0.3)
     after = sim.measure_torques(0.5, 0.5)
     truth = world.truth()
     world.close()
@@ -40,14 +42,14 @@ def test_held_rod_torque_matches_analytic_payload_torque(ur5):
 def test_regrasp_episode_on_obj1_ends_in_the_drop_box():
     # A planner that always regrasps: the put-down and the grasp at the CoM are exercised
     # whatever the trial grasp found.
-    config = EpisodeConfig(planner=PlannerConfig(max_com_offset=0.0))
+    config = EpisodeConfig(regrasp=RegraspConfig(max_com_offset=0.0))
     result = run_episode("obj1", seed=SEED_OBJ1, method="regrasp", config=config)
-    trial = result.trial
-    assert abs(trial.pos_esti - trial.pos_real) < 5e-3, (trial.pos_esti, trial.pos_real)
-    assert abs(trial.mass_esti - trial.mass_real) < 0.02 * trial.mass_real
+    trial, score = result.trial, result.trial_score
+    assert abs(score.pos_esti - score.pos_real) < 5e-3, (score.pos_esti, score.pos_real)
+    assert abs(trial.mass_esti - score.mass_real) < 0.02 * score.mass_real
     assert result.regrasped and result.success, result.reason
     # It was carried near its CoM, not where the trial grasp held it.
-    assert abs(result.final_grasp_offset - trial.pos_real) < 0.03
+    assert abs(result.final_grasp_offset - score.pos_real) < 0.03
 
 
 @pytest.mark.slow

@@ -2,15 +2,15 @@
 
 import numpy as np
 
+from comgrasp_pin.config import EpisodeConfig
 from comgrasp_pin.experiments.trials import (
     ACCURACY_COM_RANGE,
     ACCURACY_GRASP_OFFSET,
     ACCURACY_LEVER_RANGE,
     accuracy_grasp,
-    holding_lever,
 )
+from comgrasp_pin.planning.holding import holding_lever
 from comgrasp_pin.simulation.objects import OBJECTS
-from comgrasp_pin.simulation.scene import EpisodeConfig
 
 
 def test_holding_lever_is_the_pads_moment_over_the_weight():
@@ -22,7 +22,7 @@ def test_holding_lever_is_the_pads_moment_over_the_weight():
 def test_accuracy_grasps_lie_between_the_centre_and_the_com_within_the_lever_range():
     config = EpisodeConfig()
     for name, obj in OBJECTS.items():
-        lever = holding_lever(obj.mass, config.grip_force, config.world.pad_friction)
+        lever = holding_lever(obj.mass, config.motion.grip_force, config.world.pad_friction)
         limit = ACCURACY_GRASP_OFFSET * obj.length
         for seed in range(40):
             pos_real, offset = accuracy_grasp(name, seed, config)

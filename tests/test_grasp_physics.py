@@ -7,10 +7,15 @@ import time
 import numpy as np
 import pytest
 
-from comgrasp_pin.motion.ik import Q_HOME, GraspPose, link_points, scene_clearance
-from comgrasp_pin.simulation import Simulation, WorldConfig, build_spec
+from comgrasp_pin.config import MotionConfig, WorldConfig
+from comgrasp_pin.geometry import GraspPose
+from comgrasp_pin.motion.clearance import link_points, scene_clearance
+from comgrasp_pin.simulation import Simulation, build_spec
 from comgrasp_pin.simulation.objects import add_object, get_object, object_state, tilt_angle
-from comgrasp_pin.simulation.skills import DROP_BOX_XY, carry_to_drop_box, pick
+from comgrasp_pin.simulation.skills import carry_to_drop_box, pick
+from comgrasp_pin.workcell import DROP_BOX_XY, Q_HOME
+
+MOTION = MotionConfig()
 
 YAW = 0.4
 XY = (0.55, -0.05)
@@ -57,7 +62,8 @@ def test_centre_grasp_off_com_tilts_com_grasp_holds(ur5, name):
             elif "T" in ref and int(round(sim.data.time * 1000)) % 10 == 0:
                 ref["max"] = max(ref["max"], abs(_tilts(sim, ref["T"])[0]))
 
-        res = pick(sim, ur5, _grasp(o, x_grasp), grip_force=15.0, callback=at_grasp)
+        with sim.observing(at_grasp):
+            res = pick(sim, ur5, MOTION, _grasp(o, x_grasp), 15.0, 0.30, 1.0)
         assert res.closed_on_object
         # the jaws held the rod level at the grasp: axis along ee-x
         assert abs(ref["T"][0, 0]) > np.cos(np.radians(1.0))
@@ -101,8 +107,9 @@ def test_pick_carry_release_clear_of_table_and_boxes(ur5, name):
         if int(round(d.time * 1000)) % 20 == 0:
             worst["arm"] = min(worst["arm"], scene_clearance(link_points(ur5, sim.q)["arm"]).min())
 
-    pick(sim, ur5, _grasp(o, o.com()[0]), grip_force=15.0, callback=watch)
-    carry_to_drop_box(sim, ur5, callback=watch)
+    with sim.observing(watch):
+        pick(sim, ur5, MOTION, _grasp(o, o.com()[0]), 15.0, 0.30, 1.0)
+        carry_to_drop_box(sim, ur5, MOTION)
     sim.hold(0.5)
     assert worst["touch"] == 0, "the gripper touched the table or the drop box"
     assert worst["arm"] > 0.05

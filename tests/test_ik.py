@@ -3,19 +3,18 @@
 import numpy as np
 import pytest
 
+from comgrasp_pin.errors import IKError
+from comgrasp_pin.geometry import GraspPose
+from comgrasp_pin.motion.clearance import link_points, scene_clearance
 from comgrasp_pin.motion.ik import (
-    Q_HOME,
-    GraspPose,
-    IKError,
     grasp_frame,
     grasp_height,
-    link_points,
-    scene_clearance,
     solve_ik,
     solve_top_down,
     top_down_frame,
 )
 from comgrasp_pin.motion.trajectory import Quintic
+from comgrasp_pin.workcell import Q_HOME
 
 
 def _random_grasps(n, seed=0):

@@ -6,14 +6,15 @@ import pytest
 
 from comgrasp_pin.camera import PinholeCamera
 from comgrasp_pin.errors import InvalidDepthError, ObjectCutByBorderError, ObjectNotFoundError
-from comgrasp_pin.motion.ik import Q_PARK, solve_ik, top_down_frame
+from comgrasp_pin.motion.ik import solve_ik, top_down_frame
 from comgrasp_pin.perception import SlipMonitor, detect_rod_top_down
 from comgrasp_pin.simulation import Simulation, build_model
 from comgrasp_pin.simulation.cameras import CameraRig
-from comgrasp_pin.simulation.episode import random_table_pose
+from comgrasp_pin.simulation.scene import random_table_pose
 from comgrasp_pin.simulation.eyes import look_from_side
 from comgrasp_pin.simulation.objects import OBJECTS, add_object, pose_on_table
 from comgrasp_pin.simulation.world import TOP_CAMERA
+from comgrasp_pin.workcell import Q_PARK
 
 OBJECT_NAMES = sorted(OBJECTS)
 

@@ -1,18 +1,22 @@
 import numpy as np
 import pytest
 
-from comgrasp_pin.motion.ik import GraspPose, top_down_frame
+from comgrasp_pin.config import RegraspConfig
+from comgrasp_pin.geometry import GraspPose
+from comgrasp_pin.motion.ik import top_down_frame
 from comgrasp_pin.planning.regrasp import com_grasp, decide, rod_axis_world
+
+CONFIG = RegraspConfig()
 
 
 def test_decisions():
-    assert decide(np.radians(6.0), False, 0.05, 0.0).regrasp
-    assert decide(0.0, True, 0.0, 0.0).regrasp
-    assert decide(0.0, False, 0.05, 0.0).regrasp  # far CoM, no slip yet
-    keep = decide(np.radians(0.5), False, 0.004, 0.0)
+    assert decide(np.radians(6.0), False, 0.05, 0.0, CONFIG).regrasp
+    assert decide(0.0, True, 0.0, 0.0, CONFIG).regrasp
+    assert decide(0.0, False, 0.05, 0.0, CONFIG).regrasp  # far CoM, no slip yet
+    keep = decide(np.radians(0.5), False, 0.004, 0.0, CONFIG)
     assert not keep.regrasp and "holds" in keep.reason
     with pytest.raises(ValueError):
-        decide(np.nan, False, 0.0, 0.0)
+        decide(np.nan, False, 0.0, 0.0, CONFIG)
 
 
 def test_com_grasp_resolves_the_rod_direction():

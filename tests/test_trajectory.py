@@ -43,4 +43,4 @@ def test_bad_input():
         Quintic(np.zeros(6), np.zeros(5), 1.0)
     with pytest.raises(ValueError):
         Quintic(np.zeros(6), np.ones(6), 0.0)
-    assert min_duration(np.zeros(6), np.zeros(6)) == pytest.approx(0.1)
+    assert min_duration(np.zeros(6), np.zeros(6), 1.0, 2.0) == pytest.approx(0.1)

@@ -14,7 +14,7 @@ import pinocchio as pin
 
 from comgrasp_pin.errors import EmptyGripperError, InvalidInputError, UnobservableError
 from comgrasp_pin.estimation.estimate import MASS_SIGMAS, MIN_MASS_KG
-from comgrasp_pin.estimation.estimator import RCOND, _validate
+from comgrasp_pin.estimation.estimator import RCOND, validate_inputs
 from comgrasp_pin.estimation.regressor import G0
 from comgrasp_pin.robot import RobotModel
 
@@ -64,7 +64,7 @@ def estimate_com_batch(
     """
     if np.ndim(q) != 2:
         raise InvalidInputError(f"q must be (N, {robot.nq}) for a batch, got {np.shape(q)}")
-    Q, dtau, sigma = _validate(robot, q, tau_before, tau_after, torque_std)
+    Q, dtau, sigma = validate_inputs(robot, q, tau_before, tau_after, torque_std)
     count, n = Q.shape
     A = np.empty((count, 3, n))  # rows J_lin_z, J_ang_x, J_ang_y: Y_r = G0 A^T
     R = np.empty((count, 3, 3))

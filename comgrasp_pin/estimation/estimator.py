@@ -81,7 +81,7 @@ def estimate_com(
         fast = _single_pose_lstsq(robot, q, tau_before, tau_after, torque_std, rcond)
         if fast is not None:
             return fast
-    Q, dtau, sigma = _validate(robot, q, tau_before, tau_after, torque_std)
+    Q, dtau, sigma = validate_inputs(robot, q, tau_before, tau_after, torque_std)
     return _general(robot, Q, dtau, sigma, method, rcond)
 
 
@@ -254,7 +254,7 @@ def _general(robot, Q, dtau, sigma, method, rcond) -> ComEstimate:
     )
 
 
-def _validate(robot, q, tau_before, tau_after, torque_std):
+def validate_inputs(robot, q, tau_before, tau_after, torque_std):
     """(Q (k, n), dtau (k, n), sigma (n,) or None) from the raw inputs, or a clear error."""
     n = robot.nq
     arrays = {}

@@ -90,8 +90,7 @@ def reproduce(opts: RunOptions) -> Path:
     mid = time.perf_counter()
     reg = run_regrasp(opts)
     end = time.perf_counter()
-    settings = settings_summary()
-    settings["sensor"]["noise_std"] = noise
+    settings = settings_summary(noise)
     meta = {
         "objects": list(objects), "trials_per_object": trials, "seed": seed, "workers": workers,
         "accuracy_minutes": (mid - start) / 60, "regrasp_minutes": (end - mid) / 60,
@@ -99,6 +98,7 @@ def reproduce(opts: RunOptions) -> Path:
     }  # fmt: skip
     (out / "run.json").write_text(json.dumps(meta, indent=2, default=str))
     failed = sum(bool(r.get("error")) for r in acc + reg)
+    trial = settings["trial"]
     text = f"""# comgrasp_pin: the paper's experiments, reproduced
 
 {len(acc)} accuracy grasps and {len(reg)} pick-and-place trials ({trials} per object and
@@ -133,13 +133,14 @@ Wilson interval (%).
 ## Settings
 
 - torque sensor: white noise σ = {noise} N·m per sample at {1 / settings["world"]["sim_dt"]:.0f} Hz
-  (averaged over {settings["window"]} s after {settings["settle"]} s of settling), τ_before
-  {settings["tau_before"]}; estimator `{settings["estimator"]}`
-- grip force {settings["grip_force"]} N per finger; pad friction
+  (averaged over {trial["window"]} s after {trial["settle"]} s of settling), τ_before
+  {trial["tau_before"]}; estimator `{trial["estimator"]}`
+- grip force {settings["motion"]["grip_force"]} N per finger; pad friction
   {settings["world"]["pad_friction"]} (sliding, torsional, rolling), condim
   {settings["world"]["pad_condim"]}; noslip iterations {settings["world"]["noslip_iterations"]}
-- measurement {settings["lift_height"]} m above the table; planner thresholds
-  {settings["planner"]}
+- measurement {trial["lift_height"]} m above the table; regrasp when the tilt exceeds
+  {settings["regrasp"]["slip_tilt_deg"]} deg or the CoM lies more than
+  {settings["regrasp"]["max_com_offset"]} m from the jaws
 - software: {", ".join(f"{k} {v}" for k, v in meta["versions"].items())}
 
 Raw data: `accuracy.csv`, `regrasp.csv`; every setting: `run.json`.

@@ -61,16 +61,23 @@ def noise_sweep(
 def grip_force_sweep(obj: str, forces: list[float], seeds: list[int]) -> list[dict]:
     """Tilt, accuracy and whether the rod was kept, for trial grasps at the geometric centre
     of ``obj`` with each grip force (N) on the scenes drawn from ``seeds``."""
+    from dataclasses import replace
+
+    from comgrasp_pin.config import EpisodeConfig
     from comgrasp_pin.errors import EmptyGripperError
-    from comgrasp_pin.simulation.episode import EpisodeConfig, Scene, World, trial_grasp
+    from comgrasp_pin.simulation.episode import measure_and_score
+    from comgrasp_pin.simulation.scene import Scene, World
 
     rows = []
     for force in forces:
+        base = EpisodeConfig()
+        config = replace(base, motion=replace(base.motion, grip_force=force))
         for seed in seeds:
-            world = World(Scene.sample(obj, seed), EpisodeConfig(grip_force=force), seed)
+            world = World(Scene.sample(obj, seed), config, seed)
             try:
-                t = trial_grasp(world)
-                row = {"theta_deg": float(np.degrees(t.theta)), "accuracy": t.accuracy, "held": 1}
+                t, score = measure_and_score(world)
+                row = {"theta_deg": float(np.degrees(t.theta)), "accuracy": score.accuracy,
+                       "held": 1}  # fmt: skip
             except EmptyGripperError:
                 row = {"theta_deg": float("nan"), "accuracy": float("nan"), "held": 0}
             finally:

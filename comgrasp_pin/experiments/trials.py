@@ -7,9 +7,13 @@ true CoM) and ``--resume`` reproduces what an uninterrupted run would have done.
 
 from __future__ import annotations
 
+import time
 from dataclasses import asdict
 
 import numpy as np
+
+from comgrasp_pin.config import EpisodeConfig, SensorConfig, TorqueSensorConfig
+from comgrasp_pin.planning.holding import holding_lever
 
 ACCURACY_COLUMNS = [
     "object", "trial", "method", "seed", "length_m", "pos_real_m", "pos_esti_m", "theta_deg",
@@ -29,7 +33,6 @@ ACCURACY_GRASP_OFFSET = 0.25  # grasp offsets from the rectangle's centre, |offs
 # 2-60 deg, depending on the object (measured), so the tilts span the paper's 0-30 deg and
 # beyond instead of piling up at 0 deg and past 50 deg as random grasps along the rod do.
 ACCURACY_LEVER_RANGE = (0.3, 0.9)
-PAD_EDGE = 0.012  # the box pads touch a rod at their edges, this far either side (m)
 
 
 def trial_seed(run_seed: int, obj: str, trial: int) -> int:
@@ -46,20 +49,15 @@ def make_tasks(objects: list[str], trials: int, seed: int, methods: tuple[str, .
     ]
 
 
-def _episode_config(task: dict):
-    from comgrasp_pin.simulation.episode import EpisodeConfig
-    from comgrasp_pin.simulation.torque_sensor import TorqueSensorConfig
+def episode_config(noise: float = 0.05) -> EpisodeConfig:
+    """The configuration every trial runs with: the defaults, with the torque sensor's
+    white noise ``noise`` (N m per sample)."""
+    sensors = SensorConfig(torque=TorqueSensorConfig(noise_std=float(noise)))
+    return EpisodeConfig(sensors=sensors)
 
-    return EpisodeConfig(sensor=TorqueSensorConfig(noise_std=float(task.get("noise", 0.05))))
 
-
-def holding_lever(mass: float, grip_force: float, pad_friction: tuple[float, ...]) -> float:
-    """Grasp-to-CoM distance (m) at which the weight of a rod of ``mass`` (kg), held level,
-    reaches the nominal moment the jaws resist about their axis: 2 F (mu PAD_EDGE + mu_t),
-    with F the force of each finger (N) and (mu, mu_t) the pads' sliding and torsional
-    friction. Rods start to turn at 0.6-0.8 of it (the lift's acceleration adds load)."""
-    mu, mu_t = pad_friction[0], pad_friction[1]
-    return 2.0 * grip_force * (mu * PAD_EDGE + mu_t) / (mass * 9.81)
+def _episode_config(task: dict) -> EpisodeConfig:
+    return episode_config(task.get("noise", 0.05))
 
 
 def accuracy_grasp(obj: str, seed: int, config) -> tuple[float, float]:
@@ -76,7 +74,7 @@ def accuracy_grasp(obj: str, seed: int, config) -> tuple[float, float]:
     rng = np.random.default_rng(seed + 17)
     pos_real = rng.choice([-1.0, 1.0]) * rng.uniform(*ACCURACY_COM_RANGE) * spec.length
     lever = rng.uniform(*ACCURACY_LEVER_RANGE) * holding_lever(
-        spec.mass, config.grip_force, config.world.pad_friction
+        spec.mass, config.motion.grip_force, config.world.pad_friction
     )
     side = -1.0 if pos_real > 0 else 1.0
     limit = ACCURACY_GRASP_OFFSET * spec.length
@@ -86,7 +84,8 @@ def accuracy_grasp(obj: str, seed: int, config) -> tuple[float, float]:
 def accuracy_trial(task: dict) -> dict:
     """One grasp of the accuracy experiment: random rod pose, random true CoM, grasp at the
     rectangle's centre plus an offset (``accuracy_grasp``); measure and estimate."""
-    from comgrasp_pin.simulation.episode import Scene, World, trial_grasp
+    from comgrasp_pin.simulation.episode import measure_and_score
+    from comgrasp_pin.simulation.scene import Scene, World
 
     seed = int(task["seed"])
     config = _episode_config(task)
@@ -94,29 +93,27 @@ def accuracy_trial(task: dict) -> dict:
     scene = Scene.sample(task["object"], seed, pos_real=pos_real)
     world = World(scene, config, seed)
     try:
-        import time
-
         start = time.perf_counter()
-        t = trial_grasp(world, offset)
+        t, score = measure_and_score(world, offset)
         wall = time.perf_counter() - start
     finally:
         world.close()
     std = t.estimate.std
     return {
         "length_m": scene.length,
-        "pos_real_m": t.pos_real,
-        "pos_esti_m": t.pos_esti,
+        "pos_real_m": score.pos_real,
+        "pos_esti_m": score.pos_esti,
         "theta_deg": float(np.degrees(t.theta)),
-        "accuracy": t.accuracy,
-        "mass_real_kg": t.mass_real,
+        "accuracy": score.accuracy,
+        "mass_real_kg": score.mass_real,
         "mass_esti_kg": t.mass_esti,
-        "theta_true_deg": float(np.degrees(t.theta_true)),
-        "grasp_offset_m": t.grasp_offset,
+        "theta_true_deg": float(np.degrees(score.theta_true)),
+        "grasp_offset_m": score.grasp_offset,
         "com_std_m": float(np.linalg.norm(std[1:])) if std is not None else float("nan"),
         "residual_rms_Nm": t.estimate.residual_rms,
         "slip_seen": int(t.slip_seen),
-        "pos_esti_line_m": t.pos_esti_line,
-        "accuracy_line": t.accuracy_line,
+        "pos_esti_line_m": score.pos_esti_line,
+        "accuracy_line": score.accuracy_line,
         "rolled_slip": int(t.rolled_slip),
         "dropped_at_roll": int(t.dropped_at_roll),
         "wall_s": wall,
@@ -132,12 +129,10 @@ def regrasp_trial(task: dict) -> dict:
     return result.row()
 
 
-def settings_summary() -> dict:
-    """The settings an experiment ran with, for the report."""
-    from comgrasp_pin.simulation.episode import EpisodeConfig
-
-    config = EpisodeConfig()
-    out = asdict(config)
+def settings_summary(noise: float = 0.05) -> dict:
+    """Every setting an experiment ran with (the whole config tree and the experiment
+    design), for ``run.json`` and the report."""
+    out = asdict(episode_config(noise))
     out["accuracy_com_range"] = ACCURACY_COM_RANGE
     out["accuracy_grasp_offset"] = ACCURACY_GRASP_OFFSET
     out["accuracy_lever_range"] = ACCURACY_LEVER_RANGE

@@ -13,28 +13,12 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from comgrasp_pin.errors import IKError
 from comgrasp_pin.geometry import GraspPose
 from comgrasp_pin.robot import RobotModel
+from comgrasp_pin.workcell import GRIPPER, Q_HOME, TABLE_Z
 
-# Elbow up, wrist down: eelink 0.30 m above (0.45, 0), pointing down, boom away (rad).
-Q_HOME = np.array([-0.245, -1.6895, 1.6866, -1.5679, -1.5708, -0.245])
-# Parked at the robot's right, eelink 0.30 m above (0.12, -0.42): out of the top camera's
-# view of the table, so that it sees the whole pick area (rad).
-Q_PARK = np.array([-1.5451, -1.7218, 1.7142, -1.5632, -1.5708, -1.5451])
-TABLE_Z = 0.0
-FINGERTIP_BELOW_EE = 0.015  # fingertips (pad bottoms) below the eelink along ee-z (m)
 FINGERTIP_CLEARANCE = 0.002  # fingertips kept this far above the table (m)
-# Scene obstacles (world frame, m): table top, drop box (walls 0.06 m high) and pedestal.
-_OBSTACLES = (  # (x_min, x_max, y_min, y_max, top z)
-    (0.30, 0.80, -0.35, 0.35, TABLE_Z),
-    (-0.22, 0.32, 0.43, 0.73, 0.06),
-    (-0.12, 0.12, -0.12, 0.12, 0.0),
-)
-_FLOOR_Z = -0.75
-
-
-class IKError(ValueError):
-    """No joint configuration reaches the target within tolerance and joint limits."""
 
 
 def top_down_frame(x: float, y: float, z: float, yaw: float) -> np.ndarray:
@@ -49,7 +33,7 @@ def top_down_frame(x: float, y: float, z: float, yaw: float) -> np.ndarray:
 def grasp_height(z_axis: float, table_z: float = TABLE_Z) -> float:
     """Eelink height (m) for a rod whose axis is at ``z_axis``: on the axis, but with the
     fingertips at least 2 mm above the table."""
-    return max(z_axis, table_z + FINGERTIP_BELOW_EE + FINGERTIP_CLEARANCE)
+    return max(z_axis, table_z + GRIPPER.fingertip_below_ee + FINGERTIP_CLEARANCE)
 
 
 def grasp_frame(grasp: GraspPose, dz: float = 0.0, boom_away: bool = True) -> np.ndarray:
@@ -151,39 +135,3 @@ def solve_top_down(
     if boom_away:
         return results[0]
     return min(results, key=lambda r: float(np.linalg.norm(r[0] - seed)))
-
-
-def link_points(robot: RobotModel, q: np.ndarray) -> dict[str, np.ndarray]:
-    """World points (k, 3) on the arm at ``q`` (m), for clearance checks: joint origins,
-    points along each link, the gripper base corners and the fingertips."""
-    origins = robot.joint_origins(q)
-    pts = [origins]
-    for a, b in zip(origins[:-1], origins[1:], strict=True):
-        pts.append(a + np.linspace(0.25, 0.75, 3)[:, None] * (b - a))
-    T_tool = robot.frame_pose(q, "tool0")
-    corners = np.array(
-        [[sx * 0.03, sy * 0.07, z] for sx in (-1, 1) for sy in (-1, 1) for z in (0.0, 0.05)]
-    )
-    gripper = corners @ T_tool[:3, :3].T + T_tool[:3, 3]
-    T_ee = robot.ee_pose(q)
-    tips_local = np.array(
-        [[sx * 0.012, sy * 0.05, FINGERTIP_BELOW_EE] for sx in (-1, 1) for sy in (-1, 1)]
-    )
-    tips = tips_local @ T_ee[:3, :3].T + T_ee[:3, 3]
-    return {"arm": np.vstack(pts), "gripper": gripper, "fingertips": tips}
-
-
-def scene_clearance(points: np.ndarray) -> np.ndarray:
-    """(k,) height (m) of world points (k, 3) above whatever lies below them in the scene
-    (table top, drop box walls, pedestal, floor); negative means inside an obstacle."""
-    points = np.asarray(points, dtype=float).reshape(-1, 3)
-    below = np.full(len(points), _FLOOR_Z)
-    for x0, x1, y0, y1, top in _OBSTACLES:
-        over = (
-            (points[:, 0] >= x0)
-            & (points[:, 0] <= x1)
-            & (points[:, 1] >= y0)
-            & (points[:, 1] <= y1)
-        )
-        below[over] = np.maximum(below[over], top)
-    return points[:, 2] - below

@@ -15,20 +15,12 @@ import numpy as np
 PEAK_VELOCITY = 15.0 / 8.0  # max ds/du of the quintic
 PEAK_ACCELERATION = 10.0 / np.sqrt(3.0)  # max d2s/du2 of the quintic
 
-# Conservative joint limits for the experiments (rad/s, rad/s^2): a third of the UR5's
-# 3.15 rad/s, and an acceleration that keeps a held rod's inertial load small.
-DEFAULT_V_MAX = 1.0
-DEFAULT_A_MAX = 2.0
-# With nothing in the jaws the arm may move faster: two thirds of the UR5's joint speed.
-EMPTY_V_MAX = 2.0
-EMPTY_A_MAX = 6.0
-
 
 def min_duration(
     q0: np.ndarray,
     q1: np.ndarray,
-    v_max: float | np.ndarray = DEFAULT_V_MAX,
-    a_max: float | np.ndarray = DEFAULT_A_MAX,
+    v_max: float | np.ndarray,
+    a_max: float | np.ndarray,
     t_min: float = 0.1,
 ) -> float:
     """Shortest duration (s) of a quintic from q0 to q1 (n,) within v_max and a_max
@@ -72,8 +64,8 @@ class Quintic:
         cls,
         q0: np.ndarray,
         q1: np.ndarray,
-        v_max: float | np.ndarray = DEFAULT_V_MAX,
-        a_max: float | np.ndarray = DEFAULT_A_MAX,
+        v_max: float | np.ndarray,
+        a_max: float | np.ndarray,
     ) -> Quintic:
         """The quintic of ``min_duration``."""
         return cls(q0, q1, min_duration(q0, q1, v_max, a_max))

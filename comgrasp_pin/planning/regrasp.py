@@ -16,21 +16,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from comgrasp_pin.config import RegraspConfig
+from comgrasp_pin.errors import InvalidInputError, UnobservableError
 from comgrasp_pin.geometry import GraspPose
-
-
-@dataclass(frozen=True)
-class PlannerConfig:
-    """Thresholds of the regrasp decision.
-
-    Attributes:
-        slip_tilt_deg: a tilt in the jaws above this (deg) counts as slip seen.
-        max_com_offset: CoM farther than this from the grasp point along the rod (m) is
-            regrasped even without slip.
-    """
-
-    slip_tilt_deg: float = 2.0
-    max_com_offset: float = 0.015
 
 
 @dataclass(frozen=True)
@@ -55,14 +43,14 @@ def decide(
     slip_seen: bool,
     x_com_obj: float,
     grasp_offset_obj: float,
-    config: PlannerConfig | None = None,
+    config: RegraspConfig,
 ) -> RegraspDecision:
     """Regrasp decision from the tilt ``theta`` (rad), the slip monitor's verdict, and the
-    estimated CoM and grasp positions along the rod (m)."""
-    config = config or PlannerConfig()
+    estimated CoM and grasp positions along the rod (m), with the thresholds of
+    ``config`` (``slip_tilt_deg``, ``max_com_offset``)."""
     values = np.array([theta, x_com_obj, grasp_offset_obj], dtype=float)
     if not np.all(np.isfinite(values)):
-        raise ValueError(f"non-finite planner input: theta, x_com, grasp_offset = {values}")
+        raise InvalidInputError(f"non-finite planner input: theta, x_com, grasp_offset = {values}")
     offset = abs(x_com_obj - grasp_offset_obj)
     if slip_seen:
         reason = "slip seen by the side camera"
@@ -81,7 +69,9 @@ def rod_axis_world(T_world_ee: np.ndarray, T_ee_obj: np.ndarray) -> np.ndarray:
     horizontal = np.array([axis[0], axis[1], 0.0])
     norm = np.linalg.norm(horizontal)
     if norm < 1e-6:
-        raise ValueError("the rod's axis is vertical: its direction on the table is undefined")
+        raise UnobservableError(
+            "the rod's axis is vertical: its direction on the table is undefined"
+        )
     return horizontal / norm
 
 

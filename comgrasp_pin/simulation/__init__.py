@@ -6,6 +6,6 @@ import os
 os.environ.setdefault("MUJOCO_GL", "egl")
 
 from comgrasp_pin.simulation.sim import Simulation  # noqa: E402
-from comgrasp_pin.simulation.world import WorldConfig, build_model, build_spec  # noqa: E402
+from comgrasp_pin.simulation.world import build_model, build_spec  # noqa: E402
 
-__all__ = ["Simulation", "WorldConfig", "build_model", "build_spec"]
+__all__ = ["Simulation", "build_model", "build_spec"]

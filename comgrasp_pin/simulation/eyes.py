@@ -21,13 +21,10 @@ from comgrasp_pin.perception import (
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.simulation.cameras import CameraRig
 from comgrasp_pin.simulation.world import SIDE_CAMERA, TOP_CAMERA
+from comgrasp_pin.workcell import GRIPPER, TABLE_Z
 
-TABLE_Z = 0.0  # the workcell's table plane (m, world), known like the camera extrinsics
-OPEN_HALF_GAP = 0.045  # half the jaws' gap when open (URDF: pad faces at +-0.045 m)
 ARM_RADIUS = 0.075  # UR5 upper arm and forearm: about 0.06 m in radius, with a margin (m)
 WRIST_RADIUS = 0.06  # UR5 wrist housings: about 0.045-0.055 m, with a margin (m)
-
-__all__ = ["SideView", "SlipWatcher", "look_from_above", "look_from_side"]
 
 
 def look_from_above(rig: CameraRig, data: mujoco.MjData) -> RodDetection:
@@ -71,7 +68,7 @@ def look_from_side(
 
 def handle_radius(finger_q: float) -> float:
     """Radius (m) of a round handle held with the fingers at ``finger_q`` (m closed each)."""
-    return max(OPEN_HALF_GAP - finger_q, 0.0)
+    return max(GRIPPER.open_half_gap - finger_q, 0.0)
 
 
 def arm_capsules(robot: RobotModel, q: np.ndarray):
@@ -88,18 +85,20 @@ def arm_capsules(robot: RobotModel, q: np.ndarray):
 class SlipWatcher:
     """A Simulation observer sampling the tilt with the side camera every ``dt`` seconds
     once the jaws hold with ``grip_force``, on every ``stride``-th pixel; frames where the
-    rod cannot be measured are counted and skipped."""
+    rod cannot be measured are counted and skipped. Implements ``procedures.cell.SlipWatch``."""
 
     def __init__(
         self,
+        sim,
         rig: CameraRig,
         robot: RobotModel,
         dt: float,
         grip_force: float,
-        rod_length: float | None = None,
-        centre_hint: float | None = None,
-        stride: int = 3,
+        rod_length: float | None,
+        centre_hint: float | None,
+        stride: int,
     ):
+        self.sim = sim
         self.rig, self.robot, self.dt, self.grip_force = rig, robot, dt, grip_force
         self.stride = stride
         self.rod_length, self.centre_hint = rod_length, centre_hint
@@ -120,6 +119,10 @@ class SlipWatcher:
             return
         if not self.monitor.times or sim.time > self.monitor.times[-1]:
             self.monitor.add(sim.time, view.theta)
+
+    def sample_now(self) -> None:
+        """Take a frame now, whatever the period."""
+        self(self.sim, force=True)
 
     def slipping_or_tilted(self) -> bool:
         """True when slip was seen, or the rod is slipping at the last sample."""

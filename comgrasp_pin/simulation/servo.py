@@ -27,7 +27,7 @@ class ArmServo:
         tau_i_limit: anti-windup bound on the integral term (N m).
     """
 
-    def __init__(self, n: int, kp: float, ki: float = 20.0, tau_i_limit: float = 50.0):
+    def __init__(self, n: int, kp: float, ki: float, tau_i_limit: float):
         self.kp = kp
         self.ki = ki
         self.tau_i_limit = tau_i_limit

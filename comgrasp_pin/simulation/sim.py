@@ -2,24 +2,17 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 
 import mujoco
 import numpy as np
 
+from comgrasp_pin.config import TorqueSensorConfig, WorldConfig
+from comgrasp_pin.procedures.cell import TorqueMeasurement
 from comgrasp_pin.simulation.servo import ArmServo
-from comgrasp_pin.simulation.torque_sensor import (
-    JointTorqueSensor,
-    TorqueMeasurement,
-    TorqueSensorConfig,
-)
-from comgrasp_pin.simulation.world import (
-    ARM_JOINTS,
-    EE_SITE,
-    FINGER_JOINTS,
-    WorldConfig,
-    build_model,
-)
+from comgrasp_pin.simulation.torque_sensor import JointTorqueSensor
+from comgrasp_pin.simulation.world import ARM_JOINTS, EE_SITE, FINGER_JOINTS, build_model
 
 
 class Simulation:
@@ -56,7 +49,8 @@ class Simulation:
         self._tau_adr = np.array([m.sensor(f"tau_{j}").adr[0] for j in ARM_JOINTS])
         self._ee_site = m.site(EE_SITE).id
         kp = float(m.actuator_gainprm[self._arm_act[0], 0])
-        self.servo = ArmServo(len(ARM_JOINTS), kp)
+        c = self.config
+        self.servo = ArmServo(len(ARM_JOINTS), kp, c.servo_ki, c.servo_tau_i_limit)
         self._arm_qadr, self._arm_vadr, self._arm_act, self._tau_adr = (
             _as_slice(a) for a in (self._arm_qadr, self._arm_vadr, self._arm_act, self._tau_adr)
         )
@@ -121,11 +115,20 @@ class Simulation:
             for observer in observers:
                 observer(self)
 
+    @contextmanager
+    def observing(self, observer: Callable[[Simulation], None]) -> Iterator[None]:
+        """Run ``observer`` after every physics step while the ``with`` block lasts."""
+        self.observers.append(observer)
+        try:
+            yield
+        finally:
+            self.observers.remove(observer)
+
     def hold(self, duration: float) -> None:
         """Keep the commanded configuration for ``duration`` seconds."""
         self.step(int(round(duration / self.model.opt.timestep)))
 
-    def measure_torques(self, settle: float = 0.3, window: float = 0.5) -> TorqueMeasurement:
+    def measure_torques(self, settle: float, window: float) -> TorqueMeasurement:
         """Hold still for ``settle`` s, then average the sensor over ``window`` s."""
         self.hold(settle)
         n = max(1, int(round(window / self.model.opt.timestep)))

@@ -6,28 +6,9 @@ joint-torque-sensor class arm; the experiments never use a noise-free sensor.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-
-@dataclass(frozen=True)
-class TorqueSensorConfig:
-    """Error model of each joint's torque reading (N m).
-
-    Attributes:
-        noise_std: standard deviation of the white noise on every sample (N m).
-        bias: constant offset added to every sample (N m), the same for all joints.
-        drift_std: random-walk drift, standard deviation after one second (N m / sqrt(s)).
-    """
-
-    noise_std: float = 0.05
-    bias: float = 0.0
-    drift_std: float = 0.0
-
-    def __post_init__(self) -> None:
-        if self.noise_std < 0 or self.drift_std < 0:
-            raise ValueError("noise_std and drift_std must be >= 0")
+from comgrasp_pin.config import TorqueSensorConfig
 
 
 class JointTorqueSensor:
@@ -63,22 +44,3 @@ class JointTorqueSensor:
         if c.noise_std > 0:
             reading += c.noise_std * draw[: self._n]
         return reading
-
-
-@dataclass(frozen=True)
-class TorqueMeasurement:
-    """Averaged readings over a settling window at one arm configuration.
-
-    Attributes:
-        tau: (n,) mean reading (N m).
-        std_error: (n,) standard error of the mean, from the samples' spread (N m).
-        q: (n,) arm configuration during the window (rad), its mean.
-        n_samples: number of samples averaged.
-        duration: length of the window (s).
-    """
-
-    tau: np.ndarray
-    std_error: np.ndarray
-    q: np.ndarray
-    n_samples: int
-    duration: float

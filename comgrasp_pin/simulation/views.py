@@ -6,9 +6,11 @@ from pathlib import Path
 
 import cv2
 
+from comgrasp_pin.config import EpisodeConfig
 from comgrasp_pin.perception import draw_side_view, draw_top_view
-from comgrasp_pin.simulation.episode import EpisodeConfig, Scene, World, trial_grasp
+from comgrasp_pin.simulation.episode import measure_and_score
 from comgrasp_pin.simulation.eyes import look_from_above
+from comgrasp_pin.simulation.scene import Scene, World
 from comgrasp_pin.simulation.world import SIDE_CAMERA, TOP_CAMERA
 
 
@@ -21,7 +23,7 @@ def save_camera_views(out_dir: Path, obj: str = "obj2", seed: int = 0) -> list[P
         detection = look_from_above(world.rig, world.sim.data)
         top = draw_top_view(world.rig.rgb(world.sim.data, TOP_CAMERA), detection,
                             detection.axis_px.mean(axis=0))  # fmt: skip
-        trial = trial_grasp(world)
+        trial, _ = measure_and_score(world)
         side = draw_side_view(world.rig.rgb(world.sim.data, SIDE_CAMERA), trial.side_view)
     finally:
         world.close()

@@ -10,12 +10,12 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 
 from comgrasp_pin._paths import example_robot_data_dir, sim_path, urdf_path
+from comgrasp_pin.config import WorldConfig
 from comgrasp_pin.robot import UR5_URDF
 
 ARM_JOINTS = (
@@ -42,50 +42,6 @@ warnings.filterwarnings("ignore", message="Attaching a spec with an empty prefix
 
 _VISUAL_GROUP = 1
 _COLLISION_GROUP = 3  # hidden in renders
-
-
-@dataclass(frozen=True)
-class WorldConfig:
-    """Settings of the simulated world. SI units.
-
-    Attributes:
-        sim_dt: physics time step (s); the controller and the torque sensor run every step:
-            2 ms is the 500 Hz of a UR5's real-time interface (and half the cost of 1 ms;
-            grasps hold, turn and drop alike at both, checked by tests/test_grasp_physics.py).
-        kp: stiffness of the arm's position servos (N m / rad).
-        dampratio: damping ratio of the arm servos.
-        armature: reflected rotor inertia of each arm joint (kg m^2); it changes no static
-            torque, it only makes the stiff servos well-behaved at ``sim_dt``.
-        finger_armature: reflected inertia of each finger drive (kg).
-        pad_friction: (sliding, torsional, rolling) friction of the finger pads.
-            0.8: rubber pad on wood or steel. Torsional 0.002 m: the soft-finger patch of a
-            pad on a rod (radius a of a few mm, mu_t ~ (2/3) mu a). Rolling 1e-4 m (unused
-            with condim 4). With the box pads' two edge contacts (+-12 mm along the rod) a
-            grasp resists a moment about the jaw axis of about 2 F (0.8 * 0.012 + 0.002)
-            = 0.023 N m per N of grip force: 0.35 N m at the default 15 N of
-            ``motion.pick``, below m g l / 4 of every object (0.44-1.6 N m), so a centre grasp
-            of a rod whose CoM is a quarter length off tilts (measured 57-77 deg) while a CoM
-            grasp holds (< 0.1 deg); 2 mu F = 24 N carries every object's weight.
-        pad_condim: contact dimensionality of the pads: 4 (sliding + torsional friction);
-            rolling friction is not needed and condim 6 costs more in the noslip solver.
-            The pads have priority 1, so their friction and condim decide pad-object contacts.
-        noslip_iterations, impratio: MuJoCo solver settings that make static friction hold
-            (DESIGN.md section 7): without noslip a rod held at its friction limit creeps by
-            about 12 deg/s; with 50 iterations by < 1 deg/s. The elliptic cone is set in the
-            scene. Cost while holding a rod: 30-130 us per step (2 cores).
-        side_camera_fovy_deg: vertical field of view of the side camera (deg).
-    """
-
-    sim_dt: float = 0.002
-    kp: float = 2.0e4
-    dampratio: float = 1.0
-    armature: tuple[float, ...] = (0.2, 0.2, 0.1, 0.05, 0.05, 0.05)
-    finger_armature: float = 0.05
-    pad_friction: tuple[float, float, float] = (0.8, 0.002, 0.0001)
-    pad_condim: int = 4
-    noslip_iterations: int = 50
-    impratio: float = 10.0
-    side_camera_fovy_deg: float = 75.0
 
 
 def robot_spec() -> mujoco.MjSpec:

@@ -1,0 +1,101 @@
+"""Pick and place, the paper's second experiment, as the robot runs it.
+
+``baseline`` grasps at the geometric centre the top view sees. ``regrasp`` makes careful
+trial grasps (``trial_with_retry``) and, when the planner says so, lays the rod down on the
+put-down spot and grasps it again at the graspable point nearest the estimated CoM.
+``deliver`` then carries the rod to the drop box. No ground truth: whether the rod arrives
+is for the world to say.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from comgrasp_pin.config import EpisodeConfig
+from comgrasp_pin.motion.ik import solve_ik
+from comgrasp_pin.perception.top_down import nearest_graspable
+from comgrasp_pin.planning.put_down import PutDownPlan, axis_hint_after_put_down, plan_put_down
+from comgrasp_pin.planning.regrasp import com_grasp, decide
+from comgrasp_pin.procedures.cell import Cell
+from comgrasp_pin.procedures.measurement import TrialMeasurement
+from comgrasp_pin.procedures.trial_grasp import trial_with_retry
+from comgrasp_pin.workcell import PUT_DOWN_XY, Q_PARK
+
+BASELINE = "baseline: grasp at the geometric centre"
+TRIAL = "trial grasp near the geometric centre"
+CARRYING = "carrying to the drop box"
+"""Phases announced to the cell (``Cell.announce``)."""
+
+
+@dataclass(frozen=True)
+class Grasped:
+    """How the carrying grasp came about.
+
+    Attributes:
+        trial: the trial grasp's measurement (regrasp only, else None).
+        regrasped: the rod was put down and grasped again at the estimated CoM.
+        reason: the planner's reason (or the baseline's).
+    """
+
+    trial: TrialMeasurement | None
+    regrasped: bool
+    reason: str
+
+
+def baseline(cell: Cell, config: EpisodeConfig) -> Grasped:
+    """Grasp the rod at the geometric centre the top view sees, and lift it."""
+    cell.announce(BASELINE)
+    rod = cell.look_from_above().grasp
+    m = config.motion
+    cell.pick(rod, m.grip_force, m.carry_lift_height, m.carry_lift_time)
+    return Grasped(None, False, "geometric-centre grasp")
+
+
+def regrasp(cell: Cell, config: EpisodeConfig) -> Grasped:
+    """Trial grasp; if the planner says so, put the rod down and grasp it at the CoM."""
+    cell.announce(TRIAL)
+    trial = trial_with_retry(cell, config)
+    decision = decide(trial.theta, trial.slip_seen, trial.x_com_obj,
+                      trial.side_view.grasp_offset, config.regrasp)  # fmt: skip
+    if not decision.regrasp:
+        return Grasped(trial, False, decision.reason)
+    cell.announce(f"regrasp: {decision.reason}")
+    plan = put_down(cell, trial, config)
+    rod = cell.look_from_above()
+    axis_hint = axis_hint_after_put_down(plan, (rod.grasp.x, rod.grasp.y))
+    # The CoM lies x_com along the rod from its centre (the side view measures both within
+    # millimetres), and the top view sees the centre where the rod now lies; measured from
+    # where the jaws let go instead, the rod sliding in the jaws as it pivots flat would
+    # carry over (centimetres).
+    target = com_grasp(rod.grasp, axis_hint, decision.x_com_obj,
+                       lambda s: nearest_graspable(rod, s))  # fmt: skip
+    m = config.motion
+    cell.pick(target, m.grip_force, m.carry_lift_height, m.carry_lift_time)
+    return Grasped(trial, True, decision.reason)
+
+
+def put_down(cell: Cell, trial: TrialMeasurement, config: EpisodeConfig) -> PutDownPlan:
+    """Lay the held rod down on the put-down spot (``planning.put_down``) and park."""
+    r, robot, held = config.regrasp, cell.robot, trial.side_view
+    plan = plan_put_down(robot.ee_pose(cell.q_des), trial.T_ee_obj, trial.rod_length,
+                         held.grasp_offset, trial.rod_axis_z, PUT_DOWN_XY, r)  # fmt: skip
+    # Gently: the rod may be held close to its slip limit (that is why it is put down).
+    cell.move_to(solve_ik(robot, plan.T_above, cell.q_des), v_max=r.put_down_v_max,
+                 a_max=r.put_down_a_max, settle=r.put_down_settle)  # fmt: skip
+    # Slowly: a rod held near its slip limit turns if the descent brakes hard.
+    cell.move_linear(plan.T_touch, r.descend_time)
+    # Loosen the grip so that the rod turns in the jaws as it lays down, as a hand would;
+    # held firmly, it would be pushed into the table until it slipped out.
+    cell.grip_force = min(r.pivot_grip, cell.grip_force)
+    cell.place(plan.T_flat, r.lay_time)
+    cell.move_to(Q_PARK)
+    cell.hold(r.rest_after_put_down)
+    return plan
+
+
+def deliver(cell: Cell, config: EpisodeConfig) -> None:
+    """Carry the held rod to the drop box, release it, and park."""
+    cell.announce(CARRYING)
+    cell.carry_to_drop_box()
+    cell.move_to(Q_PARK)
+    cell.hold(config.motion.park_rest)

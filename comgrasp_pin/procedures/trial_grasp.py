@@ -1,0 +1,228 @@
+"""The trial grasp: perceive, measure the empty arm, grasp, lift, watch, measure, estimate.
+
+This is the measurement of the paper's first experiment and the first half of the regrasp
+method: the rod is grasped (at its perceived centre plus an offset), lifted back to the
+configuration where tau_before was measured while the side camera watches it turn, and the
+CoM is estimated from the torques and located along the rod from the side view. With
+``roll_deg`` > 0 a second static pose, the first rolled about ee-x, is measured too: gravity
+then has a component along the jaw axis, which makes the CoM's height in the jaws
+observable. The result is a measurement only: scoring against the truth lives in
+``comgrasp_pin.simulation.scoring``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from comgrasp_pin.config import EpisodeConfig
+from comgrasp_pin.errors import (
+    EmptyGripperError,
+    ObjectNotFoundError,
+    PerceptionError,
+    RodDroppedError,
+    RodSlippedError,
+)
+from comgrasp_pin.geometry import GraspPose
+from comgrasp_pin.motion.ik import grasp_frame, solve_ik, solve_top_down
+from comgrasp_pin.perception import RodDetection
+from comgrasp_pin.perception.top_down import nearest_on_handle
+from comgrasp_pin.planning import retry
+from comgrasp_pin.planning.retry import heavy_side_from_tilt
+from comgrasp_pin.procedures.cell import Cell, SlipWatch, TorqueMeasurement
+from comgrasp_pin.procedures.measurement import HeldReadings, TrialMeasurement, locate_com
+from comgrasp_pin.workcell import Q_PARK
+
+MEASURED = "trial grasp: the held rod is measured"
+"""Announced when the side camera has seen the rod at the first measurement pose."""
+
+
+@dataclass(frozen=True)
+class _Plan:
+    """Where to grasp and where to measure: grasp, measurement poses (rad), the rod's centre
+    along ee-x from the jaws (m, a hint for the side view), the first pose's T_world_ee."""
+
+    grasp: GraspPose
+    poses: list
+    centre_hint: float
+    T_meas: np.ndarray
+    detection: RodDetection
+
+
+def _rot_x(angle: float) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def plan_trial(cell: Cell, detection: RodDetection, offset: float, config: EpisodeConfig) -> _Plan:
+    """The grasp ``offset`` m along the rod from its perceived centre, and the measurement
+    poses above it (the second rolled by ``roll_deg`` about ee-x)."""
+    robot, trial = cell.robot, config.trial
+    rod = detection.grasp
+    d = np.array([np.cos(rod.yaw), np.sin(rod.yaw)])
+    grasp = GraspPose(rod.x + offset * d[0], rod.y + offset * d[1], rod.z, rod.yaw)
+    q_pre, T_pre = solve_top_down(robot, grasp, cell.q_des, dz=config.motion.approach)
+    centre_hint = -offset * float(np.r_[d, 0.0] @ T_pre[:3, 0])  # rod centre along ee-x
+    T_meas = grasp_frame(grasp)
+    T_meas[:3, :3] = robot.ee_pose(q_pre)[:3, :3]
+    T_meas[2, 3] = trial.lift_height
+    poses = [solve_ik(robot, T_meas, q_pre)]
+    if trial.roll_deg:
+        T_roll = T_meas.copy()
+        T_roll[:3, :3] = T_meas[:3, :3] @ _rot_x(np.radians(trial.roll_deg))
+        poses.append(solve_ik(robot, T_roll, poses[0]))
+    return _Plan(grasp, poses, centre_hint, T_meas, detection)
+
+
+def measure_empty(cell: Cell, plan: _Plan, config: EpisodeConfig) -> list[np.ndarray]:
+    """tau_before at each measurement pose: measured with the jaws empty, or the model's."""
+    trial, out = config.trial, []
+    for q in plan.poses:
+        cell.move_to(q, settle=trial.empty_settle)
+        if trial.tau_before == "measured":
+            out.append(cell.measure_torques(trial.settle, trial.window).tau)
+        else:
+            out.append(cell.robot.gravity_torques(q))
+    return out
+
+
+def _heavy_side(watch: SlipWatch, plan: _Plan, config: EpisodeConfig):
+    largest = watch.monitor.largest_tilt() if watch.monitor.times else None
+    min_tilt = np.radians(config.trial.heavy_side_min_deg)
+    return heavy_side_from_tilt(largest, plan.T_meas[:3, 0], min_tilt)
+
+
+def grasp_and_lift(
+    cell: Cell, plan: _Plan, watch: SlipWatch, careful: bool, config: EpisodeConfig
+) -> None:
+    """Grasp and lift to the measurement height, watched. ``careful``: lift only
+    ``careful_lift`` first and, if the rod turns by more than ``careful_abort_deg``, put it
+    back where it is and raise RodSlippedError (telling which end went down)."""
+    trial, robot, grip = config.trial, cell.robot, config.motion.grip_force
+    if not careful:
+        with cell.watching(watch):
+            cell.pick(plan.grasp, grip, trial.lift_height, trial.lift_time)
+        return
+    grasp_z = grasp_frame(plan.grasp)[2, 3]
+    with cell.watching(watch):
+        cell.pick(plan.grasp, grip, grasp_z + trial.careful_lift,
+                  trial.careful_lift_time)  # fmt: skip
+        cell.hold(trial.careful_hold)
+        watch.sample_now()
+    tilt = abs(watch.monitor.largest_tilt()) if watch.monitor.times else 0.0
+    if tilt > np.radians(trial.careful_abort_deg):
+        heavy = _heavy_side(watch, plan, config)
+        # Let go where it is (its low end is on the table already): lowering the jaws
+        # back to the grasp height would push that end into the table.
+        cell.place(robot.ee_pose(cell.q_des), trial.careful_release_time)
+        cell.move_to(Q_PARK)
+        raise RodSlippedError(f"the rod turned by {np.degrees(tilt):.0f} deg", heavy)
+    T_up = robot.ee_pose(cell.q_des)
+    T_up[2, 3] = trial.lift_height
+    with cell.watching(watch):
+        cell.move_linear(T_up, trial.lift_time)
+
+
+def measure_held(cell: Cell, plan: _Plan, watch: SlipWatch, config: EpisodeConfig) -> HeldReadings:
+    """Back at the first measurement pose: watch, measure the torques and look; then the
+    same at the rolled pose (unwatched: the roll is slow), and back."""
+    trial, hint = config.trial, plan.centre_hint
+    length = plan.detection.length
+    with cell.watching(watch):
+        cell.move_to(plan.poses[0], duration=trial.return_time)
+        cell.hold(trial.hold_before_measuring)
+        watch.sample_now()
+    after: list[TorqueMeasurement] = [cell.measure_torques(trial.settle, trial.window)]
+    try:
+        side = cell.look_from_side(after[0].q, length, hint)
+    except ObjectNotFoundError as exc:
+        raise RodDroppedError(str(exc), _heavy_side(watch, plan, config)) from exc
+    cell.announce(MEASURED)
+    slip_seen = watch.slipping_or_tilted()
+    moved, side_rolled, dropped = False, None, False
+    if len(plan.poses) > 1:
+        cell.move_to(plan.poses[1], duration=trial.roll_time)
+        after.append(cell.measure_torques(trial.settle, trial.window))
+        try:
+            side_rolled = cell.look_from_side(after[1].q, length, hint)
+            moved = abs(side_rolled.theta - side.theta) > np.radians(trial.roll_slip_deg)
+        except ObjectNotFoundError:
+            moved = dropped = True
+        except PerceptionError:
+            moved = True
+        cell.move_to(plan.poses[0], duration=trial.roll_time)
+    return HeldReadings(after, side, side_rolled, moved, dropped, slip_seen)
+
+
+def trial_grasp(
+    cell: Cell,
+    config: EpisodeConfig,
+    offset: float = 0.0,
+    careful: bool = False,
+    detection: RodDetection | None = None,
+) -> TrialMeasurement:
+    """The paper's measurement: grasp ``offset`` m along the rod from its perceived centre,
+    lift, measure, estimate (see the module docstring). ``careful``: see ``grasp_and_lift``.
+    ``detection``: the top view of the rod as it lies now, if the caller has looked already.
+    Raises RodDroppedError (or RodSlippedError) when the rod fell or turned."""
+    if detection is None:
+        detection = cell.look_from_above()
+    plan = plan_trial(cell, detection, offset, config)
+    tau_before = measure_empty(cell, plan, config)
+    watch = cell.slip_watch(config.sensors.watch_dt, config.motion.grip_force, detection.length,
+                            plan.centre_hint)  # fmt: skip
+    grasp_and_lift(cell, plan, watch, careful, config)
+    held = measure_held(cell, plan, watch, config)
+    try:
+        est, est_line, x_com, x_line = locate_com(cell.robot, held, tau_before, config)
+    except EmptyGripperError as exc:
+        raise RodDroppedError(str(exc), _heavy_side(watch, plan, config)) from exc
+    return TrialMeasurement(
+        theta=held.side.theta,
+        slip_seen=held.slip_seen,
+        T_ee_obj=held.side.T_ee_obj,
+        x_com_obj=x_com,
+        x_com_line=x_line,
+        rolled_slip=held.moved,
+        dropped_at_roll=held.dropped,
+        mass_esti=est.mass,
+        rod_length=detection.length,
+        grasp_z=grasp_frame(plan.grasp)[2, 3],
+        rod_axis_z=detection.grasp.z,
+        estimate=est,
+        estimate_line=est_line,
+        q_meas=np.array([m.q for m in held.after]),
+        tau_before=np.array(tau_before),
+        tau_after=np.array([m.tau for m in held.after]),
+        T_world_ee=cell.robot.ee_pose(held.after[0].q),
+        side_view=held.side,
+    )
+
+
+def trial_with_retry(cell: Cell, config: EpisodeConfig) -> TrialMeasurement:
+    """Careful trial grasps (``planning.retry``): if the rod turns as it is lifted (or falls),
+    put it down, look again and grasp it again where it now lies, towards the end that went
+    down; the last of ``regrasp.attempts`` is not careful."""
+    attempts = config.regrasp.attempts
+    state = retry.RetryState()
+    for attempt in range(attempts):
+        rod = cell.look_from_above()
+        offset = nearest_on_handle(rod, retry.grasp_offset(state, rod.grasp.yaw))
+        try:
+            trial = trial_grasp(cell, config, offset, careful=attempt < attempts - 1, detection=rod)
+            if trial.dropped_at_roll:
+                heavy = retry.heavy_side_from_estimate(trial.T_world_ee, trial.T_ee_obj,
+                                                       trial.x_com_obj,
+                                                       trial.side_view.grasp_offset)  # fmt: skip
+                raise RodDroppedError("it fell out at the rolled pose", heavy)
+            return trial
+        except RodDroppedError as exc:
+            if attempt == attempts - 1:
+                raise
+            cell.open_gripper(config.motion.open_time)
+            cell.move_to(Q_PARK)
+            cell.hold(config.regrasp.rest_time)  # the rod comes to rest on the table
+            state = retry.after_failure(state, exc.heavy_side_world, rod.length,
+                                        config.regrasp.retry_shift)  # fmt: skip
+    raise AssertionError("unreachable")
