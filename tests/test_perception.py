@@ -10,9 +10,9 @@ from comgrasp_pin.motion.ik import solve_ik, top_down_frame
 from comgrasp_pin.perception import SlipMonitor, detect_rod_top_down
 from comgrasp_pin.simulation import Simulation, build_model
 from comgrasp_pin.simulation.cameras import CameraRig
-from comgrasp_pin.simulation.scene import random_table_pose
 from comgrasp_pin.simulation.eyes import look_from_side
 from comgrasp_pin.simulation.objects import OBJECTS, add_object, pose_on_table
+from comgrasp_pin.simulation.scene import random_table_pose
 from comgrasp_pin.simulation.world import TOP_CAMERA
 from comgrasp_pin.workcell import Q_PARK
 

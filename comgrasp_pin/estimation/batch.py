@@ -1,8 +1,11 @@
-"""Many independent one-pose estimates at once (vectorised closed-form least squares).
+"""Many independent one-pose estimates at once: ``estimate_com``'s one-pose least squares,
+vectorised.
 
 Each grasp i has its own configuration q_i and torque readings; the estimate is the one-pose
 ``estimate_com(..., method="lstsq")`` for every i (CoM across gravity, mass), computed with
-batched NumPy instead of a Python call per grasp. Only the kinematics loop is per grasp.
+batched NumPy instead of a Python call per grasp: the same unknowns (``one_pose_basis``), the
+same input checks (``validate_inputs``) and the same empty-gripper test, solved through the
+3x3 normal equations instead of an SVD. Only the kinematics loop is per grasp.
 """
 
 from __future__ import annotations
@@ -15,7 +18,7 @@ import pinocchio as pin
 from comgrasp_pin.errors import EmptyGripperError, InvalidInputError, UnobservableError
 from comgrasp_pin.estimation.estimate import MASS_SIGMAS, MIN_MASS_KG
 from comgrasp_pin.estimation.estimator import RCOND, validate_inputs
-from comgrasp_pin.estimation.regressor import G0
+from comgrasp_pin.estimation.regressor import G0, one_pose_basis
 from comgrasp_pin.robot import RobotModel
 
 _WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -86,10 +89,7 @@ def estimate_com_batch(
     N_inv = np.linalg.inv(N)
     w = np.einsum("kij,kj->ki", N_inv, rhs) / G0  # (m, m c_wy, -m c_wx)
     mass = w[:, 0]
-    B = np.zeros((count, 4, 3))
-    B[:, 0, 0] = 1.0
-    B[:, 1:, 1] = R[:, 1]
-    B[:, 1:, 2] = -R[:, 0]
+    B = np.stack([one_pose_basis(r) for r in R])
     cov = None
     if sigma is not None:
         cov_theta = (2.0 / G0**2) * (B @ N_inv @ B.transpose(0, 2, 1))

@@ -27,14 +27,13 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pinocchio as pin
 
 from comgrasp_pin.errors import InvalidInputError, UnobservableError
-from comgrasp_pin.estimation.estimate import MIN_MASS_KG, ComEstimate, assemble_estimate
+from comgrasp_pin.estimation.estimate import ComEstimate, assemble_estimate
 from comgrasp_pin.estimation.ipopt import solve_lsq
 from comgrasp_pin.estimation.regressor import (
-    G0,
     gravity_in_ee,
+    one_pose_basis,
     perpendicular_basis,
     stacked_regressor,
 )
@@ -45,7 +44,6 @@ RCOND = 1e-6
 """Singular values of Y below RCOND * (largest) count as unobservable directions."""
 MASS_NULL_TOL = 1e-3
 """A lost direction whose mass component exceeds this (unit null vector) makes m unobservable."""
-_WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 
 def estimate_com(
@@ -77,131 +75,15 @@ def estimate_com(
         raise InvalidInputError(f"unknown method {method!r}; valid methods are {METHODS}")
     if not 0.0 < rcond < 1.0:
         raise InvalidInputError(f"rcond must be in (0, 1), got {rcond}")
-    if method == "lstsq" and (torque_std is None or isinstance(torque_std, (int, float))):
-        fast = _single_pose_lstsq(robot, q, tau_before, tau_after, torque_std, rcond)
-        if fast is not None:
-            return fast
     Q, dtau, sigma = validate_inputs(robot, q, tau_before, tau_after, torque_std)
     return _general(robot, Q, dtau, sigma, method, rcond)
-
-
-def _single_pose_lstsq(robot, q, tau_before, tau_after, torque_std, rcond):
-    """Fast path: one pose, lstsq, scalar or no sigma; about 10 us. Returns None when anything
-    needs the careful path (which then raises the right error).
-
-    Unknowns w = (m, m c_wy, -m c_wx), c_w the horizontal CoM offset in the world, with
-    Y_r = G0 (J_lin_z, J_ang_x, J_ang_y)^T; the 3x3 normal equations are solved in plain
-    Python (adjugate inverse, eigenvalues by the trigonometric formula), since NumPy's
-    LAPACK wrappers cost several microseconds each. Non-finite input shows as a non-finite
-    result and is re-checked by the careful path.
-    """
-    try:
-        q = np.asarray(q, dtype=float)
-        tb = np.asarray(tau_before, dtype=float)
-        ta = np.asarray(tau_after, dtype=float)
-    except (TypeError, ValueError):
-        return None
-    n = robot.model.nq
-    if q.shape != (n,) or tb.shape != (n,) or ta.shape != (n,):
-        return None
-    if torque_std is not None and not (math.isfinite(torque_std) and torque_std > 0):
-        return None
-    J = pin.computeFrameJacobian(robot.model, robot.data, q, robot.ee_frame_id, _WORLD_ALIGNED)
-    T = robot.data.oMf[robot.ee_frame_id].homogeneous
-    # J is a fresh array and its last row (J_ang_z) is not needed: put dtau there, so that one
-    # product gives N = A A^T and A dtau.
-    np.subtract(ta, tb, out=J[5])
-    Z = J[2:6]
-    (a, b, c, r0), (_, d, e, r1), (_, _, f, r2), _ = (Z @ Z.T).tolist()
-    # adjugate of the symmetric N = [[a, b, c], [b, d, e], [c, e, f]]
-    i00, i01, i02 = d * f - e * e, c * e - b * f, b * e - c * d
-    i11, i12, i22 = a * f - c * c, b * c - a * e, a * d - b * b
-    det = a * i00 + b * i01 + c * i02
-    lam_max, lam_min = _sym3_extreme_eigenvalues(a, b, c, d, e, f)
-    if not (det > 0.0 and lam_min > rcond * rcond * lam_max):
-        return None
-    s = 1.0 / (det * G0)
-    w0 = (i00 * r0 + i01 * r1 + i02 * r2) * s
-    w1 = (i01 * r0 + i11 * r1 + i12 * r2) * s
-    w2 = (i02 * r0 + i12 * r1 + i22 * r2) * s
-    if not (math.isfinite(w0 + w1 + w2) and w0 > MIN_MASS_KG):
-        return None  # non-finite input or (maybe) empty gripper: the careful path decides
-    residuals = np.array([-G0 * w0, -G0 * w1, -G0 * w2, 1.0]) @ Z  # dtau - Y_r w
-    rms = math.hypot(*residuals.tolist()) / math.sqrt(n)
-    if not math.isfinite(rms):
-        return None
-    (R0, R1, R2, _) = T.tolist()
-    inv_m = 1.0 / w0
-    lam_mid = max(a + d + f - lam_max - lam_min, 0.0)
-    cond = math.sqrt(lam_max / lam_min)
-    residuals.shape = (1, n)
-    T.shape = (1, 4, 4)
-    # com_ee = R^T (c_wx, c_wy, 0); unobservable_ee = R^T (0, 0, -1); then singular values
-    buf = np.array(
-        [(R1[0] * w1 - R0[0] * w2) * inv_m, (R1[1] * w1 - R0[1] * w2) * inv_m,
-         (R1[2] * w1 - R0[2] * w2) * inv_m, -R2[0], -R2[1], -R2[2],
-         G0 * math.sqrt(lam_max), G0 * math.sqrt(lam_mid), G0 * math.sqrt(lam_min), 0.0]
-    )  # fmt: skip
-    if torque_std is not None:
-        N_inv = np.array([[i00, i01, i02], [i01, i11, i12], [i02, i12, i22]]) / det
-        B = np.zeros((4, 3))
-        B[0, 0] = 1.0
-        B[1:, 1] = R1[:3]
-        B[1:, 2] = R0[:3]
-        B[1:, 2] *= -1.0
-        cov_w = (2.0 * torque_std * torque_std / (G0 * G0)) * N_inv
-        theta = B @ np.array([w0, w1, w2])
-        return assemble_estimate(theta, B, cov_w, buf[3:6], residuals, buf[6:], cond, "lstsq",
-                       "closed_form", 0, T)  # fmt: skip
-    buf.flags.writeable = False  # and so its views
-    residuals.flags.writeable = False
-    T.flags.writeable = False
-    com_ee, unobservable_ee, sv = buf[:3], buf[3:6], buf[6:]
-    est = object.__new__(ComEstimate)  # the frozen dataclass, without its slow __init__
-    est.__dict__.update(
-        com_ee=com_ee,
-        mass=w0,
-        weight=w0 * G0,
-        unobservable_ee=unobservable_ee,
-        cov=None,
-        residual_rms=rms,
-        residuals=residuals,
-        condition_number=cond,
-        singular_values=sv,
-        method="lstsq",
-        solver_status="closed_form",
-        iterations=0,
-        n_poses=1,
-        T_world_ee=T,
-    )
-    return est
-
-
-def _sym3_extreme_eigenvalues(a, b, c, d, e, f) -> tuple[float, float]:
-    """Largest and smallest eigenvalue of the symmetric [[a, b, c], [b, d, e], [c, e, f]]
-    (trigonometric formula; absolute accuracy ~ 1e-15 * largest)."""
-    p1 = b * b + c * c + e * e
-    q3 = (a + d + f) / 3.0
-    p2 = (a - q3) * (a - q3) + (d - q3) * (d - q3) + (f - q3) * (f - q3) + 2.0 * p1
-    if p2 <= 0.0:
-        return q3, q3
-    p = math.sqrt(p2 / 6.0)
-    x, y, z = (a - q3) / p, (d - q3) / p, (f - q3) / p
-    bb, cc, ee = b / p, c / p, e / p
-    half_det = 0.5 * (x * (y * z - ee * ee) - bb * (bb * z - ee * cc) + cc * (bb * ee - y * cc))
-    phi = math.acos(min(1.0, max(-1.0, half_det))) / 3.0
-    return q3 + 2.0 * p * math.cos(phi), q3 + 2.0 * p * math.cos(phi + 2.0 * math.pi / 3.0)
 
 
 def _general(robot, Q, dtau, sigma, method, rcond) -> ComEstimate:
     k, n = Q.shape
     Y, T = stacked_regressor(robot, Q)
     if k == 1:
-        R = T[0, :3, :3]
-        u = gravity_in_ee(R)
-        B = np.zeros((4, 3))
-        B[0, 0] = 1.0
-        B[1:, 1:] = np.stack([R[1], -R[0]], axis=1)
+        u, B = gravity_in_ee(T[0, :3, :3]), one_pose_basis(T[0, :3, :3])
     else:
         U_full, s_full, Vt = np.linalg.svd(Y, full_matrices=False)
         rank = int(np.sum(s_full > rcond * s_full[0])) if s_full[0] > 0 else 0

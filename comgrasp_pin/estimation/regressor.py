@@ -78,6 +78,17 @@ def gravity_in_ee(R_world_ee: np.ndarray) -> np.ndarray:
     return -R_world_ee[2].copy()
 
 
+def one_pose_basis(R_world_ee: np.ndarray) -> np.ndarray:
+    """(4, 3) B with theta = B w for one pose: w = (m, m c_wy, -m c_wx), the mass and the
+    CoM's horizontal offset in the world (the part one pose observes), written in the ee
+    frame through the rows of ``R_world_ee`` (3, 3)."""
+    B = np.zeros((4, 3))
+    B[0, 0] = 1.0
+    B[1:, 1] = R_world_ee[1]
+    B[1:, 2] = -R_world_ee[0]
+    return B
+
+
 def perpendicular_basis(u: np.ndarray) -> np.ndarray:
     """(3, 2) orthonormal basis of the plane perpendicular to the unit vector ``u`` (3,)."""
     helper = np.eye(3)[int(np.argmin(np.abs(u)))]
