@@ -27,13 +27,13 @@ from comgrasp_pin.motion.ik import solve_ik, top_down_frame
 from comgrasp_pin.perception import detect_rod_top_down, observe_held_rod  # noqa: E402
 from comgrasp_pin.simulation import Simulation, build_model  # noqa: E402
 from comgrasp_pin.simulation.cameras import CameraRig  # noqa: E402
-from comgrasp_pin.simulation.scene import random_table_pose  # noqa: E402
 from comgrasp_pin.simulation.eyes import (  # noqa: E402
     arm_capsules,
     handle_radius,
     side_camera_pose,
 )
 from comgrasp_pin.simulation.objects import OBJECTS, add_object, pose_on_table  # noqa: E402
+from comgrasp_pin.simulation.scene import random_table_pose  # noqa: E402
 from comgrasp_pin.workcell import (
     Q_PARK,  # noqa: E402
     TABLE_Z,  # noqa: E402

@@ -13,6 +13,8 @@ from functools import cache
 from importlib import metadata
 from pathlib import Path
 
+from comgrasp_pin.errors import InvalidInputError, MissingAssetError
+
 _PACKAGE = Path(__file__).resolve().parent
 DATA_FOLDERS = ("urdf", "sim")
 
@@ -20,12 +22,12 @@ DATA_FOLDERS = ("urdf", "sim")
 def data_path(folder: str, name: str) -> Path:
     """Path of ``name`` in the top-level ``folder`` ("urdf" or "sim")."""
     if folder not in DATA_FOLDERS:
-        raise ValueError(f"folder must be one of {DATA_FOLDERS}, got {folder!r}")
+        raise InvalidInputError(f"folder must be one of {DATA_FOLDERS}, got {folder!r}")
     for root in (_PACKAGE, _PACKAGE.parent):  # installed wheel, then source checkout
         path = root / folder / name
         if path.exists():
             return path
-    raise FileNotFoundError(
+    raise MissingAssetError(
         f"{folder}/{name} not found beside the package ({_PACKAGE}) nor in the repository "
         f"({_PACKAGE.parent}); reinstall comgrasp_pin"
     )
@@ -51,7 +53,7 @@ def example_robot_data_dir() -> Path:
     dist = metadata.distribution("example-robot-data")
     path = Path(str(dist.locate_file("cmeel.prefix/share/example-robot-data")))
     if not path.is_dir():
-        raise FileNotFoundError(f"example-robot-data share folder not found at {path}")
+        raise MissingAssetError(f"example-robot-data share folder not found at {path}")
     return path
 
 
@@ -59,5 +61,5 @@ def example_robot_urdf(relative: str) -> Path:
     """Path of a URDF of example-robot-data, e.g. ``"panda_description/urdf/panda.urdf"``."""
     path = example_robot_data_dir() / "robots" / relative
     if not path.exists():
-        raise FileNotFoundError(f"no such example-robot-data file: {path}")
+        raise MissingAssetError(f"no such example-robot-data file: {path}")
     return path

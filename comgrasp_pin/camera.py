@@ -10,6 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from comgrasp_pin.errors import InvalidInputError
+
 
 @dataclass(frozen=True)
 class PinholeCamera:
@@ -32,7 +34,7 @@ class PinholeCamera:
     def from_fovy(cls, width: int, height: int, fovy_deg: float) -> PinholeCamera:
         """Square pixels, principal point at the image centre, vertical field of view."""
         if width <= 0 or height <= 0 or not 0.0 < fovy_deg < 180.0:
-            raise ValueError(f"bad camera size {width}x{height} or fovy {fovy_deg} deg")
+            raise InvalidInputError(f"bad camera size {width}x{height} or fovy {fovy_deg} deg")
         f = 0.5 * height / np.tan(np.deg2rad(fovy_deg) / 2.0)
         return cls(width, height, f, f, (width - 1) / 2.0, (height - 1) / 2.0)
 
@@ -40,7 +42,7 @@ class PinholeCamera:
         """The camera of the image ``image[::stride, ::stride]``: pixel (u, v) of that image
         is pixel (stride u, stride v) of the full one."""
         if stride < 1:
-            raise ValueError(f"stride must be >= 1, got {stride}")
+            raise InvalidInputError(f"stride must be >= 1, got {stride}")
         return PinholeCamera(
             -(-self.width // stride), -(-self.height // stride),
             self.fx / stride, self.fy / stride, self.cx / stride, self.cy / stride,
@@ -56,7 +58,7 @@ class PinholeCamera:
         p_cam = np.atleast_2d(np.asarray(p_cam, dtype=float))
         z = p_cam[:, 2]
         if np.any(z <= 0):
-            raise ValueError("cannot project points behind the camera (z <= 0)")
+            raise InvalidInputError("cannot project points behind the camera (z <= 0)")
         return np.c_[self.fx * p_cam[:, 0] / z + self.cx, self.fy * p_cam[:, 1] / z + self.cy]
 
     def backproject(self, uv: np.ndarray, depth: np.ndarray) -> np.ndarray:
@@ -64,7 +66,7 @@ class PinholeCamera:
         uv = np.atleast_2d(np.asarray(uv, dtype=float))
         depth = np.asarray(depth, dtype=float).reshape(-1)
         if uv.shape[0] != depth.shape[0]:
-            raise ValueError(f"{uv.shape[0]} pixels but {depth.shape[0]} depths")
+            raise InvalidInputError(f"{uv.shape[0]} pixels but {depth.shape[0]} depths")
         x = (uv[:, 0] - self.cx) / self.fx * depth
         y = (uv[:, 1] - self.cy) / self.fy * depth
         return np.c_[x, y, depth]
@@ -72,7 +74,7 @@ class PinholeCamera:
     def depth_to_points(self, depth: np.ndarray) -> np.ndarray:
         """(H, W, 3) camera-frame points of a (H, W) z-depth image (m)."""
         if depth.shape != (self.height, self.width):
-            raise ValueError(
+            raise InvalidInputError(
                 f"depth image {depth.shape} does not match camera {(self.height, self.width)}"
             )
         v, u = np.mgrid[0 : self.height, 0 : self.width]

@@ -10,6 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
+from comgrasp_pin.errors import ComGraspError, InvalidInputError
+
 OBJECTS = ("obj1", "obj2", "obj3", "obj4", "obj5", "obj6")
 
 
@@ -34,7 +36,7 @@ def _options(args: argparse.Namespace):
     objects = tuple(o.strip() for o in args.objects.split(",") if o.strip())
     unknown = sorted(set(objects) - set(OBJECTS))
     if unknown:
-        raise SystemExit(f"unknown object(s) {unknown}; objects are {', '.join(OBJECTS)}")
+        raise InvalidInputError(f"unknown object(s) {unknown}; objects are {', '.join(OBJECTS)}")
     trials = args.trials
     if trials is None:
         trials = QUICK_TRIALS if getattr(args, "quick", False) else PAPER_TRIALS
@@ -65,19 +67,30 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     out = Path(args.out)
     video = out / f"episode_{args.object}_{args.method}_seed{args.seed}.mp4"
     if args.viewer and not os.environ.get("DISPLAY"):
-        raise SystemExit("--viewer needs a display (DISPLAY is not set); drop it for the video")
+        raise InvalidInputError(
+            "--viewer needs a display (DISPLAY is not set); drop it for the video"
+        )
     result = run_episode(args.object, args.seed, args.method, video=video, viewer=args.viewer)
     print(f"object {args.object}, method {args.method}, seed {args.seed}")
     if result.trial is not None:
-        t = result.trial
+        t, s = result.trial, result.trial_score
         print(f"  tilt in the jaws      {np.degrees(t.theta):7.2f} deg "
-              f"(truth {np.degrees(t.theta_true):.2f})")  # fmt: skip
-        print(f"  CoM along the rod     {1e3 * t.pos_esti:7.1f} mm (truth {1e3 * t.pos_real:.1f})")
-        print(f"  mass                  {t.mass_esti:7.3f} kg (truth {t.mass_real:.3f})")
-        print(f"  accuracy              {100 * t.accuracy:7.1f} %")
+              f"(truth {np.degrees(s.theta_true):.2f})")  # fmt: skip
+        print(f"  CoM along the rod     {1e3 * s.pos_esti:7.1f} mm (truth {1e3 * s.pos_real:.1f})")
+        print(f"  mass                  {t.mass_esti:7.3f} kg (truth {s.mass_real:.3f})")
+        print(f"  accuracy              {100 * s.accuracy:7.1f} %")
     print(f"  decision              {result.reason}")
     print(f"  success               {result.success}")
     print(f"video: {video}\nkey frames: {video.with_suffix('.png')}")
+    return 0
+
+
+def _cmd_scene(args: argparse.Namespace) -> int:
+    from comgrasp_pin.simulation.world import save_world_xml
+
+    path = save_world_xml(Path(args.out) / "world.xml", args.object, args.seed)
+    print(f"wrote {path}: the workcell, the robot and {args.object} as one MJCF file")
+    print(f"open it in MuJoCo's viewer:  python -m mujoco.viewer --mjcf={path}")
     return 0
 
 
@@ -141,12 +154,29 @@ def build_parser() -> argparse.ArgumentParser:
     views.add_argument("--seed", type=int, default=0)
     views.add_argument("--out", default="results/views", help="output folder (%(default)s)")
     views.set_defaults(func=_cmd_views)
+
+    scene = sub.add_parser(
+        "scene",
+        help="write the assembled world (sim/scene.xml, the robot, a rod) as one MJCF file",
+        description="Write the world the experiments run in, sim/scene.xml with the robot "
+        "compiled from urdf/ and a rod on the table, as one MJCF file that MuJoCo's own viewer "
+        "opens (python -m mujoco.viewer --mjcf=FILE). Keyframes 'home' and 'park' hold the "
+        "arm's named poses.",
+    )
+    scene.add_argument("--object", default="obj2", choices=OBJECTS, help="the rod (%(default)s)")
+    scene.add_argument("--seed", type=int, default=0, help="scene seed: where the rod lies")
+    scene.add_argument("--out", default="results/scene", help="output folder (%(default)s)")
+    scene.set_defaults(func=_cmd_scene)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    return args.func(args)
+    try:
+        return args.func(args)
+    except ComGraspError as exc:
+        print(f"comgrasp {args.command}: error: {exc}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

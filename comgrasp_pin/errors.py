@@ -70,3 +70,12 @@ class RodSlippedError(RodDroppedError):
     back down; ``heavy_side_world`` tells where its CoM lies."""
 
     template = "the rod slipped as it was lifted: {}"
+
+
+class MissingAssetError(ComGraspError):
+    """A file the package ships or depends on (urdf/, sim/, example-robot-data) is missing:
+    the installation is broken."""
+
+
+class OutputError(ComGraspError):
+    """A result file (video, figure, CSV) cannot be written where it was asked for."""

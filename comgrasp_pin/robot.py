@@ -13,6 +13,7 @@ import numpy as np
 import pinocchio as pin
 
 from comgrasp_pin._paths import example_robot_data_dir, urdf_path
+from comgrasp_pin.errors import InvalidInputError
 
 UR5_URDF = "ur5_gripper.urdf"  # in the top-level urdf/
 UR5_EE_FRAME = "eelink"
@@ -37,7 +38,7 @@ class RobotModel:
     def __init__(self, full_model: pin.Model, ee_frame: str, urdf_path: Path | None = None):
         if not full_model.existFrame(ee_frame):
             names = sorted({f.name for f in full_model.frames})
-            raise ValueError(f"frame {ee_frame!r} is not in the model; frames are: {names}")
+            raise InvalidInputError(f"frame {ee_frame!r} is not in the model; frames are: {names}")
         self.full_model = full_model
         self.ee_frame = ee_frame
         self.urdf_path = urdf_path
@@ -46,7 +47,7 @@ class RobotModel:
         for jid in chain:
             joint = full_model.joints[jid]
             if joint.nq != 1 or joint.nv != 1:
-                raise ValueError(
+                raise InvalidInputError(
                     f"joint {full_model.names[jid]!r} ({joint.shortname()}) is not a 1-DoF "
                     "revolute or prismatic joint; only such arms are supported"
                 )
@@ -72,7 +73,7 @@ class RobotModel:
         (only collision geometry needs them; kinematics and inertia do not)."""
         urdf_path = Path(urdf_path)
         if not urdf_path.exists():
-            raise ValueError(f"URDF file not found: {urdf_path}")
+            raise InvalidInputError(f"URDF file not found: {urdf_path}")
         robot = cls(pin.buildModelFromUrdf(str(urdf_path)), ee_frame, urdf_path)
         robot.package_dirs = [str(p) for p in (package_dirs or [])]
         return robot
@@ -93,9 +94,9 @@ class RobotModel:
         """``q`` as a float (n,) array; ValueError for a wrong shape or non-finite values."""
         q = np.asarray(q, dtype=float)
         if q.shape != (self.nq,):
-            raise ValueError(f"q must have shape ({self.nq},), got {q.shape}")
+            raise InvalidInputError(f"q must have shape ({self.nq},), got {q.shape}")
         if not np.all(np.isfinite(q)):
-            raise ValueError(f"q contains NaN or inf: {q}")
+            raise InvalidInputError(f"q contains NaN or inf: {q}")
         return q
 
     def _kinematics(self, q: np.ndarray) -> None:
@@ -140,7 +141,7 @@ class RobotModel:
         """(4, 4) T_world_frame of any frame of the model, e.g. ``"side_camera"``."""
         if not self.model.existFrame(frame):
             names = sorted({f.name for f in self.model.frames})
-            raise ValueError(f"frame {frame!r} is not in the model; frames are: {names}")
+            raise InvalidInputError(f"frame {frame!r} is not in the model; frames are: {names}")
         q = self.check_q(q)
         fid = self.model.getFrameId(frame)
         pin.forwardKinematics(self.model, self.data, q)
@@ -169,4 +170,4 @@ def _is_revolute(joint: pin.JointModel) -> bool:
         return True
     if "Prismatic" in name or name.startswith("JointModelP"):
         return False
-    raise ValueError(f"unsupported joint type {name}")
+    raise InvalidInputError(f"unsupported joint type {name}")

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from comgrasp_pin.camera import PinholeCamera, transform_points
+from comgrasp_pin.errors import ComGraspError
 from comgrasp_pin.simulation import Simulation
 from comgrasp_pin.simulation.cameras import CameraRig
 
@@ -79,7 +80,7 @@ def test_pinhole_round_trip():
     np.testing.assert_allclose(K.backproject(K.project(p), p[:, 2]), p, atol=1e-12)
     # The optical axis hits the centre of the image.
     np.testing.assert_allclose(K.project(np.array([[0, 0, 1.0]])), [[319.5, 239.5]])
-    with pytest.raises(ValueError):
+    with pytest.raises(ComGraspError):
         K.project(np.array([[0, 0, -1.0]]))
 
 

@@ -123,7 +123,7 @@ def test_result_is_frozen_and_read_only(ur5):
     est = cg.estimate_com(ur5, q, *payload_torques(ur5, q, MASS, COM_EE))
     with pytest.raises(dataclasses.FrozenInstanceError):
         est.mass = 1.0
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="read-only"):
         est.com_ee[0] = 1.0
     assert est.cov is None and est.std is None
     point, direction = est.com_line_ee()

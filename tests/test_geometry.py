@@ -9,6 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import comgrasp_pin as cg
+from comgrasp_pin.errors import ComGraspError
 from comgrasp_pin.geometry import check_transform, closest_point_on_line, invert_transform
 
 
@@ -125,7 +126,7 @@ def test_rod_parallel_to_gravity_raises():
     vertical = transform(rot_y(np.pi / 2) @ R_EE_OBJ_LEVEL, ORIGIN_EE)  # obj-x along ee-z
     with pytest.raises(cg.UnobservableError, match="from gravity"):
         cg.com_along_axis(est, vertical)
-    with pytest.raises(ValueError, match="1.00 deg from gravity"):
+    with pytest.raises(ComGraspError, match="1.00 deg from gravity"):
         cg.com_along_axis(est, transform(rot_y(np.radians(89.0)) @ R_EE_OBJ_LEVEL, ORIGIN_EE))
     cg.com_along_axis(est, transform(rot_y(np.radians(85.0)) @ R_EE_OBJ_LEVEL, ORIGIN_EE))
 

@@ -4,6 +4,7 @@ import mujoco
 import numpy as np
 import pytest
 
+from comgrasp_pin.errors import ComGraspError
 from comgrasp_pin.simulation import build_spec
 from comgrasp_pin.simulation.objects import (
     OBJECTS,
@@ -28,7 +29,7 @@ def test_six_objects_within_the_issue_ranges():
         for p in o.parts:
             assert -o.length / 2 - 1e-12 <= p.x0 < p.x1 <= o.length / 2 + 1e-12
         assert np.all(np.linalg.eigvalsh(o.inertia_about_com()) > 0)
-    with pytest.raises(ValueError, match="obj1"):
+    with pytest.raises(ComGraspError, match="obj1"):
         get_object("hammer")
 
 

@@ -5,7 +5,12 @@ import numpy as np
 import pytest
 
 from comgrasp_pin.camera import PinholeCamera
-from comgrasp_pin.errors import InvalidDepthError, ObjectCutByBorderError, ObjectNotFoundError
+from comgrasp_pin.errors import (
+    ComGraspError,
+    InvalidDepthError,
+    ObjectCutByBorderError,
+    ObjectNotFoundError,
+)
 from comgrasp_pin.motion.ik import solve_ik, top_down_frame
 from comgrasp_pin.perception import SlipMonitor, detect_rod_top_down
 from comgrasp_pin.simulation import Simulation, build_model
@@ -249,9 +254,9 @@ def test_slip_monitor():
         monitor.add(0.1 * k, np.radians(10.0))
     after = monitor.verdict()
     assert not after.slipping and after.slip_seen and abs(after.change_deg - 10.0) < 1e-9
-    with pytest.raises(ValueError):
+    with pytest.raises(ComGraspError):
         monitor.add(0.0, 0.0)  # out of order
-    with pytest.raises(ValueError):
+    with pytest.raises(ComGraspError):
         SlipMonitor().verdict()
 
 

@@ -2,6 +2,7 @@ import numpy as np
 import pytest
 
 from comgrasp_pin.config import RegraspConfig
+from comgrasp_pin.errors import ComGraspError
 from comgrasp_pin.geometry import GraspPose
 from comgrasp_pin.motion.ik import top_down_frame
 from comgrasp_pin.planning.regrasp import com_grasp, decide, rod_axis_world
@@ -15,7 +16,7 @@ def test_decisions():
     assert decide(0.0, False, 0.05, 0.0, CONFIG).regrasp  # far CoM, no slip yet
     keep = decide(np.radians(0.5), False, 0.004, 0.0, CONFIG)
     assert not keep.regrasp and "holds" in keep.reason
-    with pytest.raises(ValueError):
+    with pytest.raises(ComGraspError):
         decide(np.nan, False, 0.0, 0.0, CONFIG)
 
 
@@ -40,5 +41,5 @@ def test_rod_axis_world_from_a_held_tilted_rod():
     np.testing.assert_allclose(rod_axis_world(T_world_ee, T_ee_obj), [0.0, 1.0, 0.0], atol=1e-12)
     vertical = np.eye(4)
     vertical[:3, :3] = [[0, 0, 1], [0, 1, 0], [-1, 0, 0]]
-    with pytest.raises(ValueError):
+    with pytest.raises(ComGraspError):
         rod_axis_world(T_world_ee, vertical)

@@ -7,6 +7,7 @@ import pytest
 
 import comgrasp_pin as cg
 from comgrasp_pin._paths import example_robot_urdf, urdf_path
+from comgrasp_pin.errors import ComGraspError
 
 G = 9.81
 
@@ -164,17 +165,17 @@ def test_any_arm_from_example_robot_data():
 
 
 def test_unknown_frame_lists_frames():
-    with pytest.raises(ValueError, match="eelink"):
+    with pytest.raises(ComGraspError, match="eelink"):
         cg.RobotModel.from_urdf(urdf_path("ur5_gripper.urdf"), "no_such_frame")
 
 
 @pytest.mark.parametrize("q", [np.zeros(5), np.zeros((2, 6)), np.array([0, 0, np.nan, 0, 0, 0])])
 def test_bad_configuration_raises(q):
     robot = cg.RobotModel.ur5()
-    with pytest.raises(ValueError, match="q "):
+    with pytest.raises(ComGraspError, match="q "):
         robot.gravity_torques(q)
 
 
 def test_missing_urdf_raises(tmp_path):
-    with pytest.raises(ValueError, match="not found"):
+    with pytest.raises(ComGraspError, match="not found"):
         cg.RobotModel.from_urdf(tmp_path / "nope.urdf", "tool0")

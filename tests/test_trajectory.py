@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from comgrasp_pin.errors import ComGraspError
 from comgrasp_pin.motion.trajectory import Quintic, min_duration
 
 
@@ -39,8 +40,8 @@ def test_min_duration_respects_limits_and_is_tight():
 
 
 def test_bad_input():
-    with pytest.raises(ValueError):
+    with pytest.raises(ComGraspError):
         Quintic(np.zeros(6), np.zeros(5), 1.0)
-    with pytest.raises(ValueError):
+    with pytest.raises(ComGraspError):
         Quintic(np.zeros(6), np.ones(6), 0.0)
     assert min_duration(np.zeros(6), np.zeros(6), 1.0, 2.0) == pytest.approx(0.1)

@@ -1,4 +1,4 @@
-"""The static payload model, linear in theta = (m, m*c_ee) (paper eq. 5, DESIGN section 2).
+"""The static payload model, linear in theta = (m, m*c_ee) (paper eq. 5, docs/design.md section 3).
 
 A payload of mass m (kg) with its CoM at c_ee (m, ee frame) held still at q changes the joint
 torques by

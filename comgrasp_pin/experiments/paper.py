@@ -1,4 +1,4 @@
-"""The paper's reported numbers (DESIGN.md section 6), to put beside ours. Not used as results."""
+"""The paper's reported numbers (docs/design.md section 8), to put beside ours; not results."""
 
 from __future__ import annotations
 

@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from comgrasp_pin.errors import InvalidInputError
+
 PEAK_VELOCITY = 15.0 / 8.0  # max ds/du of the quintic
 PEAK_ACCELERATION = 10.0 / np.sqrt(3.0)  # max d2s/du2 of the quintic
 
@@ -51,11 +53,13 @@ class Quintic:
     def __post_init__(self) -> None:
         q0, q1 = np.asarray(self.q0, float), np.asarray(self.q1, float)
         if q0.shape != q1.shape or q0.ndim != 1:
-            raise ValueError(f"q0 and q1 must be (n,) of the same n, got {q0.shape}, {q1.shape}")
+            raise InvalidInputError(
+                f"q0 and q1 must be (n,) of the same n, got {q0.shape}, {q1.shape}"
+            )
         if not (np.all(np.isfinite(q0)) and np.all(np.isfinite(q1))):
-            raise ValueError("q0 and q1 must be finite")
+            raise InvalidInputError("q0 and q1 must be finite")
         if not self.duration > 0.0:
-            raise ValueError(f"duration must be > 0 s, got {self.duration}")
+            raise InvalidInputError(f"duration must be > 0 s, got {self.duration}")
         object.__setattr__(self, "q0", q0)
         object.__setattr__(self, "q1", q1)
 

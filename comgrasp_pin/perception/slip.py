@@ -6,6 +6,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from comgrasp_pin.errors import InvalidInputError
+
 SLIP_RATE_DEG_S = 2.0  # |dθ/dt| above this over the recent window: slipping
 SLIP_CHANGE_DEG = 1.0  # total change of θ since the first sample above this: slip was seen
 WINDOW_S = 0.3  # length of the recent window for the rate (s)
@@ -36,15 +38,15 @@ class SlipMonitor:
 
     def add(self, t: float, theta: float) -> None:
         if not np.isfinite(theta):
-            raise ValueError(f"tilt must be finite, got {theta}")
+            raise InvalidInputError(f"tilt must be finite, got {theta}")
         if self.times and t <= self.times[-1]:
-            raise ValueError(f"samples must come in time order: {t} after {self.times[-1]}")
+            raise InvalidInputError(f"samples must come in time order: {t} after {self.times[-1]}")
         self.times.append(float(t))
         self.thetas.append(float(theta))
 
     def verdict(self) -> SlipVerdict:
         if not self.times:
-            raise ValueError("no tilt samples yet")
+            raise InvalidInputError("no tilt samples yet")
         t, th = np.array(self.times), np.degrees(np.array(self.thetas))
         recent = t >= t[-1] - self.window_s
         rate = 0.0
@@ -58,14 +60,14 @@ class SlipMonitor:
     def largest_tilt(self) -> float:
         """The tilt of largest size seen so far (rad, signed), robust to one bad frame."""
         if not self.times:
-            raise ValueError("no tilt samples yet")
+            raise InvalidInputError("no tilt samples yet")
         steady = _despike(np.array(self.thetas))
         return float(steady[np.argmax(np.abs(steady))])
 
     def settled_tilt(self) -> float:
         """The tilt now (rad), robust to one bad frame: the median of the last three."""
         if not self.times:
-            raise ValueError("no tilt samples yet")
+            raise InvalidInputError("no tilt samples yet")
         return float(np.median(self.thetas[-3:]))
 
 

@@ -1,6 +1,6 @@
 """The six rod objects of the experiments and how they enter the MuJoCo world.
 
-Object frame ``obj`` (DESIGN.md section 3): origin at the rod's geometric centre (middle of
+Object frame ``obj`` (docs/design.md section 2): origin at the rod's geometric centre (middle of
 its length, on the handle's axis), x along the long axis (heavy end towards +x), z up when
 the rod lies on the table. Every part rests on the table: all parts share the handle's bottom
 plane z = -h, where h is the handle's half height, so a lying rod's origin is h above the
@@ -21,21 +21,18 @@ against the pads the pads' values apply (pads have priority 1, see world.py).
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, replace
 
 import mujoco
 import numpy as np
 
+from comgrasp_pin._paths import sim_path
+from comgrasp_pin.errors import InvalidInputError
+from comgrasp_pin.workcell import TABLE_Z
+
 OBJECT_FRICTION = (0.6, 0.005, 1e-4)
 OBJECT_CONDIM = 3
-TABLE_Z = 0.0
-
-_WOOD = (0.62, 0.45, 0.28, 1.0)
-_STEEL = (0.55, 0.57, 0.60, 1.0)
-_DARK = (0.15, 0.15, 0.17, 1.0)
-_RED = (0.75, 0.12, 0.10, 1.0)
-_YELLOW = (0.90, 0.72, 0.10, 1.0)
-_BLUE = (0.15, 0.30, 0.70, 1.0)
 
 
 @dataclass(frozen=True)
@@ -130,88 +127,41 @@ class ObjectSpec:
     def scaled(self, length: float) -> ObjectSpec:
         """The same object stretched along obj-x to ``length`` (m); masses are kept."""
         if not 0.05 <= length <= 1.0:
-            raise ValueError(f"length must be within [0.05, 1.0] m, got {length}")
+            raise InvalidInputError(f"length must be within [0.05, 1.0] m, got {length}")
         s = length / self.length
         parts = tuple(replace(p, x0=p.x0 * s, x1=p.x1 * s) for p in self.parts)
         return replace(self, length=length, parts=parts)
 
 
-def _handle(shape: str, length: float, x1: float, radius: float, mass: float, rgba) -> Part:
-    return Part(shape, -0.5 * length, x1, radius, radius, mass, rgba)
+def _load_objects() -> dict[str, ObjectSpec]:
+    """The six rods, from ``sim/objects.json`` (data, not code)."""
+    data = json.loads(sim_path("objects.json").read_text())
+    colours = {name: tuple(rgba) for name, rgba in data["colours"].items()}
+    objects = {}
+    for name, o in data["objects"].items():
+        parts = tuple(
+            Part(
+                p["shape"],
+                p["x0_m"],
+                p["x1_m"],
+                p["half_y_m"],
+                p["half_z_m"],
+                p["mass_kg"],
+                colours[p["colour"]],
+            )  # fmt: skip
+            for p in o["parts"]
+        )
+        objects[name] = ObjectSpec(name, o["description"], o["length_m"], parts)
+    return objects
 
 
-def _end(x0: float, x1: float, half_y: float, half_z: float, mass: float, rgba) -> Part:
-    return Part("box", x0, x1, half_y, half_z, mass, rgba)
-
-
-OBJECTS: dict[str, ObjectSpec] = {
-    o.name: o
-    for o in (
-        ObjectSpec(
-            "obj1",
-            "wooden stick (1 cm) with a steel weight at one end",
-            0.40,
-            (
-                _handle("capsule", 0.40, 0.16, 0.005, 0.06, _WOOD),
-                _end(0.16, 0.20, 0.020, 0.020, 0.45, _STEEL),
-            ),
-        ),
-        ObjectSpec(
-            "obj2",
-            "hammer: 2 cm wooden handle, steel head across the rod",
-            0.32,
-            (
-                _handle("capsule", 0.32, 0.125, 0.010, 0.15, _WOOD),
-                _end(0.125, 0.16, 0.055, 0.017, 0.45, _DARK),
-                _end(-0.16, -0.14, 0.011, 0.010, 0.02, _DARK),
-            ),
-        ),
-        ObjectSpec(
-            "obj3",
-            "open/ring spanner: flat 3 cm steel bar, heavy ring end",
-            0.30,
-            (
-                Part("box", -0.12, 0.11, 0.015, 0.005, 0.25, _STEEL),
-                _end(0.11, 0.15, 0.026, 0.005, 0.25, _STEEL),
-                _end(-0.15, -0.12, 0.022, 0.005, 0.10, _STEEL),
-            ),
-        ),
-        ObjectSpec(
-            "obj4",
-            "torch: 4 cm body with batteries, wide lamp head",
-            0.30,
-            (
-                _handle("capsule", 0.30, 0.10, 0.020, 0.28, _BLUE),
-                _end(0.10, 0.15, 0.030, 0.030, 0.30, _DARK),
-                _end(-0.15, -0.13, 0.021, 0.021, 0.04, _DARK),
-            ),
-        ),
-        ObjectSpec(
-            "obj5",
-            "rubber mallet: 5 cm grip, heavy head across the rod",
-            0.38,
-            (
-                _handle("capsule", 0.38, 0.125, 0.025, 0.30, _YELLOW),
-                _end(0.125, 0.19, 0.060, 0.035, 0.75, _DARK),
-            ),
-        ),
-        ObjectSpec(
-            "obj6",
-            "axe: 5.6 cm hickory handle, steel blade head across the rod",
-            0.45,
-            (
-                _handle("capsule", 0.45, 0.16, 0.028, 0.45, _WOOD),
-                _end(0.16, 0.225, 0.070, 0.020, 0.95, _RED),
-            ),
-        ),
-    )
-}
+OBJECTS: dict[str, ObjectSpec] = _load_objects()
 
 
 def get_object(name: str) -> ObjectSpec:
     """The object called ``name`` ("obj1" ... "obj6")."""
     if name not in OBJECTS:
-        raise ValueError(f"unknown object {name!r}; objects are {sorted(OBJECTS)}")
+        raise InvalidInputError(f"unknown object {name!r}; objects are {sorted(OBJECTS)}")
     return OBJECTS[name]
 
 
@@ -246,11 +196,15 @@ def add_object(
     if T.shape == (3,):
         T = pose_on_table(*T, obj)
     if T.shape != (4, 4):
-        raise ValueError(f"pose must be (4, 4) T_world_obj or (x, y, yaw), got shape {T.shape}")
+        raise InvalidInputError(
+            f"pose must be (4, 4) T_world_obj or (x, y, yaw), got shape {T.shape}"
+        )
     com = obj.com()
     if pos_real is not None:
         if abs(pos_real) > 0.5 * obj.length:
-            raise ValueError(f"pos_real {pos_real} m is outside the rod (length {obj.length} m)")
+            raise InvalidInputError(
+                f"pos_real {pos_real} m is outside the rod (length {obj.length} m)"
+            )
         com[0] = pos_real
     quat = np.zeros(4)
     mujoco.mju_mat2Quat(quat, T[:3, :3].ravel())

@@ -7,6 +7,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from comgrasp_pin.errors import InvalidInputError, OutputError
 from comgrasp_pin.simulation.cameras import CameraRig
 from comgrasp_pin.simulation.sim import Simulation
 from comgrasp_pin.simulation.world import SIDE_CAMERA, TOP_CAMERA
@@ -52,11 +53,11 @@ class EpisodeRecorder:
     def write_video(self, path: Path) -> Path:
         """MP4 (MPEG-4 part 2, plays in VLC/ffplay/most players) of the recorded frames."""
         if not self.frames:
-            raise ValueError("no frames were recorded")
+            raise InvalidInputError("no frames were recorded")
         h, w = self.frames[0].shape[:2]
         writer = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"mp4v"), self.fps, (w, h))
         if not writer.isOpened():
-            raise RuntimeError(f"OpenCV cannot write {path}")
+            raise OutputError(f"OpenCV cannot write {path}")
         for frame in self.frames:
             writer.write(frame)
         writer.release()
@@ -65,7 +66,7 @@ class EpisodeRecorder:
     def write_strip(self, path: Path, n: int = 6, width: int = 1500) -> Path:
         """PNG of ``n`` evenly spaced frames side by side (for a README or a report)."""
         if not self.frames:
-            raise ValueError("no frames were recorded")
+            raise InvalidInputError("no frames were recorded")
         idx = np.linspace(0, len(self.frames) - 1, n).round().astype(int)
         strip = np.concatenate([self.frames[i] for i in idx], axis=1)
         scale = width / strip.shape[1]
