@@ -253,7 +253,8 @@ class RegraspConfig:
         put_down_v_max, put_down_a_max: joint limits carrying a rod to be put down
             (rad/s, rad/s^2): the rod may be held near its slip limit.
         put_down_settle: the arm settles above the put-down spot this long (s).
-        touch_clearance: the rod's low end is lowered to this far above the table (m).
+        touch_clearance: the rod's low end is lowered to this far above the height the
+            jaws end at when the rod lies flat (m).
         pad_clearance: the jaws stop this far above a lying rod's axis (m).
         descend_time: lowering to the touch (s): 0.4 m in 3 s peaks at 0.27 m/s^2.
         pivot_grip: force of each finger while the rod pivots on its low end (N).

@@ -1,5 +1,4 @@
-"""Many independent one-pose estimates at once: ``estimate_com``'s one-pose least squares,
-vectorised.
+"""Many independent one-pose estimates at once: ``estimate_com``'s least squares, vectorised.
 
 Each grasp i has its own configuration q_i and torque readings; the estimate is the one-pose
 ``estimate_com(..., method="lstsq")`` for every i (CoM across gravity, mass), computed with
@@ -30,10 +29,12 @@ class ComEstimateBatch:
 
     Attributes:
         com_ee: (N, 3) CoM in the ee frame (m), no component along ``unobservable_ee``.
-        mass: (N,) kg.  weight: (N,) N.
+        mass: (N,) kg.
+        weight: (N,) N.
         unobservable_ee: (N, 3) unit gravity direction in the ee frame.
         cov: (N, 4, 4) covariance of (mass, com_ee), or None without torque_std.
-        residual_rms: (N,) N m.   condition_number: (N,).
+        residual_rms: (N,) N m.
+        condition_number: (N,).
     """
 
     com_ee: np.ndarray
@@ -59,9 +60,14 @@ def estimate_com_batch(
     """One-pose closed-form estimates for N grasps.
 
     Args:
-        q, tau_before, tau_after: (N, n) configurations (rad / m) and torques (N m), one row
-            per grasp.
+        robot: the arm.
+        q: (N, n) configurations (rad / m), one row per grasp.
+        tau_before: (N, n) joint torques without the object (N m).
+        tau_after: (N, n) joint torques holding the object (N m).
         torque_std: scalar or (n,) torque std (N m): weighted LS and ``cov``.
+        rcond: relative singular-value threshold deciding observability (as in
+            ``estimate_com``).
+
     Raises:
         ComGraspError subclasses (ValueError) naming the offending grasps.
     """

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import overload
 
 import numpy as np
 
@@ -20,6 +21,10 @@ MASS_SIGMAS = 3.0
 """With torque_std, a payload below MASS_SIGMAS standard deviations is an empty gripper."""
 
 
+@overload
+def _readonly(a: np.ndarray) -> np.ndarray: ...
+@overload
+def _readonly(a: None) -> None: ...
 def _readonly(a: np.ndarray | None) -> np.ndarray | None:
     if a is not None:
         a.flags.writeable = False
@@ -76,13 +81,27 @@ class ComEstimate:
         return T[:3, :3] @ self.com_ee + T[:3, 3]
 
     def com_line_ee(self) -> tuple[np.ndarray, np.ndarray | None]:
-        """The CoM locus in the ee frame: (point (3,), direction (3,)) of the vertical line
-        through the CoM for one pose, or (com_ee, None) when fully observed."""
+        """The CoM locus in the ee frame.
+
+        Returns:
+            (point (3,), direction (3,)) of the vertical line through the CoM for one pose,
+            or (com_ee, None) when fully observed.
+        """
         return self.com_ee, self.unobservable_ee
 
 
 def assemble_estimate(
-    theta, B, cov_w, u, residuals, sv, cond, method, status, iters, T
+    theta: np.ndarray,
+    B: np.ndarray,
+    cov_w: np.ndarray | None,
+    u: np.ndarray | None,
+    residuals: np.ndarray,
+    sv: np.ndarray,
+    cond: float,
+    method: str,
+    status: str,
+    iters: int,
+    T: np.ndarray,
 ) -> ComEstimate:
     """Assemble the estimate; EmptyGripperError if the mass is not measurably positive."""
     m = float(theta[0])

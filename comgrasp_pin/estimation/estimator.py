@@ -57,6 +57,9 @@ def estimate_com(
 ) -> ComEstimate:
     """Estimate the held payload's mass and CoM (ee frame) from static joint torques.
 
+    An estimated mass at or below 3 standard deviations (with torque_std; MIN_MASS_KG = 1 g
+    without) is refused as an empty gripper rather than returned.
+
     Args:
         robot: the arm.
         q: (n,) one static configuration (rad / m) or (k, n) for k poses.
@@ -66,8 +69,7 @@ def estimate_com(
         torque_std: std of each torque reading (N m), scalar or (n,) per joint; enables
             ``cov`` and (per-joint) weighted least squares.
         rcond: relative singular-value threshold deciding observability.
-    An estimated mass at or below 3 standard deviations (with torque_std; MIN_MASS_KG = 1 g
-    without) is refused as an empty gripper rather than returned.
+
     Raises:
         InvalidInputError, UnobservableError, EmptyGripperError, SolverError (all ValueError).
     """
@@ -79,7 +81,14 @@ def estimate_com(
     return _general(robot, Q, dtau, sigma, method, rcond)
 
 
-def _general(robot, Q, dtau, sigma, method, rcond) -> ComEstimate:
+def _general(
+    robot: RobotModel,
+    Q: np.ndarray,
+    dtau: np.ndarray,
+    sigma: np.ndarray | None,
+    method: str,
+    rcond: float,
+) -> ComEstimate:
     k, n = Q.shape
     Y, T = stacked_regressor(robot, Q)
     if k == 1:
@@ -136,7 +145,13 @@ def _general(robot, Q, dtau, sigma, method, rcond) -> ComEstimate:
     )
 
 
-def validate_inputs(robot, q, tau_before, tau_after, torque_std):
+def validate_inputs(
+    robot: RobotModel,
+    q: np.ndarray,
+    tau_before: np.ndarray,
+    tau_after: np.ndarray,
+    torque_std: float | np.ndarray | None,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """(Q (k, n), dtau (k, n), sigma (n,) or None) from the raw inputs, or a clear error."""
     n = robot.nq
     arrays = {}

@@ -30,7 +30,7 @@ def plan_wrist_poses(
     n_grid: int = 5,
     margin: float = 0.05,
 ) -> np.ndarray:
-    """k static configurations for estimation: ``q`` and k - 1 wrist variations of it.
+    """Plan ``k`` static configurations for estimation: ``q`` and k - 1 wrist variations of it.
 
     Greedy D-optimal design over a grid of wrist offsets: each step adds the candidate that
     most increases log det(sum_i Y_i^T Y_i).
@@ -42,6 +42,7 @@ def plan_wrist_poses(
         max_offset: largest change of a wrist joint from q (rad).
         n_grid: grid points per wrist joint in [-max_offset, max_offset].
         margin: distance kept from the joint limits (rad).
+
     Returns:
         (k, n) configurations; only the last three joints differ from ``q``.
     """

@@ -37,6 +37,7 @@ def regressor_from_jacobian(J_world: np.ndarray, R_world_ee: np.ndarray) -> np.n
     Args:
         J_world: (6, n) ee Jacobian, rows (linear, angular), world-aligned at the ee origin.
         R_world_ee: (3, 3) orientation of the ee frame in the world.
+
     Returns:
         Y with dtau = Y @ theta; column 0 in N m/kg, columns 1..3 in N/kg.
     """
@@ -79,9 +80,11 @@ def gravity_in_ee(R_world_ee: np.ndarray) -> np.ndarray:
 
 
 def one_pose_basis(R_world_ee: np.ndarray) -> np.ndarray:
-    """(4, 3) B with theta = B w for one pose: w = (m, m c_wy, -m c_wx), the mass and the
-    CoM's horizontal offset in the world (the part one pose observes), written in the ee
-    frame through the rows of ``R_world_ee`` (3, 3)."""
+    """(4, 3) B with theta = B w for one pose, for w = (m, m c_wy, -m c_wx).
+
+    w is the mass and the CoM's horizontal offset in the world (the part one pose observes);
+    B writes it in the ee frame through the rows of ``R_world_ee`` (3, 3).
+    """
     B = np.zeros((4, 3))
     B[0, 0] = 1.0
     B[1:, 1] = R_world_ee[1]

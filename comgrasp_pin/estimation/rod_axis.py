@@ -1,17 +1,18 @@
-"""Where the CoM lies along a held rod: the CoM line met with the rod's axis (paper eq. 8,
-made general), and the two-pose solve in the rod's own frame.
+"""Where the CoM lies along a held rod, and the two-pose solve in the rod's own frame.
 
-Both take the rod's pose in the jaws, ``T_ee_obj`` (4, 4), from the side camera.
+The first meets the CoM line with the rod's axis (paper eq. 8, made general). Both take the
+rod's pose in the jaws, ``T_ee_obj`` (4, 4), from the side camera.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
 from comgrasp_pin.errors import EmptyGripperError, InvalidInputError, UnobservableError
-from comgrasp_pin.estimation.estimate import MIN_MASS_KG
+from comgrasp_pin.estimation.estimate import MIN_MASS_KG, ComEstimate
 from comgrasp_pin.estimation.estimator import validate_inputs
 from comgrasp_pin.estimation.regressor import pose_regressor
 from comgrasp_pin.geometry import check_transform, closest_point_on_line
@@ -22,7 +23,9 @@ MIN_AXIS_GRAVITY_ANGLE = 0.05
 which ``com_along_axis`` intersects them; the error of x_CoM^O grows as 1 / sin(angle)."""
 
 
-def com_along_axis(est, T_ee_obj: np.ndarray, min_angle: float = MIN_AXIS_GRAVITY_ANGLE) -> float:
+def com_along_axis(
+    est: ComEstimate, T_ee_obj: np.ndarray, min_angle: float = MIN_AXIS_GRAVITY_ANGLE
+) -> float:
     """x_CoM^O (m): where the payload's CoM lies along the rod axis, from the rod's centre.
 
     The rod axis is the obj x-axis through the obj origin, given in the ee frame by
@@ -37,6 +40,7 @@ def com_along_axis(est, T_ee_obj: np.ndarray, min_angle: float = MIN_AXIS_GRAVIT
         est: a ``ComEstimate`` (uses ``com_ee`` and ``unobservable_ee``).
         T_ee_obj: (4, 4) pose of the object frame in the ee frame.
         min_angle: smallest accepted angle (rad) between rod axis and gravity (one pose).
+
     Raises:
         InvalidInputError for a bad transform; UnobservableError when the rod axis is
         within ``min_angle`` of gravity (the vertical CoM line then does not fix a point).
@@ -47,7 +51,7 @@ def com_along_axis(est, T_ee_obj: np.ndarray, min_angle: float = MIN_AXIS_GRAVIT
     if est.unobservable_ee is None:
         return float(axis_ee @ (com_ee - origin_ee))
     down_ee = np.asarray(est.unobservable_ee, dtype=float)
-    sin_angle = np.linalg.norm(np.cross(axis_ee, down_ee))
+    sin_angle = cast(float, np.linalg.norm(np.cross(axis_ee, down_ee)))
     if sin_angle < np.sin(min_angle):
         angle = np.degrees(np.arcsin(min(sin_angle, 1.0)))
         raise UnobservableError(
@@ -80,8 +84,10 @@ def com_in_rod_frame(
     tau_after: np.ndarray,
     T_ee_obj: np.ndarray,
 ) -> RodFrameEstimate:
-    """CoM in the rod's frame from k >= 2 static poses (q, tau_before, tau_after: (k, n)) at
-    which the rod sat in the jaws at ``T_ee_obj`` (k, 4, 4), as the side camera saw it.
+    """CoM in the rod's frame from k >= 2 static poses with the rod's pose in the jaws at each.
+
+    ``q``, ``tau_before`` and ``tau_after`` are (k, n); at pose i the rod sat in the jaws at
+    ``T_ee_obj[i]`` ((k, 4, 4) in all), as the side camera saw it.
 
     The CoM is fixed in the rod, so with theta_ee = (m, m c_ee) and c_ee = R c_obj + p per
     pose, dtau = Y theta_ee becomes linear in (m, m c_obj): rows (Y_0 + Y_c p, Y_c R),

@@ -41,8 +41,10 @@ def border_pixels(blob: np.ndarray) -> np.ndarray:
 
 
 def largest_component(mask: np.ndarray, min_pixels: int, what: str) -> np.ndarray:
-    """The largest connected blob of ``mask`` after a small opening; ObjectNotFoundError if
-    there is none, ObjectCutByBorderError if it touches the border."""
+    """The largest connected blob of ``mask``, after a small opening.
+
+    ObjectNotFoundError if there is none, ObjectCutByBorderError if it touches the border.
+    """
     mask = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
     if count <= 1 or stats[1:, cv2.CC_STAT_AREA].max() < min_pixels:
@@ -55,9 +57,11 @@ def largest_component(mask: np.ndarray, min_pixels: int, what: str) -> np.ndarra
 
 
 def blobs(mask: np.ndarray, min_pixels: int, what: str, min_blob: int = 20) -> np.ndarray:
-    """Every connected blob of ``mask`` of at least ``min_blob`` pixels, after a small
-    opening (an object split by an occluder, e.g. the near finger, stays whole);
-    ObjectNotFoundError if fewer than ``min_pixels`` remain."""
+    """Every connected blob of ``mask`` of at least ``min_blob`` pixels, after a small opening.
+
+    An object split by an occluder (e.g. the near finger) thus stays whole.
+    ObjectNotFoundError if fewer than ``min_pixels`` remain.
+    """
     mask = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
     big = 1 + np.flatnonzero(stats[1:, cv2.CC_STAT_AREA] >= min_blob)

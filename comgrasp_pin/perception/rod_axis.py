@@ -13,7 +13,9 @@ from comgrasp_pin.perception._points import fit_line
 MAX_FIT_POINTS = 3000
 
 
-def centre_line(xz: np.ndarray, bin_width: float = 0.01):
+def centre_line(
+    xz: np.ndarray, bin_width: float = 0.01
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The rod's axis in the ee x-z plane, from slice centres.
 
     The visible points are cut in slices across the rod; the median of each slice is a
@@ -50,7 +52,7 @@ def centre_line(xz: np.ndarray, bin_width: float = 0.01):
 
 def fit_cylinder(
     points: np.ndarray, direction: np.ndarray, point: np.ndarray, radius: float | None = None
-):
+) -> tuple[np.ndarray, np.ndarray, float]:
     """Refine the axis (in the plane y = 0) by fitting a cylinder to the visible surface.
 
     The camera sees one side of the rod, so the visible points stand off the axis towards
@@ -68,7 +70,7 @@ def fit_cylinder(
     normal = np.array([-direction[1], direction[0]])
     params = np.array([angle, point @ normal, 0.0])
 
-    def residuals(prm, pts):
+    def residuals(prm: np.ndarray, pts: np.ndarray) -> np.ndarray:
         u = np.array([np.cos(prm[0]), 0.0, np.sin(prm[0])])
         n = np.array([-np.sin(prm[0]), 0.0, np.cos(prm[0])])
         rel = pts - prm[1] * n

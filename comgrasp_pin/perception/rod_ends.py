@@ -8,8 +8,11 @@ and from the trusted ends and the rod's known length to place its centre. Ee fra
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
+from comgrasp_pin.camera import PinholeCamera
 from comgrasp_pin.errors import ObjectCutByBorderError
 from comgrasp_pin.perception._points import border_pixels
 
@@ -24,17 +27,23 @@ LENGTH_EXCESS = 0.004  # seen this much longer than known, something joined the 
 BORDER_NEAR = 0.03  # an end this close to where the rod meets the image border is cut (m)
 
 
-def end_profile(along, rho, end, outwards, radius) -> tuple[float, bool]:
+def end_profile(
+    along: np.ndarray, rho: np.ndarray, end: float, outwards: float, radius: float
+) -> tuple[float, bool]:
     """An end of the rod from the profile of the visible points near it.
 
     Args:
-        along, rho: (N,) the points' coordinate along the axis and distance from it (m).
-        end: the extreme coordinate seen at this end (m); outwards: +1 (hi end) or -1 (lo).
+        along: (N,) the points' coordinate along the axis (m).
+        rho: (N,) the points' distance from the axis (m).
+        end: the extreme coordinate seen at this end (m).
+        outwards: +1 (hi end) or -1 (lo end).
         radius: the handle's radius (m).
-    Returns (the end's coordinate (m), sharp): a sharp end is located to a fraction of a
-    millimetre, because it carries a head (it stands off the axis farther than the handle:
-    its flat face is seen edge-on) or it is a round cap fitted by ``round_end``. A plain
-    handle end too thin for the cap fit may fall short by up to its radius.
+
+    Returns:
+        (the end's coordinate (m), sharp): a sharp end is located to a fraction of a
+        millimetre, because it carries a head (it stands off the axis farther than the
+        handle: its flat face is seen edge-on) or it is a round cap fitted by ``round_end``.
+        A plain handle end too thin for the cap fit may fall short by up to its radius.
     """
     near_end = outwards * (end - along) < HEAD_BAND
     if np.percentile(rho[near_end], 90) > HEAD_RATIO * radius:
@@ -43,9 +52,13 @@ def end_profile(along, rho, end, outwards, radius) -> tuple[float, bool]:
     return (end, False) if tip is None else (tip, True)
 
 
-def round_end(along, rho, end, outwards, radius) -> float | None:
-    """The tip of a round (hemispherical) end whose visible extreme is ``end`` (m, along
-    the axis); None if the end does not show as a cap of the handle's ``radius``.
+def round_end(
+    along: np.ndarray, rho: np.ndarray, end: float, outwards: float, radius: float
+) -> float | None:
+    """The tip of a round (hemispherical) end whose visible extreme is ``end``.
+
+    Both are coordinates along the axis (m); None if the end does not show as a cap of the
+    handle's ``radius``.
 
     The side camera sees a cap at the rod's end from behind and at a grazing angle, so the
     extreme of the visible points falls short of the tip (by up to half the radius). The
@@ -65,9 +78,21 @@ def round_end(along, rho, end, outwards, radius) -> float | None:
 
 
 def centre_along(
-    x_axis, ends, sharp, along, offset, depth, points, candidate, mask, camera, T_cam_ee,
-    rod_length, centre_hint, excluded,
-) -> float:  # fmt: skip
+    x_axis: np.ndarray,
+    ends: tuple[float, float],
+    sharp: tuple[bool, bool],
+    along: np.ndarray,
+    offset: np.ndarray,
+    depth: np.ndarray,
+    points: np.ndarray,
+    candidate: np.ndarray,
+    mask: np.ndarray,
+    camera: PinholeCamera,
+    T_cam_ee: np.ndarray,
+    rod_length: float | None,
+    centre_hint: float | None,
+    excluded: Callable[[np.ndarray], np.ndarray],
+) -> float:
     """Where the rod's centre lies along ``x_axis`` (coordinate, m), from its trusted ends.
 
     ``ends``: (lo, hi) coordinates of the ends seen; ``sharp``: whether each is located
@@ -113,10 +138,22 @@ def centre_along(
     raise ObjectCutByBorderError("neither end of the held rod is seen whole (side camera)")
 
 
-def end_is_seen(end, outwards, depth, points, candidate, camera, T_cam_ee, excluded) -> bool:
-    """Whether the rod really ends at ``end`` (3-D point on the axis, ee frame, m;
-    ``outwards``: unit axis direction): the point PEEK beyond it is in the image and shows
-    background behind it, or the rod's own end covering it in perspective."""
+def end_is_seen(
+    end: np.ndarray,
+    outwards: np.ndarray,
+    depth: np.ndarray,
+    points: np.ndarray,
+    candidate: np.ndarray,
+    camera: PinholeCamera,
+    T_cam_ee: np.ndarray,
+    excluded: Callable[[np.ndarray], np.ndarray],
+) -> bool:
+    """Whether the rod really ends at ``end`` (3-D point on the axis, ee frame, m).
+
+    ``outwards`` is the unit axis direction. The rod ends there if the point PEEK beyond it
+    is in the image and shows background behind it, or the rod's own end covering it in
+    perspective.
+    """
     beyond = end + PEEK * outwards
     in_robot = bool(excluded(beyond[None])[0])
     p_cam = T_cam_ee[:3, :3] @ beyond + T_cam_ee[:3, 3]

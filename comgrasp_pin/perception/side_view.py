@@ -48,8 +48,10 @@ class SideView:
         length: visible extent of the rod along its axis (m).
         grasp_offset: where the jaws hold it: the point of the axis nearest the TCP, along
             +x_obj from the rod's centre (m).
-        mask: (H, W) bool rod pixels; rect: OpenCV rotated rectangle of the mask;
-        axis_px: (2, 2) pixel ends of the axis; tcp_px: (2,) pixel of the TCP.
+        mask: (H, W) bool rod pixels.
+        rect: OpenCV rotated rectangle of the mask.
+        axis_px: (2, 2) pixel ends of the axis.
+        tcp_px: (2,) pixel of the TCP.
     """
 
     T_ee_obj: np.ndarray
@@ -86,10 +88,14 @@ def observe_held_rod(
     """Locate the rod held in the jaws in a side-camera RGBD frame.
 
     Args:
+        rgb: (H, W, 3) colour image, or None; only checked to match ``depth``.
         depth: (H, W) z-depth (m), inf where nothing is seen.
-        camera: intrinsics. T_ee_cam: (4, 4) optical frame of the camera in the ee frame.
-        T_world_ee, table_z: with both, points within 3 mm of the table plane (world z) are
-            left out, so that the rod can be seen while it still rests on the table.
+        camera: intrinsics.
+        T_ee_cam: (4, 4) optical frame of the camera in the ee frame.
+        T_world_ee: (4, 4) pose of the ee in the world, or None. With ``table_z`` too,
+            points within 3 mm of the table plane (world z) are left out, so that the rod
+            can be seen while it still rests on the table.
+        table_z: height of the table plane (world z, m), or None; see ``T_world_ee``.
         rod_length: the rod's length if known (e.g. from the top view, m). A steeply hanging
             rod may leave the image or hide an end behind the gripper; with the length, the
             centre is found from the one end that is seen whole.
@@ -100,7 +106,9 @@ def observe_held_rod(
             the rod is seen whole: the rod turns in the jaws, it hardly slides along them.
         handle_radius: half the jaws' opening where they hold the rod (m), from the
             fingers' joint reading; fixes the radius of the fitted cylinder.
-    Raises ObjectNotFoundError, ObjectCutByBorderError, InvalidDepthError.
+
+    Raises:
+        ObjectNotFoundError, ObjectCutByBorderError, InvalidDepthError.
     """
     depth = check_images(rgb, depth, camera)
     p = points_in(T_ee_cam, depth, camera)

@@ -15,9 +15,15 @@ WINDOW_S = 0.3  # length of the recent window for the rate (s)
 
 @dataclass(frozen=True)
 class SlipVerdict:
-    """Attributes: slipping: θ is changing now; slip_seen: θ changed by more than
-    SLIP_CHANGE_DEG since the first sample; rate_deg_s: recent |dθ/dt|; change_deg: total
-    change; theta: last θ (rad)."""
+    """The monitor's verdict on the tilt samples so far.
+
+    Attributes:
+        slipping: θ is changing now.
+        slip_seen: θ changed by more than SLIP_CHANGE_DEG since the first sample.
+        rate_deg_s: recent |dθ/dt| (deg/s).
+        change_deg: total change of θ (deg).
+        theta: last θ (rad).
+    """
 
     slipping: bool
     slip_seen: bool
@@ -37,6 +43,11 @@ class SlipMonitor:
     thetas: list[float] = field(default_factory=list)
 
     def add(self, t: float, theta: float) -> None:
+        """Record the tilt ``theta`` (rad) at time ``t`` (s), later than every earlier sample.
+
+        Raises:
+            InvalidInputError: for a non-finite tilt or a sample out of time order.
+        """
         if not np.isfinite(theta):
             raise InvalidInputError(f"tilt must be finite, got {theta}")
         if self.times and t <= self.times[-1]:
@@ -45,6 +56,11 @@ class SlipMonitor:
         self.thetas.append(float(theta))
 
     def verdict(self) -> SlipVerdict:
+        """Slipping now, slip seen, rate and change, from the samples so far.
+
+        Raises:
+            InvalidInputError: if there are no samples yet.
+        """
         if not self.times:
             raise InvalidInputError("no tilt samples yet")
         t, th = np.array(self.times), np.degrees(np.array(self.thetas))
@@ -72,8 +88,11 @@ class SlipMonitor:
 
 
 def _despike(x: np.ndarray) -> np.ndarray:
-    """Each sample replaced by the median of itself and its two neighbours (the first and
-    last by the median of the first and last three): single outliers vanish."""
+    """Each sample replaced by the median of itself and its two neighbours.
+
+    The first and last are replaced by the median of the first and last three: single
+    outliers vanish.
+    """
     if len(x) < 3:
         return x
     middle = np.median(np.stack([x[:-2], x[1:-1], x[2:]]), axis=0)

@@ -34,12 +34,14 @@ class RodDetection:
     Attributes:
         grasp: top-down grasp at the rod's geometric centre: (x, y) of the centre, z of the
             handle's axis (half the handle's height above the table), yaw of the rod.
-        length: extent along the rod (m). table_z: height of the table plane (m).
+        length: extent along the rod (m).
         widths: (K, 2) the rod's width across its axis (m) in 1 cm slices, as rows
             (position along the rod from its centre towards +yaw, width).
+        table_z: height of the table plane (m).
         handle_height: the rod's height at its centre above the table (m).
-        mask: (H, W) bool pixels of the rod. rect: OpenCV rotated rectangle
-            ((u, v), (w, h), angle_deg) of the mask. axis_px: (2, 2) pixel ends of the axis.
+        mask: (H, W) bool pixels of the rod.
+        rect: OpenCV rotated rectangle ((u, v), (w, h), angle_deg) of the mask.
+        axis_px: (2, 2) pixel ends of the axis.
     """
 
     grasp: GraspPose
@@ -61,9 +63,10 @@ def detect_rod_top_down(
 ) -> RodDetection:
     """Find the rod in a top-down RGBD frame (depth: (H, W) z-depth in m, inf = none).
 
-    Raises ObjectNotFoundError (nothing above the table), ObjectCutByBorderError (the rod
-    leaves the image or reaches the edge of the pick area), InvalidDepthError (unusable
-    depth).
+    Raises:
+        ObjectNotFoundError: nothing above the table.
+        ObjectCutByBorderError: the rod leaves the image or reaches the edge of the pick area.
+        InvalidDepthError: unusable depth.
     """
     depth = check_images(rgb, depth, camera)
     points = points_in(T_world_cam, depth, camera)
@@ -115,8 +118,11 @@ def detect_rod_top_down(
 def nearest_graspable(
     det: RodDetection, s: float, max_width: float = 0.075, half_pad: float = 0.022
 ) -> float:
-    """The position along the rod (m from its centre, towards +yaw) nearest ``s`` where the
-    jaws fit: the rod is narrower than ``max_width`` over ``half_pad`` either side."""
+    """The position along the rod nearest ``s`` where the jaws fit.
+
+    Positions are in m from the rod's centre, towards +yaw. The jaws fit where the rod is
+    narrower than ``max_width`` over ``half_pad`` either side.
+    """
     pos, width = det.widths[:, 0], det.widths[:, 1]
     ok = []
     for c in (s, *pos):  # ``s`` itself first: the slices are 1 cm apart
@@ -129,9 +135,11 @@ def nearest_graspable(
 
 
 def nearest_on_handle(det: RodDetection, s: float, half_pad: float = 0.022) -> float:
-    """The position along the rod (m from its centre, towards +yaw) nearest ``s`` where both
-    pads lie on the handle: within ``half_pad`` either side the rod is no wider than its
-    width at the centre (the handle) plus a quarter and 4 mm. A grasp on a head's shoulder
-    stops the jaws on the head and barely holds the handle."""
+    """The position along the rod nearest ``s`` where both pads lie on the handle.
+
+    Positions are in m from the rod's centre, towards +yaw. Within ``half_pad`` either side
+    the rod is no wider than its width at the centre (the handle) plus a quarter and 4 mm.
+    A grasp on a head's shoulder stops the jaws on the head and barely holds the handle.
+    """
     handle = det.widths[np.argmin(np.abs(det.widths[:, 0])), 1]
     return nearest_graspable(det, s, max_width=1.25 * handle + 0.004, half_pad=half_pad)

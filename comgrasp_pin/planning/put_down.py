@@ -25,7 +25,8 @@ class PutDownPlan:
         T_above: above the put-down spot, at the current height.
         T_touch: lowered until the rod's low end nearly touches the table.
         T_flat: moved along ee-x and down so that the rod lies flat, where the jaws open.
-        p_pivot: (3,) where the low end meets the table (world, m).
+        p_pivot: (3,) the low end at ``T_touch`` (world, m): the rod pivots about it; its
+            x, y is where that end stays as the rod lies down.
         low_is_plus: the low end is the rod's +x end (obj frame).
     """
 
