@@ -8,6 +8,7 @@ from comgrasp_pin.errors import (
     UnobservableError,
 )
 from comgrasp_pin.estimation import (
+    AxisPrior,
     ComEstimate,
     ComEstimateBatch,
     com_along_axis,
@@ -19,6 +20,7 @@ from comgrasp_pin.estimation import (
 from comgrasp_pin.robot import RobotModel
 
 __all__ = [
+    "AxisPrior",
     "ComEstimate",
     "ComEstimateBatch",
     "ComGraspError",

@@ -41,7 +41,7 @@ def _options(args: argparse.Namespace):
     if trials is None:
         trials = QUICK_TRIALS if getattr(args, "quick", False) else PAPER_TRIALS
     return RunOptions(Path(args.out), objects, trials, args.seed, args.workers, args.resume,
-                      args.overwrite, args.noise)  # fmt: skip
+                      args.overwrite, args.noise, args.estimator)  # fmt: skip
 
 
 def _cmd_experiment(args: argparse.Namespace) -> int:
@@ -116,6 +116,10 @@ def _add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
                    help="parallel processes (default: one per core, %(default)s here)")  # fmt: skip
     p.add_argument("--noise", type=float, default=0.05,
                    help="torque sensor noise per sample, N m (%(default)s)")  # fmt: skip
+    p.add_argument("--estimator", default="ipopt", choices=("ipopt", "lstsq"),
+                   help="the trial grasp's estimator: IPOPT with the side view's prior on the "
+                   "CoM's distance from the rod's axis, or the closed-form least squares "
+                   "(%(default)s)")  # fmt: skip
     p.add_argument("--resume", action="store_true", help="continue the CSV in --out")
     p.add_argument("--overwrite", action="store_true", help="start the CSV in --out again")
     p.add_argument("--quick", action="store_true", help="a few-minute run (3 trials)")

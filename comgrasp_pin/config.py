@@ -186,7 +186,9 @@ class TrialConfig:
         settle, window: hold time before averaging the torques, and averaging window (s).
         tau_before: "measured" (at the same configuration before grasping, as the paper)
             or "model" (RobotModel.gravity_torques).
-        estimator: "lstsq" or "ipopt".
+        estimator: "ipopt" (the torque balance with the side view's prior on the CoM's
+            distance from the rod's axis, ``procedures.measurement.axis_prior``) or
+            "lstsq" (the closed form, no prior).
         return_time: from the lift to the first measurement pose (s).
         hold_before_measuring: the side camera watches the held rod this long (s).
         roll_time: move between the two measurement poses (s).
@@ -213,7 +215,7 @@ class TrialConfig:
     settle: float = 0.5
     window: float = 1.0
     tau_before: str = "measured"
-    estimator: str = "lstsq"
+    estimator: str = "ipopt"
     return_time: float = 0.3
     hold_before_measuring: float = 0.5
     roll_time: float = 1.0

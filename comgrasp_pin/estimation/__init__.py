@@ -4,9 +4,11 @@ from comgrasp_pin.estimation.batch import ComEstimateBatch, estimate_com_batch
 from comgrasp_pin.estimation.estimate import ComEstimate
 from comgrasp_pin.estimation.estimator import estimate_com
 from comgrasp_pin.estimation.pose_planning import plan_wrist_poses
+from comgrasp_pin.estimation.prior import AxisPrior
 from comgrasp_pin.estimation.rod_axis import RodFrameEstimate, com_along_axis, com_in_rod_frame
 
 __all__ = [
+    "AxisPrior",
     "ComEstimate",
     "ComEstimateBatch",
     "RodFrameEstimate",

@@ -16,7 +16,8 @@ import pinocchio as pin
 
 from comgrasp_pin.errors import EmptyGripperError, InvalidInputError, UnobservableError
 from comgrasp_pin.estimation.estimate import MASS_SIGMAS, MIN_MASS_KG
-from comgrasp_pin.estimation.estimator import RCOND, validate_inputs
+from comgrasp_pin.estimation.estimator import RCOND
+from comgrasp_pin.estimation.inputs import validate_inputs
 from comgrasp_pin.estimation.regressor import G0, one_pose_basis
 from comgrasp_pin.robot import RobotModel
 

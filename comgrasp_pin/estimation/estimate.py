@@ -1,7 +1,7 @@
-"""The estimate: a frozen result with its uncertainty, and how it is assembled from theta.
+"""The estimate: a frozen result with its uncertainty, and how it is assembled.
 
 theta = (m, m c_ee) (kg, kg m) is what the linear least squares delivers; the result holds
-(m, c_ee) and their covariance by the delta method (see ``estimator``).
+(m, c_ee) and their covariance (by the delta method from theta's, or the posterior's).
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from typing import overload
 
 import numpy as np
 
-from comgrasp_pin.errors import EmptyGripperError
+from comgrasp_pin.errors import EmptyGripperError, UnobservableError
 from comgrasp_pin.estimation.regressor import G0
 
 MIN_MASS_KG = 1e-3
@@ -41,8 +41,10 @@ class ComEstimate:
         weight: payload weight m * G0 (N).
         unobservable_ee: (3,) unit gravity direction in the ee frame along which the CoM is
             not observed (one pose), or None when the full 3-D CoM is estimated.
-        cov: (4, 4) covariance of (mass, com_ee) (kg, m) when torque_std was given, else
+        cov: (4, 4) covariance of (mass, com_ee) (kg, m): from torque_std, or from the noise
+            the residuals show where readings outnumber the unknowns (``noise_std``), else
             None; zero variance along ``unobservable_ee`` (that component is fixed at 0).
+            With a prior (IPOPT), the posterior's (Laplace at the optimum).
         residual_rms: RMS of the torque residuals (N m).
         residuals: (k, n) residuals dtau - Y theta per pose and joint (N m).
         condition_number: largest / smallest singular value over the estimated directions.
@@ -53,6 +55,8 @@ class ComEstimate:
         iterations: IPOPT iterations (0 for lstsq).
         n_poses: number of static poses k.
         T_world_ee: (k, 4, 4) ee poses at the measurement configurations.
+        noise_std: std of a torque difference estimated from the residuals (N m) when no
+            torque_std was given, else None.
     """
 
     com_ee: np.ndarray
@@ -69,6 +73,7 @@ class ComEstimate:
     iterations: int
     n_poses: int
     T_world_ee: np.ndarray
+    noise_std: float | None = None
 
     @property
     def std(self) -> np.ndarray | None:
@@ -90,10 +95,27 @@ class ComEstimate:
         return self.com_ee, self.unobservable_ee
 
 
+NEAR_SINGULAR = 100.0
+"""A refused estimate whose torque regression has a condition number above this (good poses:
+5-30) is reported as unobservable (a near-singular pose set), not as an empty gripper."""
+
+
+def delta_method(theta: np.ndarray, cov_theta: np.ndarray) -> np.ndarray:
+    """(4, 4) covariance of (m, c) = (theta_0, theta_1:4 / theta_0) from that of theta."""
+    m = theta[0]
+    G = np.zeros((4, 4))
+    G[0, 0] = 1.0
+    with np.errstate(divide="ignore", invalid="ignore"):  # m = 0: refused later
+        com = theta[1:] / m
+        G[1:, 0] = -com / m
+        G[1:, 1:] = np.eye(3) / m
+    return G @ cov_theta @ G.T
+
+
 def assemble_estimate(
-    theta: np.ndarray,
-    B: np.ndarray,
-    cov_w: np.ndarray | None,
+    mass: float,
+    com_ee: np.ndarray,
+    cov: np.ndarray | None,
     u: np.ndarray | None,
     residuals: np.ndarray,
     sv: np.ndarray,
@@ -102,36 +124,56 @@ def assemble_estimate(
     status: str,
     iters: int,
     T: np.ndarray,
+    noise_std: float | None = None,
 ) -> ComEstimate:
-    """Assemble the estimate; EmptyGripperError if the mass is not measurably positive."""
-    m = float(theta[0])
-    cov = None
-    if cov_w is not None:
-        cov_theta = B @ cov_w @ B.T
-        threshold = MASS_SIGMAS * math.sqrt(max(cov_theta[0, 0], 0.0))
+    """The frozen estimate, or an error when its mass is not measurably positive.
+
+    Args:
+        mass: kg.
+        com_ee: (3,) m.
+        cov: (4, 4) covariance of (mass, com_ee), or None.
+        u: (3,) unobservable direction (ee) or None.
+        residuals: (k, n) N m.
+        sv: singular values of the torque regression.
+        cond: its condition number.
+        method: the solver's name.
+        status: its status.
+        iters: its iterations.
+        T: (k, 4, 4) T_world_ee at the poses.
+        noise_std: std of a torque difference estimated from the residuals (N m), when
+            torque_std was not given; None otherwise.
+
+    Raises:
+        UnobservableError: the mass is within MASS_SIGMAS standard deviations of zero and the
+            regression is near singular (condition number above NEAR_SINGULAR).
+        EmptyGripperError: the mass is not measurably above zero (MASS_SIGMAS standard
+            deviations, or MIN_MASS_KG without a covariance).
+    """
+    m = float(mass)
+    if cov is not None:
+        threshold = MASS_SIGMAS * math.sqrt(max(cov[0, 0], 0.0))
     else:
         threshold = MIN_MASS_KG
     if not m > threshold:
-        what = f"{MASS_SIGMAS:g} standard deviations" if cov_w is not None else "MIN_MASS_KG"
+        if cov is not None and cond > NEAR_SINGULAR:
+            raise UnobservableError(
+                f"the pose set is near singular (condition number {cond:.3g} > "
+                f"{NEAR_SINGULAR:g}): the estimate {m:.3g} kg +- {threshold / MASS_SIGMAS:.3g} "
+                "kg is swamped by its error bar; measure away from singular configurations"
+            )
+        what = f"{MASS_SIGMAS:g} standard deviations" if cov is not None else "MIN_MASS_KG"
         raise EmptyGripperError(
             f"estimated payload mass {m:.3g} kg is not measurably above zero (threshold "
             f"{threshold:.3g} kg = {what}): is the gripper empty, or are tau_before and "
             "tau_after swapped?"
         )
-    com_ee = theta[1:] / m
-    if cov_w is not None:
-        G = np.zeros((4, 4))
-        G[0, 0] = 1.0
-        G[1:, 0] = -com_ee / m
-        G[1:, 1:] = np.eye(3) / m
-        cov = G @ cov_theta @ G.T
     rms = math.sqrt(float(residuals.ravel() @ residuals.ravel()) / residuals.size)
     return ComEstimate(
-        com_ee=_readonly(com_ee),
+        com_ee=_readonly(np.array(com_ee, dtype=float)),
         mass=m,
         weight=m * G0,
         unobservable_ee=_readonly(None if u is None else np.array(u, dtype=float)),
-        cov=_readonly(cov),
+        cov=_readonly(None if cov is None else np.array(cov, dtype=float)),
         residual_rms=rms,
         residuals=_readonly(residuals),
         condition_number=float(cond),
@@ -141,4 +183,5 @@ def assemble_estimate(
         iterations=iters,
         n_poses=residuals.shape[0],
         T_world_ee=_readonly(np.array(T, dtype=float)),
+        noise_std=noise_std,
     )

@@ -1,12 +1,21 @@
-"""The payload least squares posed symbolically in CasADi and solved by IPOPT.
+"""The torque balance posed in CasADi and solved by IPOPT: what least squares cannot pose.
 
-    minimise_w  0.5 * || Y w - b ||^2      Y (rows, p), b (rows,) are parameters
+Residuals, one per joint and pose, in standard deviations of a torque difference:
+``e = w * (Y theta(x) - b)``. The objective is the negative log posterior
 
-One ``nlpsol`` is built per (rows, p) = (k poses * n joints, number of observable unknowns)
-and cached: building costs tens of ms, a solve about 0.4 ms. The problem is a convex
-quadratic, so IPOPT with the exact (constant) Hessian takes one Newton step; the options tell
-IPOPT that the Hessian is constant and skip its NLP scaling. Every solve starts from w = 0
-(no warm start from a previous answer), so timings are fair.
+    f(x) = sum_i rho(e_i) + 1/2 |(I - d d^T)(c - p)|^2 / s^2    (the second term with a prior)
+
+- ``rho`` is 1/2 e^2 (``loss="l2"``) or the pseudo-Huber delta^2 (sqrt(1 + (e/delta)^2) - 1)
+  (``loss="huber"``): quadratic near zero, linear beyond ``delta`` standard deviations, so a
+  bump or a spike on one reading barely moves the estimate;
+- without a prior the unknowns are the observable combination ``x = w`` of theta = B w
+  (linear residuals: a convex problem);
+- with an ``AxisPrior`` (point p, unit direction d, std s, ee frame) the unknowns are
+  ``x = (m, c_ee)`` and theta = (m, m c_ee): the prior settles what the torques cannot see.
+
+One ``nlpsol`` and one Hessian function are built per (rows, unknowns, loss, prior) and
+cached: building costs milliseconds, a solve a fraction of one. ``cov`` is the inverse of
+the objective's Hessian at the optimum (the Laplace approximation of the posterior).
 """
 
 from __future__ import annotations
@@ -19,54 +28,127 @@ import numpy as np
 
 from comgrasp_pin.errors import SolverError
 
+LOSSES = ("l2", "huber")
+
 IPOPT_OPTIONS: dict = {
     "expand": True,  # MX -> SX: cheaper function evaluations
     "print_time": False,
     "record_time": False,
     "ipopt.print_level": 0,
     "ipopt.sb": "yes",
+    "ipopt.tol": 1e-10,
+    "ipopt.max_iter": 100,
+}
+"""Options of every IPOPT solver built here (quiet; a tight tolerance on a small problem)."""
+
+_LINEAR_OPTIONS = {
     "ipopt.hessian_constant": "yes",
     "ipopt.jac_c_constant": "yes",
     "ipopt.jac_d_constant": "yes",
     "ipopt.nlp_scaling_method": "none",
-    "ipopt.tol": 1e-10,
-    "ipopt.max_iter": 50,
 }
-"""Options of every IPOPT solver built here (quiet, tuned for a linear least squares)."""
+"""Extra options where the problem is a linear least squares (l2, no prior)."""
 
 _ACCEPTED = ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+_STALLED = "Search_Direction_Becomes_Too_Small"
+"""IPOPT's status when it starts at (or reaches) the optimum of a well-scaled problem and
+cannot step further; accepted when the gradient there is zero to GRADIENT_TOL."""
+GRADIENT_TOL = 1e-8
+"""A stalled solve is accepted when |grad f| <= GRADIENT_TOL (1 + |f|)."""
 
 
 @dataclass(frozen=True)
 class IpoptResult:
-    """Solution w (p,), IPOPT's return_status and iteration count."""
+    """Solution x, its Hessian (the posterior's inverse covariance), IPOPT's status."""
 
-    w: np.ndarray
+    x: np.ndarray
+    hessian: np.ndarray
     return_status: str
     iterations: int
 
 
 @cache
-def lsq_solver(rows: int, p: int) -> ca.Function:
-    """The cached IPOPT solver for a (rows, p) problem; parameter = (vec(Y) column-major, b)."""
-    Y = ca.SX.sym("Y", rows, p)
-    b = ca.SX.sym("b", rows)
-    w = ca.SX.sym("w", p)
-    r = Y @ w - b
-    nlp = {"x": w, "p": ca.vertcat(ca.vec(Y), b), "f": 0.5 * ca.dot(r, r)}
-    return ca.nlpsol(f"com_lsq_{rows}x{p}", "ipopt", nlp, IPOPT_OPTIONS)
+def build(rows: int, p: int, loss: str, prior: bool) -> tuple[ca.Function, ca.Function]:
+    """The cached (solver, derivatives) pair for ``rows`` residuals and ``p`` unknowns.
+
+    derivatives(x, params) gives the objective's Hessian, gradient and value. The parameter
+    vector is (vec(Y) column-major, b, w, delta, point, direction, 1/std):
+    Y is (rows, p) without a prior (theta = x) and (rows, 4) with one (theta = (m, m c)).
+    """
+    x = ca.SX.sym("x", p)
+    Y = ca.SX.sym("Y", rows, 4 if prior else p)
+    b, w = ca.SX.sym("b", rows), ca.SX.sym("w", rows)
+    delta, point, direction = ca.SX.sym("delta"), ca.SX.sym("point", 3), ca.SX.sym("d", 3)
+    inv_std = ca.SX.sym("inv_std")
+    theta = ca.vertcat(x[0], x[0] * x[1:4]) if prior else x
+    e = w * (Y @ theta - b)
+    if loss == "l2":
+        f = 0.5 * ca.sumsqr(e)
+    else:
+        f = delta**2 * ca.sum1(ca.sqrt(1.0 + (e / delta) ** 2) - 1.0)
+    if prior:
+        dev = x[1:4] - point
+        across = dev - direction * ca.dot(direction, dev)
+        f += 0.5 * inv_std**2 * ca.sumsqr(across)
+    params = ca.vertcat(ca.vec(Y), b, w, delta, point, direction, inv_std)
+    options = dict(IPOPT_OPTIONS)
+    if loss == "l2" and not prior:
+        options.update(_LINEAR_OPTIONS)
+    name = f"com_{loss}_{'prior' if prior else 'free'}_{rows}x{p}"
+    solver = ca.nlpsol(name, "ipopt", {"x": x, "p": params, "f": f}, options)
+    H, g = ca.hessian(f, x)
+    derivatives = ca.Function(f"{name}_derivatives", [x, params], [H, g, f])
+    return solver, derivatives
 
 
-def solve_lsq(Y: np.ndarray, b: np.ndarray) -> IpoptResult:
-    """Solve min ||Y w - b|| with IPOPT; SolverError (with IPOPT's status) if it fails."""
-    rows, p = Y.shape
-    solver = lsq_solver(rows, p)
-    params = np.concatenate([Y.ravel(order="F"), b])
-    sol = solver(x0=np.zeros(p), p=params)
+def solve(
+    Y: np.ndarray,
+    b: np.ndarray,
+    w: np.ndarray,
+    x0: np.ndarray,
+    loss: str,
+    delta: float,
+    prior=None,
+) -> IpoptResult:
+    """Minimise the objective of the module docstring from ``x0``.
+
+    Args:
+        Y: (rows, p) regression of the unknowns (no prior) or (rows, 4) of theta (prior).
+        b: (rows,) torque differences (N m).
+        w: (rows,) 1 / their standard deviations (1 / N m).
+        x0: (p,) start (the closed form's answer).
+        loss: "l2" or "huber".
+        delta: pseudo-Huber threshold (standard deviations).
+        prior: an ``AxisPrior`` or None.
+
+    Raises:
+        SolverError: IPOPT did not converge (its status is kept).
+    """
+    rows = len(b)
+    p = len(x0)
+    solver, derivatives = build(rows, p, loss, prior is not None)
+    if prior is None:
+        point, direction, inv_std = np.zeros(3), np.zeros(3), 0.0
+    else:
+        point, direction, inv_std = prior.point_ee, prior.direction_ee, 1.0 / prior.std
+    # IPOPT sees the objective scaled by 1 / max(w)^2 (the same minimiser, well scaled even
+    # for weights of 1e6); the Hessian is scaled back.
+    root = 1.0 / float(np.max(w))
+    w_s = w * root
+    if loss == "huber":  # e = w r: scaling w scales e; keep the threshold in the same units
+        delta_s = delta * root
+    else:
+        delta_s = delta
+    params = np.concatenate(
+        [Y.ravel(order="F"), b, w_s, [delta_s], point, direction, [inv_std * root]]
+    )
+    sol = solver(x0=x0, p=params)
     stats = solver.stats()
     status = str(stats.get("return_status", "unknown"))
     iterations = int(stats.get("iter_count", -1))
-    w = np.asarray(sol["x"], dtype=float).ravel()
-    if status not in _ACCEPTED or not np.all(np.isfinite(w)):
-        raise SolverError("IPOPT failed on the CoM least squares", status, iterations)
-    return IpoptResult(w, status, iterations)
+    x = np.asarray(sol["x"], dtype=float).ravel()
+    H, g, f = (np.asarray(v, dtype=float) for v in derivatives(x, params))
+    stalled_at_optimum = status == _STALLED and np.linalg.norm(g) <= GRADIENT_TOL * (1 + abs(f))
+    if not (status in _ACCEPTED or stalled_at_optimum) or not np.all(np.isfinite(x)):
+        raise SolverError("IPOPT failed on the CoM estimate", status, iterations)
+    return IpoptResult(x, H / root**2, status, iterations)

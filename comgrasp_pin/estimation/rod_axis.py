@@ -13,7 +13,7 @@ import numpy as np
 
 from comgrasp_pin.errors import EmptyGripperError, InvalidInputError, UnobservableError
 from comgrasp_pin.estimation.estimate import MIN_MASS_KG, ComEstimate
-from comgrasp_pin.estimation.estimator import validate_inputs
+from comgrasp_pin.estimation.inputs import validate_inputs
 from comgrasp_pin.estimation.regressor import pose_regressor
 from comgrasp_pin.geometry import check_transform, closest_point_on_line
 from comgrasp_pin.robot import RobotModel

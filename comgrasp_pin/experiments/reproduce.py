@@ -33,6 +33,8 @@ class RunOptions:
         out: output folder. objects: object names. trials: trials per object (and method).
         seed: the run's seed. workers: parallel processes. resume: continue the CSVs in
         ``out``. overwrite: start them again. noise: torque sensor noise (N m per sample).
+        estimator: the trial grasp's estimator, "ipopt" (with the side view's axis prior)
+        or "lstsq" (closed form).
     """
 
     out: Path
@@ -43,12 +45,14 @@ class RunOptions:
     resume: bool = False
     overwrite: bool = False
     noise: float = 0.05
+    estimator: str = "ipopt"
 
 
 def _run(opts: RunOptions, fn, methods, name: str, columns) -> list[dict]:
     tasks = make_tasks(list(opts.objects), opts.trials, opts.seed, methods)
     for task in tasks:
         task["noise"] = opts.noise
+        task["estimator"] = opts.estimator
     return run_trials(fn, tasks, opts.out / f"{name}.csv", columns, opts.workers,
                       opts.resume, opts.overwrite, desc=name)  # fmt: skip
 
@@ -90,7 +94,7 @@ def reproduce(opts: RunOptions) -> Path:
     mid = time.perf_counter()
     reg = run_regrasp(opts)
     end = time.perf_counter()
-    settings = settings_summary(noise)
+    settings = settings_summary(noise, opts.estimator)
     meta = {
         "objects": list(objects), "trials_per_object": trials, "seed": seed, "workers": workers,
         "accuracy_minutes": (mid - start) / 60, "regrasp_minutes": (end - mid) / 60,

@@ -12,7 +12,7 @@ from dataclasses import asdict
 
 import numpy as np
 
-from comgrasp_pin.config import EpisodeConfig, SensorConfig, TorqueSensorConfig
+from comgrasp_pin.config import EpisodeConfig, SensorConfig, TorqueSensorConfig, TrialConfig
 from comgrasp_pin.planning.holding import holding_lever
 
 ACCURACY_COLUMNS = [
@@ -49,15 +49,15 @@ def make_tasks(objects: list[str], trials: int, seed: int, methods: tuple[str, .
     ]
 
 
-def episode_config(noise: float = 0.05) -> EpisodeConfig:
+def episode_config(noise: float = 0.05, estimator: str = "ipopt") -> EpisodeConfig:
     """The configuration every trial runs with: the defaults, with the torque sensor's
-    white noise ``noise`` (N m per sample)."""
+    white noise ``noise`` (N m per sample) and the trial grasp's ``estimator``."""
     sensors = SensorConfig(torque=TorqueSensorConfig(noise_std=float(noise)))
-    return EpisodeConfig(sensors=sensors)
+    return EpisodeConfig(trial=TrialConfig(estimator=estimator), sensors=sensors)
 
 
 def _episode_config(task: dict) -> EpisodeConfig:
-    return episode_config(task.get("noise", 0.05))
+    return episode_config(task.get("noise", 0.05), task.get("estimator", "ipopt"))
 
 
 def accuracy_grasp(obj: str, seed: int, config) -> tuple[float, float]:
@@ -129,10 +129,10 @@ def regrasp_trial(task: dict) -> dict:
     return result.row()
 
 
-def settings_summary(noise: float = 0.05) -> dict:
+def settings_summary(noise: float = 0.05, estimator: str = "ipopt") -> dict:
     """Every setting an experiment ran with (the whole config tree and the experiment
     design), for ``run.json`` and the report."""
-    out = asdict(episode_config(noise))
+    out = asdict(episode_config(noise, estimator))
     out["accuracy_com_range"] = ACCURACY_COM_RANGE
     out["accuracy_grasp_offset"] = ACCURACY_GRASP_OFFSET
     out["accuracy_lever_range"] = ACCURACY_LEVER_RANGE

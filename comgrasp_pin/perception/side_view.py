@@ -28,6 +28,7 @@ TABLE_MARGIN = 0.003  # points less than this above the table are the table (m)
 MIN_PIXELS = 60
 MAX_AXIS_FROM_TCP = 0.035  # a held rod's axis passes this close to the TCP (m)
 MIN_EXTENT = 0.05  # a held rod is at least this long in view (m)
+OFF_AXIS_PERCENTILE = 99.0  # SideView.off_axis: nearly the farthest point, robust to a stray
 MAX_CYLINDER_MISFIT = 5e-4  # a round handle's points lie this close to the fitted cylinder (m)
 # The gripper's own volume in the ee frame (from the URDF): fingers and pads (with margin),
 # palm, and the wrist above it.
@@ -62,6 +63,9 @@ class SideView:
     rect: tuple
     axis_px: np.ndarray
     tcp_px: np.ndarray
+    radius: float
+    off_axis: float
+    axis_std: float
 
 
 def _gripper_volume(p: np.ndarray) -> np.ndarray:
@@ -176,8 +180,12 @@ def observe_held_rod(
     tcp_cam = T_cam_ee[:3, 3]
     contours, _ = cv2.findContours(mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     rect = cv2.minAreaRect(np.vstack(contours))
+    off_axis = float(np.percentile(rho, OFF_AXIS_PERCENTILE))
+    n_handle = max(int(handle.sum()), 1)
+    axis_std = float(np.std(rho[handle] - radius) / np.sqrt(n_handle)) if handle.any() else radius
     return SideView(T_ee_obj, theta, float(hi - lo), grasp_offset, mask, rect,
-                    camera.project(ends_cam), camera.project(tcp_cam[None])[0])  # fmt: skip
+                    camera.project(ends_cam), camera.project(tcp_cam[None])[0],
+                    float(radius), off_axis, axis_std)  # fmt: skip
 
 
 def _in_capsule(p: np.ndarray, p0: np.ndarray, p1: np.ndarray, radius: float) -> np.ndarray:

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from comgrasp_pin.config import EpisodeConfig
-from comgrasp_pin.estimation import ComEstimate, com_along_axis, estimate_com
+from comgrasp_pin.estimation import AxisPrior, ComEstimate, com_along_axis, estimate_com
 from comgrasp_pin.estimation.rod_axis import com_in_rod_frame
 from comgrasp_pin.perception import SideView
 from comgrasp_pin.robot import RobotModel
@@ -84,30 +84,50 @@ def _same_direction(T: np.ndarray, T_ref: np.ndarray) -> np.ndarray:
     return T
 
 
+def axis_prior(side: SideView) -> AxisPrior:
+    """The prior on the CoM from the side view: near the rod's axis. The CoM lies within the
+    rod's cross-section, which the side camera sees reach ``off_axis`` from the axis; half of
+    that is one standard deviation across the axis, combined with how well the axis itself
+    was located (``axis_std``)."""
+    std = float(np.hypot(0.5 * side.off_axis, side.axis_std))
+    return AxisPrior.from_rod(side.T_ee_obj, std)
+
+
 def locate_com(
     robot: RobotModel, held: HeldReadings, tau_before: list, config: EpisodeConfig
 ) -> tuple[ComEstimate, ComEstimate, float, float]:
-    """(estimate used, one-pose estimate, x_com_obj, x_com_line): the two-pose 3-D CoM
-    projected on the axis when the rod stayed put, the two poses combined in the rod's frame
-    when it turned (at tilts of at least ``rod_frame_min_tilt_deg``), the one-pose estimate
-    otherwise. A payload not measurably above zero: EmptyGripperError."""
+    """(estimate used, the paper's estimate, x_com_obj, x_com_line).
+
+    The paper's: one pose, least squares, the vertical CoM line met with the rod's axis.
+    Ours (``estimator``: "ipopt" adds the side view's ``axis_prior``; "lstsq" is the closed
+    form without it): the two-pose 3-D CoM projected on the axis when the rod stayed put;
+    the two poses combined in the rod's frame when it turned (at tilts of at least
+    ``rod_frame_min_tilt_deg``); the first pose alone otherwise. A payload not measurably
+    above zero: EmptyGripperError.
+    """
     trial, after = config.trial, held.after
     n_std = config.sensors.torque.noise_std / np.sqrt(after[0].n_samples)
     pair_std = max(n_std * (1.0 if trial.tau_before == "measured" else np.sqrt(0.5)), 1e-6)
+    T_obj = held.side.T_ee_obj
 
-    def estimate(k: int) -> ComEstimate:
+    def estimate(k: int, method: str, prior: AxisPrior | None) -> ComEstimate:
         q = np.array([m.q for m in after[:k]])
         tau_a = np.array([m.tau for m in after[:k]])
-        return estimate_com(robot, q, np.array(tau_before[:k]), tau_a,
-                            method=trial.estimator, torque_std=pair_std)  # fmt: skip
+        return estimate_com(robot, q, np.array(tau_before[:k]), tau_a, method=method,
+                            torque_std=pair_std, com_prior=prior)  # fmt: skip
 
-    est_line = estimate(1)
-    x_line = com_along_axis(est_line, held.side.T_ee_obj)
-    est, x_com = est_line, x_line
+    est_line = estimate(1, "lstsq", None)
+    x_line = com_along_axis(est_line, T_obj)
+    prior = axis_prior(held.side) if trial.estimator == "ipopt" else None
+    if prior is None:
+        est, x_com = est_line, x_line
+    else:
+        est = estimate(1, "ipopt", prior)
+        x_com = com_along_axis(est, T_obj)
     two_poses = len(after) > 1
     if two_poses and not held.moved:
-        est = estimate(len(after))
-        x_com = com_along_axis(est, held.side.T_ee_obj)
+        est = estimate(len(after), trial.estimator, prior)
+        x_com = com_along_axis(est, T_obj)
     elif (
         two_poses
         and held.side_rolled is not None
@@ -115,8 +135,8 @@ def locate_com(
     ):
         # The rod turned in the jaws between the poses: the CoM is fixed in the rod, so the
         # two poses still stack when written in the rod's frame, each with its own view.
-        T_rolled = _same_direction(held.side_rolled.T_ee_obj, held.side.T_ee_obj)
-        T_views = [held.side.T_ee_obj, T_rolled]
+        T_rolled = _same_direction(held.side_rolled.T_ee_obj, T_obj)
+        T_views = [T_obj, T_rolled]
         rod_frame = com_in_rod_frame(robot, [m.q for m in after], tau_before,
                                      [m.tau for m in after], T_views)  # fmt: skip
         if rod_frame.condition_number < trial.max_condition:
