@@ -1,44 +1,73 @@
-"""Timing of the CoM estimator: lstsq vs IPOPT, one pose and four, and batch throughput.
+"""Timing of the CoM estimator on the UR5: lstsq, IPOPT (l2, axis prior, Huber), batch, a peer.
 
     python benchmarks/bench_estimator.py [--quick] [--out benchmarks/results/estimator.json]
 
-Times are medians over blocks of calls (UR5, clean RNEA torques with a 0.7 kg payload). The
-IPOPT solvers are built before timing (build time reported apart); every IPOPT solve starts
-from zero. Targets (issue 3): lstsq <= 15 us per one-pose estimate including kinematics,
-IPOPT <= 1.5 ms, batch >= 100 000 estimates/s for 10 000 grasps.
+A realistic noisy case: a 0.5 kg payload with its CoM at (0.01, 0, 0.08) m in the ee frame,
+Gaussian noise of 0.01 N m on every torque reading (before and after), ``torque_std`` passed
+unless a key says ``no_std``. Four poses are one configuration with the wrist joints changed
+(as tests/test_estimator.py's ``wrist_poses``). Times are medians over blocks of calls and
+include the kinematics (the estimator's own Jacobians) unless a key says ``solve`` or
+``nlpsol_call``. IPOPT solvers are built before timing (warm cache); the build time of each
+problem is reported apart. The peer is mujoco-sysid's joint-body regressor on the MuJoCo world
+(the same URDF) solved by NumPy least squares; it is skipped with a message when mujoco-sysid
+is not installed (``pip install mujoco-sysid``: a benchmark-only tool, not a dependency).
+Targets: lstsq <= 10 us per one-pose estimate, IPOPT with the axis prior <= 0.5 ms per solve.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib.metadata
 import json
+import math
+import os
 import platform
 import statistics
 import time
+from functools import partial
 from pathlib import Path
 
 import casadi as ca
+import mujoco
 import numpy as np
 import pinocchio as pin
 
 import comgrasp_pin as cg
-from comgrasp_pin.estimation import ipopt as _lsq_ipopt
+from comgrasp_pin.estimation import ipopt as _ipopt
 from comgrasp_pin.estimation.regressor import stacked_regressor
 
-MASS, COM_EE = 0.7, np.array([0.04, -0.03, 0.15])
+MASS, COM_EE = 0.5, np.array([0.01, 0.0, 0.08])
+INERTIA_EE = np.diag([2e-3, 3e-3, 4e-3])  # about the CoM (as tests/_payload.py)
+TORQUE_STD = 0.01  # N m, each reading
+PRIOR_STD = 0.005  # m
+HUBER_DELTA = 3.0
+N_BATCH = 10_000
+SEED = 0
+TARGETS = {"lstsq_one_pose_us": 10.0, "ipopt_prior_one_pose_solve_ms": 0.5}
 
 
 def payload_torques(robot: cg.RobotModel, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(tau_before, tau_after) (k, n) from RNEA at v = a = 0 with a payload at the ee."""
+    """Clean (tau_before, tau_after) (k, n): RNEA at v = a = 0 with a payload at the ee."""
     loaded = pin.Model(robot.model)
     frame = loaded.frames[robot.ee_frame_id]
     loaded.appendBodyToJoint(
-        frame.parentJoint, pin.Inertia(MASS, COM_EE, np.eye(3) * 1e-3), frame.placement
+        frame.parentJoint, pin.Inertia(MASS, COM_EE, INERTIA_EE), frame.placement
     )
     d0, d1, z = robot.model.createData(), loaded.createData(), np.zeros(robot.nq)
     tau_before = np.array([pin.rnea(robot.model, d0, q, z, z) for q in Q])
     tau_after = np.array([pin.rnea(loaded, d1, q, z, z) for q in Q])
     return tau_before, tau_after
+
+
+def noisy(tau: np.ndarray, rng) -> np.ndarray:
+    return tau + rng.normal(scale=TORQUE_STD, size=tau.shape)
+
+
+def wrist_poses(robot: cg.RobotModel, q: np.ndarray, k: int, rng) -> np.ndarray:
+    """q and k - 1 copies with the wrist joints offset (as tests/test_estimator.py)."""
+    offsets = np.zeros((k, robot.nq))
+    offsets[1:, -3:] = rng.uniform(-0.8, 0.8, size=(k - 1, 3))
+    return q + offsets
 
 
 def median_time(fn, calls: int, blocks: int) -> float:
@@ -53,116 +82,330 @@ def median_time(fn, calls: int, blocks: int) -> float:
     return statistics.median(samples)
 
 
-def ipopt_default_options_ms(Y: np.ndarray, b: np.ndarray, calls: int, blocks: int) -> float:
-    """The same problem with IPOPT's default options (only quiet): what tuning bought."""
-    rows, p = Y.shape
-    Ys, bs, w = ca.SX.sym("Y", rows, p), ca.SX.sym("b", rows), ca.SX.sym("w", p)
-    nlp = {"x": w, "p": ca.vertcat(ca.vec(Ys), bs), "f": 0.5 * ca.sumsqr(Ys @ w - bs)}
-    opts = {"print_time": False, "ipopt.print_level": 0, "ipopt.sb": "yes"}
-    solver = ca.nlpsol("default", "ipopt", nlp, opts)
-    params = np.concatenate([Y.ravel(order="F"), b])
-    return 1e3 * median_time(lambda: solver(x0=np.zeros(p), p=params), calls, blocks)
+def errors(est, u_true: np.ndarray | None = None) -> dict:
+    """Mass error (g) and CoM error (mm); one pose without a prior: across gravity only."""
+    com_true = COM_EE if u_true is None else COM_EE - u_true * (u_true @ COM_EE)
+    return {
+        "mass_error_g": 1e3 * float(est.mass - MASS),
+        "com_error_mm": 1e3 * float(np.linalg.norm(est.com_ee - com_true)),
+    }
+
+
+def cold_and_warm(fn, calls: int, blocks: int) -> tuple[float, float]:
+    """(first call with an empty solver cache, warm median) in s; the difference is the build."""
+    _ipopt.build.cache_clear()
+    t0 = time.perf_counter()
+    fn()
+    cold = time.perf_counter() - t0
+    return cold, median_time(fn, calls, blocks)
+
+
+# ----------------------------------------------------------------------------------- the peer
+
+
+def peer_available() -> bool:
+    try:
+        import mujoco_sysid.regressors  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def bench_peer(robot: cg.RobotModel, Q: np.ndarray, rng, calls: int, blocks: int) -> dict:
+    """mujoco-sysid on the MuJoCo world vs ours, the same torques, 4 poses, lstsq."""
+    from mujoco_sysid.regressors import get_jacobian, joint_body_regressor
+
+    from comgrasp_pin.simulation import build_model
+    from comgrasp_pin.simulation.world import ARM_JOINTS
+
+    def add_payload(spec: mujoco.MjSpec) -> None:
+        body = spec.body("eelink").add_body(name="payload")  # frame = eelink = the ee frame
+        body.explicitinertial = True
+        body.mass = MASS
+        body.ipos = COM_EE.tolist()
+        body.inertia = np.diag(INERTIA_EE).tolist()
+
+    m0, m1 = build_model(), build_model(extras=[add_payload])
+    d0, d1 = mujoco.MjData(m0), mujoco.MjData(m1)
+    qadr = [m1.joint(name).qposadr[0] for name in ARM_JOINTS]
+    dofs = [m1.joint(name).dofadr[0] for name in ARM_JOINTS]
+    payload = m1.body("payload").id
+
+    # static torques from MuJoCo: qfrc_bias at zero velocity (gravity only)
+    tb, ta = np.empty(Q.shape), np.empty(Q.shape)
+    for i, q in enumerate(Q):
+        for m, d, out in ((m0, d0, tb), (m1, d1, ta)):
+            d.qpos[qadr] = q
+            d.qvel[:] = 0.0
+            mujoco.mj_forward(m, d)
+            out[i] = d.qfrc_bias[dofs]
+    tb, ta = noisy(tb, rng), noisy(ta, rng)
+    dtau = (ta - tb).ravel()
+
+    data = mujoco.MjData(m1)
+    data.qvel[:] = 0.0
+
+    def peer_regressor() -> np.ndarray:
+        rows = []
+        for q in Q:
+            data.qpos[qadr] = q
+            # what the regressor reads: poses, com-based frames, velocities, cacc (v = a = 0)
+            mujoco.mj_kinematics(m1, data)
+            mujoco.mj_comPos(m1, data)
+            mujoco.mj_comVel(m1, data)
+            data.qacc[:] = 0.0
+            mujoco.mj_rnePostConstraint(m1, data)
+            Yb = joint_body_regressor(m1, data, payload)  # (6, 10), body frame
+            J = get_jacobian(m1, data, payload)  # (6, nv), body frame
+            rows.append((J.T @ Yb)[dofs, :4])  # static rows of (m, m c) for the arm joints
+        return np.vstack(rows)
+
+    def peer() -> np.ndarray:
+        return np.linalg.lstsq(peer_regressor(), dtau, rcond=None)[0]
+
+    def ours(std):
+        return lambda: cg.estimate_com(robot, Q, tb, ta, torque_std=std)
+
+    theta = peer()
+    peer_mass, peer_com = float(theta[0]), theta[1:] / theta[0]
+    est = ours(TORQUE_STD)()
+    Y_ours = stacked_regressor(robot, Q)[0]
+    t_peer = median_time(peer, calls, blocks)
+    t_peer_regressor = median_time(peer_regressor, calls, blocks)
+    t_ours = median_time(ours(TORQUE_STD), calls, blocks)
+    t_ours_no_std = median_time(ours(None), calls, blocks)
+    return {
+        "peer": f"mujoco-sysid {importlib.metadata.version('mujoco-sysid')}",
+        "poses": len(Q),
+        "mujoco_model_bodies": int(m1.nbody),
+        "regressor_max_abs_difference": float(np.abs(peer_regressor() - Y_ours).max()),
+        "peer_mass_error_g": 1e3 * (peer_mass - MASS),
+        "peer_com_error_mm": 1e3 * float(np.linalg.norm(peer_com - COM_EE)),
+        "ours_mass_error_g": 1e3 * (est.mass - MASS),
+        "ours_com_error_mm": 1e3 * float(np.linalg.norm(est.com_ee - COM_EE)),
+        "peer_minus_ours_mass_g": 1e3 * (peer_mass - est.mass),
+        "peer_minus_ours_com_mm": 1e3 * float(np.linalg.norm(peer_com - est.com_ee)),
+        "peer_four_poses_us": 1e6 * t_peer,
+        "peer_regressor_only_four_poses_us": 1e6 * t_peer_regressor,
+        "ours_lstsq_four_poses_us": 1e6 * t_ours,
+        "ours_lstsq_four_poses_no_std_us": 1e6 * t_ours_no_std,
+        "ratio_peer_over_ours": t_peer / t_ours,
+        "ratio_peer_over_ours_no_std": t_peer / t_ours_no_std,
+    }
+
+
+# ------------------------------------------------------------------------------------- main
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="fewer repetitions")
+    parser.add_argument("--quick", action="store_true", help="fewer repetitions (~5 s)")
     parser.add_argument("--out", default=str(Path(__file__).parent / "results/estimator.json"))
     args = parser.parse_args()
     # many short blocks: the median shrugs off bursts of load from other processes
-    calls, blocks = (200, 5) if args.quick else (400, 61)
-    ipopt_calls, ipopt_blocks = (20, 5) if args.quick else (200, 11)
-    n_batch = 10_000
+    calls, blocks = (100, 9) if args.quick else (400, 41)
+    ipopt_calls, ipopt_blocks = (20, 9) if args.quick else (100, 15)
+    batch_blocks = 3 if args.quick else 7
+    n_loop = 1000 if args.quick else N_BATCH
 
     robot = cg.RobotModel.ur5()
-    rng = np.random.default_rng(0)
+    rng = np.random.default_rng(SEED)
     q = robot.random_configuration(rng)
-    Q4 = cg.plan_wrist_poses(robot, q, 4)
+    Q4 = wrist_poses(robot, q, 4, rng)
     tb4, ta4 = payload_torques(robot, Q4)
+    tb4, ta4 = noisy(tb4, rng), noisy(ta4, rng)
     tb1, ta1 = tb4[0], ta4[0]
+    u1 = -robot.ee_pose(q)[:3, :3][2]  # gravity in the ee frame: unseen at one pose
+    prior = cg.AxisPrior(COM_EE, [1.0, 0.0, 0.0], PRIOR_STD)
+    cases = {"one_pose": (q, tb1, ta1), "four_poses": (Q4, tb4, ta4)}
+    results: dict = {"robot": "ur5"}
+    table: list[tuple[str, float, str]] = []
 
-    def estimate(Q, tb, ta, method):
-        return lambda: cg.estimate_com(robot, Q, tb, ta, method=method)
+    def record(key: str, seconds: float, unit: str) -> float:
+        value = seconds * {"us": 1e6, "ms": 1e3}[unit]
+        results[f"{key}_{unit}"] = value
+        table.append((key, value, unit))
+        return seconds
 
-    lstsq_1 = median_time(estimate(q, tb1, ta1, "lstsq"), calls, blocks)
-    lstsq_1_best = median_time(estimate(q, tb1, ta1, "lstsq"), calls, 1)
-    for _ in range(blocks - 1):
-        lstsq_1_best = min(lstsq_1_best, median_time(estimate(q, tb1, ta1, "lstsq"), calls, 1))
-    lstsq_1_cov = median_time(
-        lambda: cg.estimate_com(robot, q, tb1, ta1, torque_std=0.05), calls, blocks
+    # 1. closed form, with and without torque_std
+    accuracy: dict = {}
+    lstsq: dict = {}
+    for name, (Q, tb, ta) in cases.items():
+        for std, suffix in ((None, "_no_std"), (TORQUE_STD, "")):
+            fn = partial(cg.estimate_com, robot, Q, tb, ta, torque_std=std)
+            lstsq[name + suffix] = record(
+                f"lstsq_{name}{suffix}", median_time(fn, calls, blocks), "us"
+            )
+        accuracy[f"lstsq_{name}"] = errors(fn(), u1 if name == "one_pose" else None)
+    jacobian = partial(
+        pin.computeFrameJacobian,
+        robot.model,
+        robot.data,
+        q,
+        robot.ee_frame_id,
+        pin.LOCAL_WORLD_ALIGNED,
     )
-    lstsq_4 = median_time(estimate(Q4, tb4, ta4, "lstsq"), calls // 4, blocks)
-    t_build = time.perf_counter()
-    _lsq_ipopt.lsq_solver.cache_clear()
-    cg.estimate_com(robot, q, tb1, ta1, method="ipopt")
-    cg.estimate_com(robot, Q4, tb4, ta4, method="ipopt")
-    build_ms = 1e3 * (time.perf_counter() - t_build) / 2
+    record("kinematics_jacobian", median_time(jacobian, calls, blocks), "us")
 
-    kinematics = median_time(
-        lambda: pin.computeFrameJacobian(
-            robot.model, robot.data, q, robot.ee_frame_id, pin.LOCAL_WORLD_ALIGNED
-        ),
-        calls,
-        blocks,
-    )
-    ipopt_1 = median_time(estimate(q, tb1, ta1, "ipopt"), ipopt_calls, ipopt_blocks)
-    ipopt_4 = median_time(estimate(Q4, tb4, ta4, "ipopt"), ipopt_calls, ipopt_blocks)
-    est_ipopt_1 = cg.estimate_com(robot, q, tb1, ta1, method="ipopt")
-    est_ipopt_4 = cg.estimate_com(robot, Q4, tb4, ta4, method="ipopt")
-    Y4 = stacked_regressor(robot, Q4)[0]
-    b4 = (ta4 - tb4).ravel()
-    ipopt_default_4 = ipopt_default_options_ms(Y4, b4, ipopt_calls, ipopt_blocks)
-    ipopt_tuned_4 = 1e3 * median_time(
-        lambda: _lsq_ipopt.solve_lsq(Y4, b4), ipopt_calls, ipopt_blocks
-    )
+    # 2.-4. IPOPT through estimate_com: l2, axis prior, Huber (warm cache; build apart)
+    _ipopt.build(2, 2, "l2", False)  # load the IPOPT plugin once, outside any build time
+    ipopt_cases = {
+        "ipopt_l2_one_pose": ("one_pose", {}),
+        "ipopt_l2_four_poses": ("four_poses", {}),
+        "ipopt_prior_one_pose": ("one_pose", {"com_prior": prior}),
+        "ipopt_prior_four_poses": ("four_poses", {"com_prior": prior}),
+        "ipopt_huber_four_poses": ("four_poses", {"loss": "huber", "huber_delta": HUBER_DELTA}),
+    }
+    build_ms, ipopt_runs, ipopt_times = {}, {}, {}
+    for key, (name, kwargs) in ipopt_cases.items():
+        Q, tb, ta = cases[name]
+        fn = partial(cg.estimate_com, robot, Q, tb, ta, "ipopt", TORQUE_STD, **kwargs)
+        cold, warm = cold_and_warm(fn, ipopt_calls, ipopt_blocks)
+        ipopt_times[key] = record(key, warm, "ms")
+        build_ms[key] = 1e3 * (cold - warm)
+        est = fn()
+        ipopt_runs[key] = {"status": est.solver_status, "iterations": est.iterations}
+        no_prior_one_pose = name == "one_pose" and "com_prior" not in kwargs
+        accuracy[key] = errors(est, u1 if no_prior_one_pose else None)
+    results["ipopt_build_ms"] = build_ms
+    results["ipopt_runs"] = ipopt_runs
 
-    Qb = np.array([robot.random_configuration(rng) for _ in range(n_batch)])
+    # 5. the prior problem at one pose, solve only: arrays prepared as estimate_com does
+    Y1 = stacked_regressor(robot, q[None])[0]
+    b1 = ta1 - tb1
+    w1 = np.full(robot.nq, 1.0 / (math.sqrt(2.0) * TORQUE_STD))
+    closed = cg.estimate_com(robot, q, tb1, ta1, torque_std=TORQUE_STD)
+    P = prior.across()
+    Pu = P @ u1
+    c0 = closed.com_ee - u1 * float(Pu @ (P @ (closed.com_ee - prior.point_ee))) / float(Pu @ Pu)
+    x0 = np.r_[closed.mass, c0]  # the warm start of estimate_com: on the line nearest the axis
+    solve = partial(_ipopt.solve, Y1, b1, w1, x0, "l2", HUBER_DELTA, prior)
+    solver, _ = _ipopt.build(robot.nq, 4, "l2", True)
+    root = 1.0 / float(np.max(w1))  # the objective scaling of ipopt.solve
+    params = np.concatenate(
+        [
+            Y1.ravel(order="F"),
+            b1,
+            w1 * root,
+            [HUBER_DELTA],
+            prior.point_ee,
+            prior.direction_ee,
+            [root / prior.std],
+        ]
+    )
+    call = partial(solver, x0=x0, p=params)
+    solve_s = record(
+        "ipopt_prior_one_pose_solve", median_time(solve, ipopt_calls, ipopt_blocks), "ms"
+    )
+    record("ipopt_prior_one_pose_nlpsol_call", median_time(call, ipopt_calls, ipopt_blocks), "ms")
+    res = solve()
+    x_call = np.asarray(call()["x"]).ravel()
+    via = cg.estimate_com(
+        robot, q, tb1, ta1, method="ipopt", torque_std=TORQUE_STD, com_prior=prior
+    )
+    x_est = np.r_[via.mass, via.com_ee]
+    results["ipopt_prior_one_pose_solve_detail"] = {
+        "status": res.return_status,
+        "iterations": res.iterations,
+        "nlpsol_call_vs_solve_max_abs_x": float(np.abs(x_call - res.x).max()),
+        "solve_vs_estimate_com_max_abs_x": float(np.abs(res.x - x_est).max()),
+    }
+
+    # 6. batch throughput vs a Python loop of estimate_com (one pose per grasp, torque_std)
+    Qb = np.array([robot.random_configuration(rng) for _ in range(N_BATCH)])
     tbb, tab = payload_torques(robot, Qb)
-    batch_s = median_time(lambda: cg.estimate_com_batch(robot, Qb, tbb, tab), 1, 3)
-    batch_est = cg.estimate_com_batch(robot, Qb, tbb, tab)
-    loop_s = median_time(
-        lambda: [cg.estimate_com(robot, Qb[i], tbb[i], tab[i]) for i in range(2000)], 1, 3
-    )
+    tbb, tab = noisy(tbb, rng), noisy(tab, rng)
+    batch = partial(cg.estimate_com_batch, robot, Qb, tbb, tab, torque_std=TORQUE_STD)
+    batch_s = median_time(batch, 1, batch_blocks)
 
-    results = {
-        "robot": "ur5",
-        "lstsq_one_pose_us": 1e6 * lstsq_1,
-        "lstsq_one_pose_best_block_us": 1e6 * lstsq_1_best,
-        "lstsq_one_pose_with_cov_us": 1e6 * lstsq_1_cov,
-        "lstsq_four_poses_us": 1e6 * lstsq_4,
-        "kinematics_jacobian_us": 1e6 * kinematics,
-        "ipopt_one_pose_ms": 1e3 * ipopt_1,
-        "ipopt_four_poses_ms": 1e3 * ipopt_4,
-        "ipopt_four_poses_solver_only_tuned_ms": ipopt_tuned_4,
-        "ipopt_four_poses_solver_only_default_options_ms": ipopt_default_4,
-        "ipopt_build_ms": build_ms,
-        "ipopt_iterations_one_pose": est_ipopt_1.iterations,
-        "ipopt_iterations_four_poses": est_ipopt_4.iterations,
-        "ipopt_status": est_ipopt_4.solver_status,
-        "ipopt_options": {k: v for k, v in _lsq_ipopt.IPOPT_OPTIONS.items()},
-        "ratio_ipopt_over_lstsq_one_pose": ipopt_1 / lstsq_1,
-        "ratio_ipopt_over_lstsq_four_poses": ipopt_4 / lstsq_4,
-        "batch_grasps": n_batch,
-        "batch_estimates_per_s": n_batch / batch_s,
-        "batch_max_mass_error_kg": float(np.abs(batch_est.mass - MASS).max()),
-        "single_call_loop_estimates_per_s": 2000 / loop_s,
-        "targets": {"lstsq_one_pose_us": 15.0, "ipopt_ms": 1.5, "batch_estimates_per_s": 1e5},
-        "environment": {
-            "python": platform.python_version(),
-            "machine": platform.machine(),
-            "numpy": np.__version__,
-            "pinocchio": pin.__version__,
-            "casadi": ca.__version__,
-            "quick": args.quick,
-            "date": time.strftime("%Y-%m-%dT%H:%M:%S"),
-        },
+    def loop() -> list:
+        return [cg.estimate_com(robot, *g, torque_std=TORQUE_STD) for g in grasps[:n_loop]]
+
+    grasps = list(zip(Qb, tbb, tab))
+    loop_s = median_time(loop, 1, batch_blocks)
+    batch_est = batch()
+    loop_mass = np.array([e.mass for e in loop()[:200]])
+    results["batch"] = {
+        "grasps": N_BATCH,
+        "loop_grasps": n_loop,
+        "batch_estimates_per_s": N_BATCH / batch_s,
+        "loop_estimates_per_s": n_loop / loop_s,
+        "ratio_batch_over_loop_throughput": (N_BATCH / batch_s) / (n_loop / loop_s),
+        "batch_vs_loop_max_abs_mass_kg": float(np.abs(batch_est.mass[:200] - loop_mass).max()),
+        "batch_median_abs_mass_error_g": 1e3 * float(np.median(np.abs(batch_est.mass - MASS))),
+    }
+    table.append(("batch (10000 grasps)", N_BATCH / batch_s, "est/s"))
+    table.append(("loop of estimate_com", n_loop / loop_s, "est/s"))
+
+    # 7. the peer
+    if peer_available():
+        peer = bench_peer(robot, Q4, rng, calls, blocks)
+        table.append(("peer mujoco-sysid 4 poses", peer["peer_four_poses_us"], "us"))
+    else:
+        print("mujoco-sysid is not installed (pip install mujoco-sysid): peer comparison skipped")
+        peer = None
+    results["peer"] = peer
+
+    results["accuracy"] = accuracy
+    results["ratios"] = {
+        "ipopt_l2_over_lstsq_one_pose": ipopt_times["ipopt_l2_one_pose"] / lstsq["one_pose"],
+        "ipopt_l2_over_lstsq_four_poses": ipopt_times["ipopt_l2_four_poses"] / lstsq["four_poses"],
+        "ipopt_prior_over_l2_one_pose": ipopt_times["ipopt_prior_one_pose"]
+        / ipopt_times["ipopt_l2_one_pose"],
+        "ipopt_huber_over_l2_four_poses": ipopt_times["ipopt_huber_four_poses"]
+        / ipopt_times["ipopt_l2_four_poses"],
+        "lstsq_with_std_over_no_std_one_pose": lstsq["one_pose"] / lstsq["one_pose_no_std"],
+        "ipopt_prior_one_pose_estimate_over_solve": ipopt_times["ipopt_prior_one_pose"] / solve_s,
+        "batch_over_loop_throughput": results["batch"]["ratio_batch_over_loop_throughput"],
+        "peer_over_ours_four_poses": None if peer is None else peer["ratio_peer_over_ours"],
+    }
+    results["targets"] = TARGETS
+    results["meets_targets"] = {key: results[key] <= value for key, value in TARGETS.items()}
+    results["case"] = {
+        "payload_mass_kg": MASS,
+        "payload_com_ee_m": COM_EE.tolist(),
+        "torque_noise_std_nm": TORQUE_STD,
+        "prior": {"point_ee": COM_EE.tolist(), "direction_ee": [1.0, 0.0, 0.0], "std_m": PRIOR_STD},
+        "huber_delta": HUBER_DELTA,
+        "seed": SEED,
+        "q": q.tolist(),
+        "poses": Q4.tolist(),
+    }
+    results["ipopt_options"] = dict(_ipopt.IPOPT_OPTIONS)
+    results["environment"] = {
+        "python": platform.python_version(),
+        "machine": platform.machine(),
+        "cpus": os.cpu_count(),
+        "numpy": np.__version__,
+        "pinocchio": pin.__version__,
+        "casadi": ca.__version__,
+        "mujoco": mujoco.__version__,
+        "mujoco_sysid": importlib.metadata.version("mujoco-sysid") if peer is not None else None,
+        "quick": args.quick,
+        "date": time.strftime("%Y-%m-%dT%H:%M:%S"),
     }
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(results, indent=2) + "\n")
-    for key, value in results.items():
-        if isinstance(value, float):
-            print(f"{key:40s} {value:12.3f}")
+
+    targets = {key.rsplit("_", 1)[0]: value for key, value in TARGETS.items()}
+    print(f"{'case':36s} {'value':>12s} {'unit':6s} target")
+    for key, value, unit in table:
+        target = f"<= {targets[key]:g}" if key in targets else ""
+        print(f"{key:36s} {value:12.2f} {unit:6s} {target}")
+    print(
+        "ipopt build (ms):",
+        ", ".join(f"{k.removeprefix('ipopt_')} {v:.1f}" for k, v in build_ms.items()),
+    )
+    for key, acc in accuracy.items():
+        mass_g, com_mm = acc["mass_error_g"], acc["com_error_mm"]
+        print(f"  {key:28s} mass error {mass_g:+8.3f} g   CoM error {com_mm:7.3f} mm")
+    if peer is not None:
+        print(
+            f"peer vs ours (4 poses, lstsq): mass {peer['peer_minus_ours_mass_g']:+.2e} g, "
+            f"CoM {peer['peer_minus_ours_com_mm']:.2e} mm apart; "
+            f"time peer/ours {peer['ratio_peer_over_ours']:.2f}"
+        )
     print(f"wrote {out}")
 
 

@@ -12,7 +12,7 @@ import numpy as np
 
 from comgrasp_pin.errors import ComGraspError, InvalidInputError
 
-OBJECTS = ("obj1", "obj2", "obj3", "obj4", "obj5", "obj6")
+OBJECTS = tuple(__import__("comgrasp_pin.simulation.objects", fromlist=["OBJECTS"]).OBJECTS)
 
 
 def _cmd_check(args: argparse.Namespace) -> int:

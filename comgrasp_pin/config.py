@@ -194,11 +194,6 @@ class TrialConfig:
         roll_time: move between the two measurement poses (s).
         roll_slip_deg: a tilt change above this between the two poses means the rod moved
             in the jaws (deg).
-        rod_frame_min_tilt_deg: below this tilt a rod that moved at the rolled pose keeps
-            the one-pose estimate (deg): the vertical CoM line meets a nearly level axis
-            where the CoM is, while the moved second view adds its own error (measured:
-            equal below 10 deg, the two-pose estimate better above).
-        max_condition: the rod-frame two-pose problem is used below this condition number.
         careful_lift: a careful trial grasp first lifts the rod this much (m) ...
         careful_lift_time: ... this briskly (s): its peak acceleration (10/sqrt(3) 0.04 /
             0.6^2 = 0.64 m/s^2) exceeds the lift's, so a grasp that passes holds through it;
@@ -220,8 +215,6 @@ class TrialConfig:
     hold_before_measuring: float = 0.5
     roll_time: float = 1.0
     roll_slip_deg: float = 0.5
-    rod_frame_min_tilt_deg: float = 12.0
-    max_condition: float = 1e4
     careful_lift: float = 0.04
     careful_lift_time: float = 0.6
     careful_hold: float = 0.3
@@ -248,6 +241,13 @@ class RegraspConfig:
         slip_tilt_deg: a tilt in the jaws above this (deg) counts as slip seen.
         max_com_offset: a CoM farther than this from the grasp point along the rod (m) is
             regrasped even without slip (the transport's accelerations add load).
+        holding_margin: a CoM known to a 95 % interval within this share of the jaws'
+            holding lever is good enough to regrasp at (``needs_another_pose``); beyond it
+            the trial grasp measures one more pose first.
+        pad_friction: (sliding, torsional) friction of the pads as the robot knows them
+            (its gripper's data; the simulated world has its own, ``WorldConfig``).
+        extra_rolls_deg: the candidate rolls about ee-x of that one more pose (deg); the
+            D-optimal one (``estimation.pose_planning.best_next_pose``) is measured.
         attempts: careful trial grasps before the last, uncareful one.
         retry_shift: a turning rod is grasped again this fraction of its length further
             towards the end that went down (then bisected).
@@ -266,6 +266,9 @@ class RegraspConfig:
 
     slip_tilt_deg: float = 2.0
     max_com_offset: float = 0.015
+    holding_margin: float = 0.5
+    pad_friction: tuple[float, float] = (0.8, 0.002)
+    extra_rolls_deg: tuple[float, ...] = (-20.0, -30.0, 30.0)
     attempts: int = 4
     retry_shift: float = 0.15
     rest_time: float = 0.5

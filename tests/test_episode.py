@@ -60,3 +60,23 @@ def test_same_seed_same_result():
 
 
 SEED_OBJ1 = 2
+
+
+@pytest.mark.slow
+def test_a_poorly_known_com_gets_one_more_pose():
+    """A planner that never trusts two poses (holding margin ~0) measures a third, planned
+    pose; the three poses, each with its own view, still find the CoM (simulator truth)."""
+    from dataclasses import replace
+
+    from comgrasp_pin.simulation.episode import measure_and_score
+
+    base = EpisodeConfig()
+    config = replace(base, regrasp=replace(base.regrasp, holding_margin=1e-9))
+    world = World(Scene.sample("obj2", 4, pos_real=0.06), config, seed=4)
+    try:
+        trial, score = measure_and_score(world, offset=0.0)
+    finally:
+        world.close()
+    assert trial.extra_pose and trial.com_path == "3 poses"
+    assert trial.estimate.n_poses == 3 and len(trial.q_meas) == 3
+    assert abs(score.pos_esti - score.pos_real) < 3 * trial.x_com_std + 1e-3

@@ -1,16 +1,33 @@
-"""The accuracy experiment's grasps: where they go relative to the true CoM."""
+"""The accuracy experiment's design: target tilts, the calibrated curves and their
+inversion, and where the grasps go relative to the true CoM."""
 
 import numpy as np
+import pytest
 
 from comgrasp_pin.config import EpisodeConfig
+from comgrasp_pin.experiments import design
+from comgrasp_pin.experiments.design import (
+    invert_curve,
+    lever_for_tilt,
+    load_calibration,
+    monotone,
+    target_tilt,
+    target_tilts,
+    tilt_curve,
+    wrap_tilt,
+)
 from comgrasp_pin.experiments.trials import (
     ACCURACY_COM_RANGE,
     ACCURACY_GRASP_OFFSET,
     ACCURACY_LEVER_RANGE,
     accuracy_grasp,
+    trial_seed,
 )
 from comgrasp_pin.planning.holding import holding_lever
 from comgrasp_pin.simulation.objects import OBJECTS
+from comgrasp_pin.workcell import GRIPPER
+
+PAPER_TRIALS = 50
 
 
 def test_holding_lever_is_the_pads_moment_over_the_weight():
@@ -19,20 +36,121 @@ def test_holding_lever_is_the_pads_moment_over_the_weight():
     assert np.isclose(holding_lever(1.0, 30.0, (0.8, 0.002)), 2 * 0.348 / 9.81)
 
 
-def test_accuracy_grasps_lie_between_the_centre_and_the_com_within_the_lever_range():
+@pytest.mark.parametrize("run_seed", [0, 1, 7, 123])
+def test_targets_fill_every_5_deg_bin_below_30_deg_at_the_papers_size(run_seed):
+    targets = target_tilts(PAPER_TRIALS, run_seed)
+    assert np.all((targets >= 0.0) & (targets <= 90.0))
+    counts, _ = np.histogram(targets, bins=np.arange(0.0, 30.1, 5.0))
+    assert np.all(counts >= 7), counts
+    rest = targets[targets >= 30.0]
+    assert len(rest) == PAPER_TRIALS - counts.sum() and len(rest) >= 5
+    assert rest.max() - rest.min() > 30.0  # spread over 30-90 deg, not piled up
+    # Within a bin the targets spread out: no two of a bin's 7+ closer than 0.2 deg.
+    for lo in range(0, 30, 5):
+        inside = np.sort(targets[(targets >= lo) & (targets < lo + 5)])
+        assert np.min(np.diff(inside)) > 0.2
+
+
+def test_a_trials_target_depends_on_its_index_and_run_seed_only():
+    # the same trial index -> the same target, whatever the number of trials (--resume)
+    np.testing.assert_array_equal(target_tilts(20, 3), target_tilts(PAPER_TRIALS, 3)[:20])
+    assert target_tilt(17, 3) == target_tilt(17, 3)
+    assert target_tilt(17, 3) != target_tilt(17, 4)
+    # fewer trials still cover every bin evenly: 25 trials give 3-4 targets per bin
+    counts, _ = np.histogram(target_tilts(25), bins=np.arange(0.0, 30.1, 5.0))
+    assert np.all(counts >= 3)
+
+
+def test_wrap_tilt_is_modulo_180_deg():
+    for deg, wrapped in [(-179.99, 0.01), (174.8, -5.2), (30.0, 30.0), (-95.0, 85.0)]:
+        assert np.degrees(wrap_tilt(np.radians(deg))) == pytest.approx(wrapped, abs=1e-9)
+
+
+def test_monotone_is_pool_adjacent_violators():
+    # by hand: 5 and 3 violate the order and pool to their mean 4
+    np.testing.assert_allclose(monotone([0.0, 5.0, 3.0, 10.0]), [0.0, 4.0, 4.0, 10.0])
+    np.testing.assert_allclose(monotone([3.0, 2.0, 1.0]), [2.0, 2.0, 2.0])
+    np.testing.assert_allclose(monotone([0.0, 1.0, 2.0]), [0.0, 1.0, 2.0])
+
+
+def test_inversion_by_hand_on_a_curve_with_a_plateau_and_a_step():
+    levers, tilts = [0.3, 0.5, 0.6, 0.7, 0.8], [0.0, 0.0, 10.0, 50.0, 60.0]
+    assert invert_curve(levers, tilts, 0.0) == 0.3  # the first lever that reaches it
+    assert invert_curve(levers, tilts, 5.0) == pytest.approx(0.55)  # linear
+    assert invert_curve(levers, tilts, 20.0, gap_deg=20.0) == 0.6  # step: the nearer end
+    assert invert_curve(levers, tilts, 40.0, gap_deg=20.0) == 0.7
+    assert invert_curve(levers, tilts, 20.0, gap_deg=45.0) == pytest.approx(0.625)
+    assert invert_curve(levers, tilts, 55.0) == pytest.approx(0.75)
+    assert invert_curve(levers, tilts, 89.0) == 0.8  # beyond the curve: its end
+    with pytest.raises(ValueError, match="must not decrease"):
+        invert_curve(levers, [0.0, 5.0, 3.0, 10.0, 20.0], 4.0)
+
+
+def test_every_object_is_calibrated_with_a_monotone_curve_within_the_lever_range():
+    data = load_calibration()
+    assert set(data["objects"]) == set(OBJECTS)
+    for name in OBJECTS:
+        levers, tilts = tilt_curve(name)
+        assert np.all(np.diff(levers) > 0) and np.all(np.diff(tilts) >= 0)
+        assert ACCURACY_LEVER_RANGE[0] <= levers[0] and levers[-1] <= ACCURACY_LEVER_RANGE[1]
+        # the monotone curve is the pooled median of the raw tilts (made by hand here)
+        raw = np.array(data["objects"][name]["abs_tilt_deg"])
+        np.testing.assert_allclose(tilts, monotone(np.median(raw, axis=1)), atol=2e-3)
+        assert tilts[0] < 2.0 and tilts[-1] > 45.0  # holds level at first, turns far later
+
+
+@pytest.mark.parametrize("name", sorted(OBJECTS))
+def test_the_inversion_is_monotone_and_hits_calibrated_points_exactly(name):
+    levers, tilts = tilt_curve(name)
+    grid = np.linspace(0.0, 90.0, 1801)
+    inverse = np.array([lever_for_tilt(name, t) for t in grid])
+    assert np.all(np.diff(inverse) >= 0)
+    assert levers[0] <= inverse.min() and inverse.max() <= levers[-1]
+    rising = np.flatnonzero(np.diff(tilts) > 0) + 1  # first points reaching their tilt
+    for i in rising:
+        assert lever_for_tilt(name, tilts[i]) == levers[i]
+
+
+def test_accuracy_grasps_lie_on_the_handle_at_the_calibrated_lever_from_the_com():
     config = EpisodeConfig()
     for name, obj in OBJECTS.items():
         lever = holding_lever(obj.mass, config.motion.grip_force, config.world.pad_friction)
-        limit = ACCURACY_GRASP_OFFSET * obj.length
-        for seed in range(40):
+        handle = obj.parts[0]
+        for k in range(PAPER_TRIALS):
+            seed = trial_seed(0, name, k)
             pos_real, offset = accuracy_grasp(name, seed, config)
-            assert ACCURACY_COM_RANGE[0] * obj.length <= abs(pos_real)
-            assert abs(pos_real) <= ACCURACY_COM_RANGE[1] * obj.length
-            assert abs(offset) <= limit + 1e-12
-            if abs(offset) < limit - 1e-9:  # not clipped to the handle
-                distance = abs(offset - pos_real)
-                assert ACCURACY_LEVER_RANGE[0] * lever - 1e-12 <= distance
-                assert distance <= ACCURACY_LEVER_RANGE[1] * lever + 1e-12
-                assert abs(offset) <= abs(pos_real) + distance  # towards the centre
+            assert ACCURACY_COM_RANGE[0] * obj.length <= abs(pos_real) + 1e-12
+            assert abs(pos_real) <= ACCURACY_COM_RANGE[1] * obj.length + 1e-12
+            assert abs(offset) <= ACCURACY_GRASP_OFFSET * obj.length + 1e-12
+            # both pads on the handle
+            half_pad = GRIPPER.pad_half[0]
+            assert handle.x0 <= offset - half_pad and offset + half_pad <= handle.x1
+            # the lever the design asked for, on the centre's side of the CoM
+            ratio = np.clip(lever_for_tilt(name, target_tilt(k, 0)), *ACCURACY_LEVER_RANGE)
+            assert abs(offset - pos_real) == pytest.approx(ratio * lever, abs=1e-9)
+            assert np.sign(pos_real - offset) == np.sign(pos_real) or pos_real == 0.0
         # The same seed gives the same grasp (baseline/regrasp comparisons, --resume).
-        assert accuracy_grasp(name, 3, config) == accuracy_grasp(name, 3, config)
+        seed = trial_seed(2, name, 3)
+        assert accuracy_grasp(name, seed, config) == accuracy_grasp(name, seed, config)
+        assert accuracy_grasp(name, seed, config) != accuracy_grasp(name, seed + 1, config)
+
+
+def test_grasps_for_the_strata_order_their_levers_like_their_targets():
+    # a higher target tilt never gets a shorter lever (same object, same run)
+    for name in OBJECTS:
+        targets = target_tilts(PAPER_TRIALS)
+        ratios = np.array([lever_for_tilt(name, t) for t in targets])
+        order = np.argsort(targets)
+        assert np.all(np.diff(ratios[order]) >= 0)
+
+
+@pytest.mark.slow
+def test_a_calibrated_grasp_settles_at_its_recorded_tilt():
+    """The calibration is current: one of its grasps, run again, settles where it did."""
+    curve = load_calibration()["objects"]["obj4"]
+    i = int(np.argmin(np.abs(np.array(curve["median_abs_tilt_deg"]) - 15.0)))
+    task = {"object": "obj4", "lever": curve["lever_ratio"][i],
+            "seed": design.calibration_seed("obj4", 0)}  # fmt: skip
+    row = design.tilt_trial(task)
+    assert not row["dropped"]
+    assert abs(row["tilt_deg"]) == pytest.approx(curve["abs_tilt_deg"][i][0], abs=1.0)

@@ -1,29 +1,38 @@
-"""The six rod objects: specs, explicit inertial (pos_real), lying still, ground truth read-back."""
+"""The rod objects (the paper's six and the extras): specs, explicit inertial (pos_real),
+lying still, ground truth read-back."""
+
+import json
 
 import mujoco
 import numpy as np
 import pytest
 
+from comgrasp_pin._paths import sim_path
+from comgrasp_pin.config import EpisodeConfig
 from comgrasp_pin.errors import ComGraspError
 from comgrasp_pin.simulation import build_spec
 from comgrasp_pin.simulation.objects import (
+    EXTRA_OBJECTS,
     OBJECTS,
+    PAPER_OBJECTS,
     add_object,
     get_object,
     object_state,
     pose_on_table,
     tilt_angle,
 )
+from comgrasp_pin.workcell import GRIPPER
 
 
-def test_six_objects_within_the_issue_ranges():
+def test_six_paper_objects_within_the_issue_ranges():
     names = [f"obj{i}" for i in range(1, 7)]
-    assert sorted(OBJECTS) == names
+    assert PAPER_OBJECTS == tuple(names)
     thickness = [get_object(n).thickness for n in names]
     assert thickness[0] == pytest.approx(0.01) and 0.05 <= thickness[-1] <= 0.06
     assert np.all(np.diff(thickness) > 0)
     for n in names:
         o = get_object(n)
+        assert o.paper
         assert 0.25 <= o.length <= 0.45 and 0.2 <= o.mass <= 1.5
         assert abs(o.com()[0]) > 0.02  # mass unevenly spread
         for p in o.parts:
@@ -33,7 +42,63 @@ def test_six_objects_within_the_issue_ranges():
         get_object("hammer")
 
 
-@pytest.mark.parametrize("name", ["obj1", "obj3", "obj6"])
+# (length m, mass kg, handle width m, parts) of the paper's six as they were first made
+PAPER_AS_MADE = {
+    "obj1": (0.4, 0.51, 0.01, 2), "obj2": (0.32, 0.62, 0.02, 3), "obj3": (0.3, 0.6, 0.03, 3),
+    "obj4": (0.3, 0.62, 0.04, 3), "obj5": (0.38, 1.05, 0.05, 2), "obj6": (0.45, 1.4, 0.056, 2),
+}  # fmt: skip
+
+
+def test_the_paper_objects_are_unchanged():
+    for name, (length, mass, width, n_parts) in PAPER_AS_MADE.items():
+        o = get_object(name)
+        assert (o.length, o.thickness, len(o.parts)) == pytest.approx((length, width, n_parts))
+        assert o.mass == pytest.approx(mass, abs=1e-12)
+
+
+def test_extra_objects_are_listed_apart_and_everything_is_offered():
+    assert EXTRA_OBJECTS == ("obj7", "obj8")
+    assert list(OBJECTS) == [f"obj{i}" for i in range(1, 9)]
+    assert not any(get_object(n).paper for n in EXTRA_OBJECTS)
+    from comgrasp_pin.cli import OBJECTS as CLI_OBJECTS
+    from comgrasp_pin.experiments.reproduce import ALL_OBJECTS
+
+    assert CLI_OBJECTS == ALL_OBJECTS == PAPER_OBJECTS + EXTRA_OBJECTS
+
+
+def _com_by_hand(name: str) -> np.ndarray:
+    """The CoM from the file's raw parts: every part's bottom on the handle's bottom plane."""
+    raw = json.loads(sim_path("objects.json").read_text())["objects"][name]["parts"]
+    h = raw[0]["half_z_m"]
+    m = np.array([p["mass_kg"] for p in raw])
+    centres = np.array([[(p["x0_m"] + p["x1_m"]) / 2, 0.0, p["half_z_m"] - h] for p in raw])
+    return m @ centres / m.sum()
+
+
+def test_the_hammers_com_lies_well_off_its_axis():
+    o = get_object("obj7")
+    com = _com_by_hand("obj7")
+    assert np.hypot(com[1], com[2]) >= 0.015  # the paper's assumption fails
+    np.testing.assert_allclose(o.com(), com, atol=1e-12)
+    assert 0.02 <= o.thickness <= 0.03 and 0.25 <= o.length <= 0.45
+    # the simulator carries it: the body's CoM in MuJoCo
+    spec = build_spec()
+    add_object(spec, o, (0.55, 0.0, 0.3))
+    m = spec.compile()
+    assert m.body_ipos[m.body("object").id][2] == pytest.approx(com[2])
+
+
+def test_the_thick_rod_fits_the_jaws_and_its_weight_the_grip():
+    o = get_object("obj8")
+    assert 0.06 <= o.thickness <= 0.07
+    assert o.thickness < 2 * GRIPPER.open_half_gap - 0.015  # room to close on it
+    config = EpisodeConfig()
+    mu, force = config.world.pad_friction[0], config.motion.grip_force
+    assert o.mass * 9.81 < 2 * mu * force  # the two pads carry its weight
+    assert abs(_com_by_hand("obj8")[0]) > 0.05  # weighted at one end
+
+
+@pytest.mark.parametrize("name", ["obj1", "obj3", "obj6", "obj7", "obj8"])
 def test_pos_real_and_length_set_per_trial_and_rod_lies_still(name):
     o = get_object(name).scaled(0.9 * get_object(name).length)
     pos_real = -0.2 * o.length

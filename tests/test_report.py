@@ -1,8 +1,18 @@
 """Report tables and figures from known rows."""
 
+import math
+
+import numpy as np
+import pytest
+
+from comgrasp_pin.experiments import report
 from comgrasp_pin.experiments.report import (
     accuracy_figure,
     accuracy_table,
+    calibration_figure,
+    calibration_table,
+    extra_pose_summary,
+    method_comparison,
     regrasp_figure,
     regrasp_table,
     success_rates,
@@ -30,18 +40,45 @@ def test_tables_and_figures(tmp_path):
     table = regrasp_table(_regrasp_rows())
     assert "70.0 % (7/10" in table and "81.8 % (9/11" in table and "93.2 %" in table
     acc_rows = [
-        {"object": "obj1", "theta_deg": 1.0, "accuracy": 0.99},
-        {"object": "obj1", "theta_deg": 2.0, "accuracy": 0.97},
-        {"object": "obj1", "theta_deg": -13.0, "accuracy": 0.90},
+        {"object": "obj1", "theta_deg": 1.0, "accuracy": 0.99, "accuracy_line": 0.98},
+        {"object": "obj1", "theta_deg": 2.0, "accuracy": 0.97, "accuracy_line": 0.96},
+        {"object": "obj1", "theta_deg": -13.0, "accuracy": 0.90, "accuracy_line": 0.80},
     ]
     acc = accuracy_table(acc_rows)
-    assert "| 0–2.5 | 98.0 (2) |" in acc
-    assert "| 10–12.5 | –" in acc and "| 12.5–15 | 90.0 (1) |" in acc
+    # ours / the paper's method in our world / the paper's published obj1 at the bin centre
+    # (1.25 deg: 98.7 + (97.7 - 98.7) * 1.15 / 3.1 = 98.33), grasps.
+    assert "| 0–2.5 | 98.0 / 97.0 / 98.3 (2) |" in acc
+    assert "| 10–12.5 | – / – / 94.4 |" in acc and "| 12.5–15 | 90.0 / 80.0 / 87.5 (1) |" in acc
+    assert "| 30–45 | – |" in acc  # beyond the paper's curve: "–"
     for fig in (
         accuracy_figure(acc_rows, tmp_path / "a.png"),
         regrasp_figure(_regrasp_rows(), tmp_path / "r.png"),
     ):
         assert fig.stat().st_size > 10_000
+
+
+def test_accuracy_table_without_the_paper_method_says_not_recorded():
+    text = accuracy_table([{"object": "obj2", "theta_deg": 1.0, "accuracy": 0.99}])
+    assert "not recorded" in text and "| 0–2.5 | 99.0 / n.r. / – (1) |" in text
+
+
+def test_empty_bins_break_the_accuracy_curves():
+    rows = [
+        {"object": "obj1", "theta_deg": 1.0, "accuracy": 0.99, "accuracy_line": 0.98},
+        {"object": "obj1", "theta_deg": 2.0, "accuracy": 0.97, "accuracy_line": 0.97},
+        {"object": "obj1", "theta_deg": 13.0, "accuracy": 0.90, "accuracy_line": 0.80},
+        {"object": "obj1", "theta_deg": 70.0, "accuracy": 0.95, "accuracy_line": 0.50},
+    ]
+    fig, curves = report._accuracy_plot(rows)
+    try:
+        for kind, first in (("ours", 98.0), ("line", 97.5)):
+            y = np.asarray(curves["obj1"][kind].get_ydata(), float)
+            # Bins (deg): 0-2.5 | 2.5-5 ... 10-12.5 | 12.5-15 | 15-20 ... 45-60 | 60-90.
+            assert y[0] == pytest.approx(first)
+            assert np.isnan(y[1:5]).all() and np.isfinite(y[5]) and np.isnan(y[6:11]).all()
+            assert np.isfinite(y[11])
+    finally:
+        report._pyplot().close(fig)
 
 
 def _acc_row(obj, theta, acc, **extra):
@@ -92,7 +129,7 @@ def test_regrasp_verdict_counts_reasons():
     failed = next(r for r in rows if r["method"] == "baseline" and not r["success"])
     failed["reason"] = "geometric-centre grasp; the rod ended on the table"
     text = regrasp_verdict(rows)
-    assert "Regrasp overall: 9/11 (81.8 %" in text
+    assert "Regrasp overall (obj1): 9/11 (81.8 %" in text
     assert "below: obj1 82 %" in text
     assert "- regrasp: boom × 1" in text
     assert "- baseline: geometric-centre grasp, rod ended on the table × 1" in text
@@ -102,8 +139,227 @@ def test_regrasp_figure_with_every_trial_a_success(tmp_path):
     # Wilson's upper bound for 6/6 rounds to just below 1: the error bar must not go negative.
     rows = [
         {"object": o, "trial": k, "method": m, "success": 1}
-        for o in ("obj1", "obj2")
+        for o in ("obj1", "obj2", "obj7")
         for k in range(6)
         for m in ("baseline", "regrasp")
     ]
     assert regrasp_figure(rows, tmp_path / "r.png").stat().st_size > 10_000
+
+
+# --- calibration ----------------------------------------------------------------------------
+
+
+def _cal_row(obj, theta, z, std=0.004, real=0.05):
+    return {
+        "object": obj, "theta_deg": theta, "accuracy": 0.99, "pos_real_m": real,
+        "pos_esti_m": real + z * std, "pos_std_m": std, "length_m": 0.4,
+    }  # fmt: skip
+
+
+def test_calibration_table_by_hand():
+    # Bin 0-5 deg: z = ±0.5, ±1.5, ±2.5 -> 2/6 inside ±1σ, 4/6 inside ±1.96σ, rms
+    # sqrt(8.75 / 3) = 1.71. Bin 60-90 (tilt 90 counts): z = 0.1, 0.2 -> all inside.
+    zs = (0.5, -0.5, 1.5, -1.5, 2.5, -2.5)
+    rows = [_cal_row("obj2", 3.0, z) for z in zs] + [
+        _cal_row("obj2", -90.0, 0.1),
+        _cal_row("obj2", 75.0, 0.2),
+        {**_cal_row("obj2", 1.0, 0.0), "pos_std_m": ""},  # no std: left out
+    ]
+    text = calibration_table(rows)
+    lo68, hi68 = report.wilson_interval(2, 6)
+    assert f"| 0–5 | 6 | 33.3 % ({100 * lo68:.0f}–{100 * hi68:.0f}) | 66.7 % (" in text
+    assert "| 1.71 | " in text and "0.00 | 95 % ≥ 90 %: not met" in text
+    assert "| 60–90 | 2 | 100.0 % (" in text and "| 0.16 | +0.15 |" in text
+    assert "| 5–10 | 0 | – |" in text
+    # Overall: 4/8 inside ±1σ, 6/8 inside ±1.96σ, rms sqrt((8.75 * 2 + 0.01 + 0.04) / 8).
+    rms = math.sqrt((17.5 + 0.05) / 8)
+    assert "| **all** | 8 | 50.0 % (" in text and "| 75.0 % (" in text
+    assert f"| {rms:.2f} |" in text
+    assert "1 grasp(s) without a recorded std are left out" in text
+    assert "95 % in 93–97 %: not met" in text
+
+
+def test_calibration_well_calibrated_meets_the_targets():
+    rng = np.random.default_rng(3)
+    z = rng.standard_normal(4000)
+    rows = [_cal_row("obj3", t, v) for t, v in zip(rng.uniform(0, 90, len(z)), z)]
+    text = calibration_table(rows)
+    assert "95 % in 93–97 %: met; rms z in 0.9–1.1: met" in text
+
+
+def test_calibration_not_recorded(tmp_path):
+    rows = [_acc_row("obj1", 1.0, 0.99)]
+    assert "not recorded" in calibration_table(rows)
+    assert "not recorded" in report.calibration_section(rows, tmp_path)
+    assert not (tmp_path / "calibration.png").exists()
+    assert calibration_figure(rows, tmp_path / "c.png").stat().st_size > 1_000
+
+
+def test_calibration_figure_written(tmp_path):
+    rng = np.random.default_rng(0)
+    rows = [_cal_row("obj1", t, z) for t, z in zip(rng.uniform(0, 80, 60), rng.normal(size=60))]
+    rows += [
+        _cal_row("obj7", t, 3 * z) for t, z in zip(rng.uniform(0, 80, 20), rng.normal(size=20))
+    ]
+    path = calibration_figure(rows, tmp_path / "c.png")
+    assert path.stat().st_size > 30_000
+    assert "![calibration](calibration.png)" in report.calibration_section(rows, tmp_path)
+    assert (tmp_path / "calibration.png").stat().st_size > 30_000
+
+
+# --- ours against the paper's method ----------------------------------------------------------
+
+
+def test_method_comparison_by_hand():
+    # 20-30 deg: ours 99, 98, 97 % against the paper's method 96 % each: differences 3, 2, 1
+    # points, mean 2, s = 1, se = 1 / sqrt(3), t(0.975, 2) = 4.302653 -> 2 ± 2.484.
+    rows = [
+        _acc_row("obj1", 25.0, a, accuracy_line=0.96, pos_esti_line_m=0.0)
+        for a in (0.99, 0.98, 0.97)
+    ]
+    rows.append(_acc_row("obj1", 1.0, 0.99, accuracy_line=0.99, pos_esti_line_m=0.0))
+    text = method_comparison(rows)
+    assert "| 20–30 | 3 | 98.0 | 96.0 | +2.00 (-0.48 to +4.48) | 3 | 0 | 0 |" in text
+    assert "| 0–10 | 1 | 99.0 | 99.0 | +0.00 (n < 2) | 0 | 0 | 1 |" in text
+    assert "| 10–20 | 0 |" in text
+    assert "no clear difference at 0–10°, 20–30°" in text
+
+
+def test_method_comparison_explains_with_the_offset_of_the_com(monkeypatch):
+    # The paper's one-pose line misses by h·tan θ with h = 13 mm; ours by 1 mm·tan θ.
+    monkeypatch.setattr(report, "com_off_axis_m", lambda obj: 0.013)
+    rows = []
+    for theta in (15.0, 25.0, 40.0, 60.0):
+        t = math.tan(math.radians(theta))
+        rows.append(
+            _acc_row("obj1", theta, 1 - 5 * 0.001 * t / 0.4, pos_esti_m=0.001 * t,
+                     pos_esti_line_m=0.013 * t, accuracy_line=1 - 5 * 0.013 * t / 0.4)
+        )  # fmt: skip
+    text = method_comparison(rows)
+    assert "| obj1 | 13.0 | 4 | 13.0 | 1.0 |" in text
+    assert "close to the model's h for obj1" in text
+
+
+def test_method_comparison_without_the_column():
+    assert "not recorded" in method_comparison([_acc_row("obj1", 1.0, 0.99)])
+
+
+# --- extra objects stay apart ------------------------------------------------------------------
+
+
+def test_object_groups_without_paper_objects_from_the_simulation(monkeypatch):
+    monkeypatch.setattr(report, "paper_objects", lambda: report.DEFAULT_PAPER_OBJECTS)
+    rows = [{"object": o} for o in ("obj7", "obj10", "obj1", "obj9", "obj6")]
+    assert report.object_groups(rows) == (["obj1", "obj6"], ["obj7", "obj9", "obj10"])
+
+
+def test_extra_objects_never_enter_the_paper_comparison(tmp_path):
+    paper_rows = [
+        _acc_row("obj1", th, a, accuracy_line=al, pos_esti_line_m=0.01, pos_std_m=0.002)
+        for th, a, al in ((1.0, 0.995, 0.99), (12.0, 0.98, 0.95), (27.0, 0.97, 0.90))
+    ]
+    # obj7: far worse, in the same bins. Were it pooled, every number would move.
+    extra_rows = [
+        _acc_row("obj7", th, 0.5, accuracy_line=0.1, pos_esti_line_m=0.2, pos_std_m=1e-5)
+        for th in (1.0, 12.0, 27.0)
+    ]
+    both = paper_rows + extra_rows
+    for fn in (method_comparison, report.accuracy_verdict, calibration_table):
+        assert fn(both) == fn(paper_rows), fn.__name__
+        assert "obj7" not in fn(both)
+    table = accuracy_table(both)
+    paper_part, extra_part = table.split("Extra objects (not in the paper), apart:")
+    assert paper_part.strip() == accuracy_table(paper_rows).strip() and "obj7" in extra_part
+    reg = [
+        {"object": o, "trial": k, "method": m, "success": int(o == "obj1")}
+        for o in ("obj1", "obj7")
+        for k in range(4)
+        for m in ("baseline", "regrasp")
+    ]
+    reg_paper = [r for r in reg if r["object"] == "obj1"]
+    assert report.regrasp_verdict(reg) == report.regrasp_verdict(reg_paper)
+    table = regrasp_table(reg)
+    assert table.index("extra objects, not in the paper") < table.index("| obj7 |")
+    # The extra objects' own section has them, each on its own.
+    section = report.extra_objects_section(both, reg)
+    assert "### obj7" in section and "Objects obj7;" in section and "obj1" not in section
+    assert report.extra_objects_section(paper_rows, reg_paper) == "No extra objects in this run."
+    # The accuracy figure gives obj7 a panel of its own, away from the paper's.
+    fig, curves = report._accuracy_plot(both)
+    try:
+        obj1_ax, obj7_ax = curves["obj1"]["ours"].axes, curves["obj7"]["ours"].axes
+        assert obj1_ax is not obj7_ax
+        assert obj1_ax.figure is not obj7_ax.figure  # another subfigure
+        assert (
+            curves["obj7"]["line"] in obj7_ax.lines and curves["obj7"]["ours"] not in obj1_ax.lines
+        )
+    finally:
+        report._pyplot().close(fig)
+    assert accuracy_figure(both, tmp_path / "a.png").stat().st_size > 20_000
+    assert calibration_figure(both, tmp_path / "c.png").stat().st_size > 20_000
+
+
+# --- the extra measurement pose ------------------------------------------------------------------
+
+
+def test_extra_pose_summary_counts_what_it_bought():
+    rows = []
+    for k, (extra, ok, base_ok) in enumerate(((1, 1, 0), (1, 1, 0), (1, 0, 1), (0, 1, 1))):
+        rows.append({"object": "obj3", "trial": k, "seed": 3000 + k, "method": "regrasp",
+                     "success": ok, "extra_pose": extra})  # fmt: skip
+        rows.append({"object": "obj3", "trial": k, "seed": 3000 + k, "method": "baseline",
+                     "success": base_ok})  # fmt: skip
+    text = extra_pose_summary(rows)
+    assert "| obj3 | 4 | 3 of 4 | 2/3 (67 %," in text and "| 1/1 (100 %," in text
+    assert "| 1/3 (33 %) |" in text  # the baseline on the three scenes with the extra pose
+    assert "one more pose in 3 of 4 regrasp trials" in text
+    no_column = [{k: v for k, v in r.items() if k != "extra_pose"} for r in rows]
+    assert "not recorded" in extra_pose_summary(no_column)
+
+
+# --- the run summary and reproduce()'s report with runs from two seeds ----------------------------
+
+
+def test_run_summary_counts_the_rows_of_two_seeds():
+    acc = [{"object": o, "seed": s * 100_000 + 1000 + k, "method": "trial"}
+           for s in (0, 1) for o in ("obj1", "obj7") for k in range(3)]  # fmt: skip
+    reg = [{"object": "obj1", "seed": s * 100_000 + 1000 + k, "method": m, "success": 1}
+           for s in (0, 1) for k in range(3) for m in ("baseline", "regrasp")]  # fmt: skip
+    text = report.run_summary(acc, reg, seed=0)
+    assert "12 accuracy grasps and 12 pick-and-place trials" in text
+    assert "6 per object and method" in text and "seeds 0, 1 pooled" in text
+    assert "extra objects obj7, reported apart" in text
+
+
+@pytest.mark.parametrize("new_columns", [False, True])
+def test_reproduce_report_with_two_seeds_and_an_extra_object(tmp_path, monkeypatch, new_columns):
+    from comgrasp_pin.experiments import reproduce as rep
+
+    rng = np.random.default_rng(1)
+    acc, reg = [], []
+    for seed in (0, 1):
+        for obj in ("obj1", "obj6", "obj7"):
+            for k in range(4):
+                trial_seed = seed * 100_000 + int(obj[3:]) * 1000 + k
+                theta = float(rng.uniform(0, 70))
+                row = _acc_row(obj, theta, 0.99, accuracy_line=0.97, pos_esti_line_m=0.01,
+                               seed=trial_seed, trial=k, method="trial")  # fmt: skip
+                if new_columns:
+                    row.update(pos_std_m=0.003, estimator="ipopt")
+                acc.append(row)
+                for method in ("baseline", "regrasp"):
+                    r = {"object": obj, "trial": k, "seed": trial_seed, "method": method,
+                         "success": int(method == "regrasp" or k % 2), "error": ""}  # fmt: skip
+                    if new_columns and method == "regrasp":
+                        r["extra_pose"] = k % 2
+                    reg.append(r)
+    monkeypatch.setattr(rep, "run_accuracy", lambda opts: acc)
+    monkeypatch.setattr(rep, "run_regrasp", lambda opts: reg)
+    text = rep.reproduce(rep.RunOptions(out=tmp_path, trials=4)).read_text()
+    assert "seeds 0, 1 pooled" in text and "8 per object and method" in text
+    for heading in ("## Calibration", "### Ours against the paper's method",
+                    "### The extra measurement pose", "## Extra objects", "### obj7"):  # fmt: skip
+        assert heading in text
+    assert ("![calibration](calibration.png)" in text) == new_columns
+    assert ("not recorded" in text.split("## Experiment 2")[0]) != new_columns
+    assert (tmp_path / "calibration.png").exists() == new_columns

@@ -80,6 +80,7 @@ def estimate_com(
     loss: str = "l2",
     huber_delta: float = 3.0,
     com_prior: AxisPrior | None = None,
+    payload_motion_ee: np.ndarray | None = None,
 ) -> ComEstimate:
     """Estimate the held payload's mass and CoM (ee frame) from static joint torques.
 
@@ -99,6 +100,10 @@ def estimate_com(
             follows a bump or a spike on one reading.
         huber_delta: the Huber threshold, in standard deviations of a torque difference.
         com_prior: an ``AxisPrior`` (ipopt): the CoM near the rod's axis.
+        payload_motion_ee: (k, 4, 4) rigid motions in the ee frame that carry the payload
+            from where it sat at the first pose to where it sat at each pose (a held object
+            that shifted or turned in the jaws; the first is the identity), or None (it
+            stayed put). The CoM is estimated where it was at the first pose.
 
     Raises:
         InvalidInputError, UnobservableError, EmptyGripperError, SolverError (all
@@ -106,7 +111,7 @@ def estimate_com(
     """
     check_options(method, rcond, loss, huber_delta, com_prior, torque_std)
     Q, dtau, sigma = validate_inputs(robot, q, tau_before, tau_after, torque_std)
-    red = _reduce(robot, Q, rcond)
+    red = _reduce(robot, Q, rcond, _motion_maps(payload_motion_ee, len(Q)))
     k, n = Q.shape
     b = dtau.ravel()
     Yr = red.Y @ red.B
@@ -198,10 +203,35 @@ def _inverse(H: np.ndarray) -> np.ndarray:
     return np.linalg.inv(H)
 
 
-def _reduce(robot: RobotModel, Q: np.ndarray, rcond: float) -> _Reduced:
+def _motion_maps(motion: np.ndarray | None, k: int) -> np.ndarray | None:
+    """(k, 4, 4) maps A_i: theta at pose i = A_i theta (theta at the first pose).
+
+    From the payload's rigid motions M_i = (R_i, p_i): m c_i = R_i (m c) + m p_i.
+    """
+    if motion is None:
+        return None
+    M = np.asarray(motion, dtype=float)
+    if M.shape != (k, 4, 4) or not np.all(np.isfinite(M)):
+        raise InvalidInputError(
+            f"payload_motion_ee must be ({k}, 4, 4) finite transforms (one per pose), got "
+            f"shape {M.shape}"
+        )
+    A = np.zeros((k, 4, 4))
+    A[:, 0, 0] = 1.0
+    A[:, 1:, 0] = M[:, :3, 3]
+    A[:, 1:, 1:] = M[:, :3, :3]
+    return A
+
+
+def _reduce(
+    robot: RobotModel, Q: np.ndarray, rcond: float, maps: np.ndarray | None = None
+) -> _Reduced:
     """The regression and the observable combination of theta, or UnobservableError."""
     k = len(Q)
     Y, T = stacked_regressor(robot, Q)
+    if maps is not None:
+        n = Q.shape[1]
+        Y = np.concatenate([Y[i * n : (i + 1) * n] @ maps[i] for i in range(k)])
     if k == 1:
         u, B = gravity_in_ee(T[0, :3, :3]), one_pose_basis(T[0, :3, :3])
         s_full = None

@@ -79,6 +79,25 @@ def plan_wrist_poses(
     return np.vstack([q, candidates[chosen]])
 
 
+def best_next_pose(robot: RobotModel, existing_q: np.ndarray, candidates: np.ndarray) -> int:
+    """The D-optimal next pose: index of the row of ``candidates`` (c, n).
+
+    The one that most increases log det of the information of the poses ``existing_q``
+    (k, n) for theta = (m, m c_ee).
+    """
+    existing_q = np.atleast_2d(np.asarray(existing_q, dtype=float))
+    candidates = np.atleast_2d(np.asarray(candidates, dtype=float))
+    if len(candidates) == 0:
+        raise InvalidInputError("best_next_pose needs at least one candidate configuration")
+    info = sum(Y.T @ Y for Y in (pose_regressor(robot, q)[0] for q in existing_q))
+    scores = []
+    for c in candidates:
+        Y = pose_regressor(robot, c)[0]
+        sign, logdet = np.linalg.slogdet(info + Y.T @ Y)
+        scores.append(logdet if sign > 0 else -np.inf)
+    return int(np.argmax(scores))
+
+
 def _wrist_candidates(
     robot: RobotModel, q: np.ndarray, max_offset: float, n_grid: int, margin: float
 ) -> np.ndarray:

@@ -12,7 +12,7 @@ from typing import cast
 import numpy as np
 
 from comgrasp_pin.errors import EmptyGripperError, InvalidInputError, UnobservableError
-from comgrasp_pin.estimation.estimate import MIN_MASS_KG, ComEstimate
+from comgrasp_pin.estimation.estimate import MIN_MASS_KG, ComEstimate, delta_method
 from comgrasp_pin.estimation.inputs import validate_inputs
 from comgrasp_pin.estimation.regressor import pose_regressor
 from comgrasp_pin.geometry import check_transform, closest_point_on_line
@@ -70,11 +70,13 @@ class RodFrameEstimate:
         com_obj: (3,) CoM in the rod's frame (m); com_obj[0] is x_CoM^O.
         mass: kg.
         condition_number: of the stacked problem (large: the poses do not separate the CoM).
+        cov: (4, 4) covariance of (mass, com_obj) from the torque noise, or None.
     """
 
     com_obj: np.ndarray
     mass: float
     condition_number: float
+    cov: np.ndarray | None = None
 
 
 def com_in_rod_frame(
@@ -83,6 +85,7 @@ def com_in_rod_frame(
     tau_before: np.ndarray,
     tau_after: np.ndarray,
     T_ee_obj: np.ndarray,
+    torque_std: float | np.ndarray | None = None,
 ) -> RodFrameEstimate:
     """CoM in the rod's frame from k >= 2 static poses with the rod's pose in the jaws at each.
 
@@ -92,9 +95,10 @@ def com_in_rod_frame(
     The CoM is fixed in the rod, so with theta_ee = (m, m c_ee) and c_ee = R c_obj + p per
     pose, dtau = Y theta_ee becomes linear in (m, m c_obj): rows (Y_0 + Y_c p, Y_c R),
     stacked over the poses. Inputs are checked as in ``estimate_com``; a mass not above
-    MIN_MASS_KG raises EmptyGripperError.
+    MIN_MASS_KG raises EmptyGripperError. With ``torque_std`` (N m, each reading) the result
+    carries the covariance of (m, c_obj).
     """
-    Q, dtau, _ = validate_inputs(robot, q, tau_before, tau_after, None)
+    Q, dtau, sigma = validate_inputs(robot, q, tau_before, tau_after, torque_std)
     T_all = np.asarray(T_ee_obj, dtype=float)
     if len(Q) < 2 or T_all.shape != (len(Q), 4, 4):
         raise InvalidInputError(
@@ -114,4 +118,8 @@ def com_in_rod_frame(
             f"the rod-frame estimate gives a payload of {theta[0]:.3g} kg: nothing held?"
         )
     cond = float(singular[0] / max(singular[-1], 1e-300))
-    return RodFrameEstimate(theta[1:] / theta[0], float(theta[0]), cond)
+    cov = None
+    if sigma is not None:
+        W = np.tile(1.0 / (2.0 * sigma**2), len(Q))  # 1 / variance of each difference
+        cov = delta_method(theta, np.linalg.inv(A.T @ (A * W[:, None])))
+    return RodFrameEstimate(theta[1:] / theta[0], float(theta[0]), cond, cov)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 # Accuracy (%) read from the paper's figure, by tilt theta (deg), objects 1 and 6.
 ACCURACY_THETA_DEG = (0.1, 3.2, 5.7, 9.1, 10.3, 12.3, 13.6, 16.6, 20.6, 25.5, 30.8)
 ACCURACY_PERCENT = {
@@ -19,6 +21,10 @@ SUCCESS_PERCENT = {
     "obj6": (86.9, 58.0),
 }
 
+METHOD = "one pose, CoM line ∩ rod axis"
+"""The paper's estimate (eq. 8): the vertical line through the CoM, from one static pose,
+met with the rod's axis seen by the side camera; our ``accuracy_line`` column."""
+
 
 def paper_accuracy_at(obj: str, theta_deg: float) -> float | None:
     """The paper's accuracy (%) for ``obj`` at ``theta_deg``, linearly interpolated between
@@ -30,3 +36,9 @@ def paper_accuracy_at(obj: str, theta_deg: float) -> float | None:
     if not ACCURACY_THETA_DEG[0] <= theta_deg <= ACCURACY_THETA_DEG[-1]:
         return None
     return float(np.interp(theta_deg, ACCURACY_THETA_DEG, ACCURACY_PERCENT[obj]))
+
+
+def paper_accuracy_bins(obj: str, edges: Sequence[float]) -> list[float | None]:
+    """The paper's accuracy (%) for ``obj`` at the centre of each bin of ``edges`` (deg);
+    None where the paper has no value (``paper_accuracy_at``)."""
+    return [paper_accuracy_at(obj, 0.5 * (lo + hi)) for lo, hi in zip(edges[:-1], edges[1:])]

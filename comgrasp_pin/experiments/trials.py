@@ -13,26 +13,29 @@ from dataclasses import asdict
 import numpy as np
 
 from comgrasp_pin.config import EpisodeConfig, SensorConfig, TorqueSensorConfig, TrialConfig
-from comgrasp_pin.planning.holding import holding_lever
+from comgrasp_pin.experiments.design import grasp_for_lever, lever_for_tilt, target_tilt
 
 ACCURACY_COLUMNS = [
     "object", "trial", "method", "seed", "length_m", "pos_real_m", "pos_esti_m", "theta_deg",
     "accuracy", "mass_real_kg", "mass_esti_kg", "theta_true_deg", "grasp_offset_m",
     "com_std_m", "residual_rms_Nm", "slip_seen", "pos_esti_line_m", "accuracy_line",
-    "rolled_slip", "dropped_at_roll", "wall_s",
+    "rolled_slip", "dropped_at_roll", "pos_std_m", "com_path", "extra_pose", "estimator",
+    *(f"pos_std_{part}_m" for part in
+      ("estimator", "tilt", "shift", "out_of_plane", "slide", "off_axis")),
+    "wall_s",
 ]  # fmt: skip
 REGRASP_COLUMNS = [
     "object", "trial", "method", "seed", "success", "regrasped", "reason", "length_m",
     "pos_real_m", "pos_esti_m", "theta_deg", "accuracy", "mass_real_kg", "mass_esti_kg",
-    "final_grasp_offset_m", "wall_s",
+    "final_grasp_offset_m", "pos_std_m", "extra_pose", "wall_s",
 ]  # fmt: skip
-ACCURACY_COM_RANGE = (0.0, 0.3)  # true CoM |pos_real| / length, uniform
+ACCURACY_COM_RANGE = (0.0, 0.3)  # true CoM |pos_real| / length, uniform (capped, see below)
 ACCURACY_GRASP_OFFSET = 0.25  # grasp offsets from the rectangle's centre, |offset| / length
-# Grasp-to-CoM distance as a fraction of the nominal holding lever (``holding_lever``),
-# uniform. Below about 0.6 the jaws hold the rod level; from 0.6 to 0.9 it turns to
-# 2-60 deg, depending on the object (measured), so the tilts span the paper's 0-30 deg and
-# beyond instead of piling up at 0 deg and past 50 deg as random grasps along the rod do.
-ACCURACY_LEVER_RANGE = (0.3, 0.9)
+# Grasp-to-CoM distance as a fraction of the nominal holding lever (``holding_lever``): the
+# span the tilt calibration covers (sim/tilt_calibration.json) and the grasps keep to. Each
+# grasp gets a target tilt (``design.target_tilt``: each 5 deg bin of 0-30 deg and 30-90 deg
+# in turn) and the lever at which the calibration saw its object settle there.
+ACCURACY_LEVER_RANGE = (0.3, 2.0)
 
 
 def trial_seed(run_seed: int, obj: str, trial: int) -> int:
@@ -63,22 +66,19 @@ def _episode_config(task: dict) -> EpisodeConfig:
 def accuracy_grasp(obj: str, seed: int, config) -> tuple[float, float]:
     """(true CoM, grasp offset) along the rod from its centre (m) for one accuracy grasp.
 
-    The true CoM is uniform within ACCURACY_COM_RANGE of the length, either side; the grasp
-    lies on the centre's side of it, ACCURACY_LEVER_RANGE holding levers away, and within
-    ACCURACY_GRASP_OFFSET of the length from the centre (on the handle). The experiment
-    designer uses the truth to spread the tilts; the robot never sees it.
+    The grasp targets a tilt (``design.target_tilt`` of the trial index, ``seed`` % 1000,
+    and the run seed, ``seed`` // 100000, as ``trial_seed`` composes them); the object's
+    tilt calibration gives the lever ratio for it (within ACCURACY_LEVER_RANGE). The true
+    CoM is uniform within ACCURACY_COM_RANGE of the length, either side, capped so that the
+    grasp that lever away on the centre's side stays within ACCURACY_GRASP_OFFSET of the
+    length from the centre (on the handle). The experiment designer uses the truth to
+    spread the tilts; the robot never sees it.
     """
-    from comgrasp_pin.simulation.objects import get_object
-
-    spec = get_object(obj)
+    trial, run_seed = int(seed) % 1_000, int(seed) // 100_000
+    ratio = np.clip(lever_for_tilt(obj, target_tilt(trial, run_seed)), *ACCURACY_LEVER_RANGE)
     rng = np.random.default_rng(seed + 17)
-    pos_real = rng.choice([-1.0, 1.0]) * rng.uniform(*ACCURACY_COM_RANGE) * spec.length
-    lever = rng.uniform(*ACCURACY_LEVER_RANGE) * holding_lever(
-        spec.mass, config.motion.grip_force, config.world.pad_friction
-    )
-    side = -1.0 if pos_real > 0 else 1.0
-    limit = ACCURACY_GRASP_OFFSET * spec.length
-    return float(pos_real), float(np.clip(pos_real + side * lever, -limit, limit))
+    return grasp_for_lever(obj, float(ratio), rng, config, ACCURACY_COM_RANGE,
+                           ACCURACY_GRASP_OFFSET)  # fmt: skip
 
 
 def accuracy_trial(task: dict) -> dict:
@@ -116,6 +116,11 @@ def accuracy_trial(task: dict) -> dict:
         "accuracy_line": score.accuracy_line,
         "rolled_slip": int(t.rolled_slip),
         "dropped_at_roll": int(t.dropped_at_roll),
+        "pos_std_m": t.x_com_std,
+        "com_path": t.com_path,
+        "extra_pose": int(t.extra_pose),
+        "estimator": config.trial.estimator,
+        **{f"pos_std_{k.replace(' ', '_')}_m": v for k, v in t.std_parts.items()},
         "wall_s": wall,
     }
 

@@ -15,7 +15,7 @@ MAX_FIT_POINTS = 3000
 
 def centre_line(
     xz: np.ndarray, bin_width: float = 0.01
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
     """The rod's axis in the ee x-z plane, from slice centres.
 
     The visible points are cut in slices across the rod; the median of each slice is a
@@ -23,12 +23,14 @@ def centre_line(
     rejection. Heads and weights, which stand off the handle's axis over a few slices
     only, then do not pull the axis (a plain PCA of all points would).
     Returns (unit direction (2,) with positive x, the point nearest the TCP (2,), (N,) bool
-    mask of the points in the slices kept: the handle).
+    mask of the points in the slices kept: the handle, the standard error of the direction's
+    angle (rad) from the kept slice centres' scatter about the line).
     """
     _, direction = fit_line(np.c_[xz, np.zeros(len(xz))])
     direction = direction[:2] / np.linalg.norm(direction[:2])
     point = xz.mean(axis=0)
     in_kept = np.ones(len(xz), dtype=bool)
+    angle_std = np.inf
     for _ in range(2):
         normal = np.array([-direction[1], direction[0]])
         along, across = xz @ direction, xz @ normal
@@ -45,9 +47,20 @@ def centre_line(
         point = intercept * normal
         direction = (direction + slope * normal) / np.hypot(1.0, slope)
         in_kept = np.isin(bins, np.array(labels)[keep])
+        angle_std = _slope_std(c[keep], slope, intercept) / (1.0 + slope * slope)
     if direction[0] < 0:
         direction = -direction
-    return direction, point - (point @ direction) * direction, in_kept
+    return direction, point - (point @ direction) * direction, in_kept, float(angle_std)
+
+
+def _slope_std(c: np.ndarray, slope: float, intercept: float) -> float:
+    """Standard error of a fitted line's slope through the points ``c`` (k, 2)."""
+    k = len(c)
+    spread = float(np.sum((c[:, 0] - c[:, 0].mean()) ** 2))
+    if k < 3 or spread <= 0.0:
+        return float("inf")
+    residual = c[:, 1] - (slope * c[:, 0] + intercept)
+    return float(np.sqrt(np.sum(residual**2) / (k - 2) / spread))
 
 
 def fit_cylinder(

@@ -28,6 +28,9 @@ TABLE_MARGIN = 0.003  # points less than this above the table are the table (m)
 MIN_PIXELS = 60
 MAX_AXIS_FROM_TCP = 0.035  # a held rod's axis passes this close to the TCP (m)
 MIN_EXTENT = 0.05  # a held rod is at least this long in view (m)
+HEAD_RHO = 1.5  # points farther than this many handle radii (plus HEAD_MARGIN) from the axis
+HEAD_MARGIN = 0.003  # ... belong to a head or weight (m)
+MIN_HEAD_POINTS = 30
 OFF_AXIS_PERCENTILE = 99.0  # SideView.off_axis: nearly the farthest point, robust to a stray
 MAX_CYLINDER_MISFIT = 5e-4  # a round handle's points lie this close to the fitted cylinder (m)
 # The gripper's own volume in the ee frame (from the URDF): fingers and pads (with margin),
@@ -53,6 +56,23 @@ class SideView:
         rect: OpenCV rotated rectangle of the mask.
         axis_px: (2, 2) pixel ends of the axis.
         tcp_px: (2,) pixel of the TCP.
+        radius: the handle's radius (m): from the jaws' opening, or fitted.
+        off_axis: how far the rod's visible surface reaches from its axis (m, the
+            OFF_AXIS_PERCENTILE-th percentile): a head or a weight reaches farther than the
+            handle. The rod's CoM lies within this of the axis.
+        axis_std: standard error of the axis' position from the handle's surface points
+            (m): the spread of their distances from the fitted cylinder over sqrt(count).
+        tilt_std: standard error of ``theta`` (rad) from the scatter of the rod's slice
+            centres about its axis.
+        head_ee: (3,) mean offset from the axis (ee frame, m) of the visible points standing
+            off the handle (a head, a weight), or None when fewer than MIN_HEAD_POINTS do;
+            head_points: their count. Two views' ``head_ee`` turn with the rod about its
+            own axis.
+        surface_y: ee-y (m) of the handle's visible surface where the axis passes nearest
+            the TCP, and surface_slope its change per metre along the rod (a line fitted to
+            the handle's points); between two views they give the rod's shift along the jaw
+            axis and its turn out of the jaws' plane. surface_y_std, surface_slope_std: their
+            standard errors.
     """
 
     T_ee_obj: np.ndarray
@@ -66,6 +86,13 @@ class SideView:
     radius: float
     off_axis: float
     axis_std: float
+    tilt_std: float
+    head_ee: np.ndarray | None
+    head_points: int
+    surface_y: float
+    surface_slope: float
+    surface_y_std: float
+    surface_slope_std: float
 
 
 def _gripper_volume(p: np.ndarray) -> np.ndarray:
@@ -137,7 +164,7 @@ def observe_held_rod(
     mask = blobs(candidate, MIN_PIXELS, "side-camera image")
     points = p[mask]
     # Tilt lives in the ee x-z plane; the jaws fix the axis at y = 0.
-    x_axis, offset_xz, handle = centre_line(points[:, [0, 2]])
+    x_axis, offset_xz, handle, tilt_std = centre_line(points[:, [0, 2]])
     if handle.sum() >= MIN_PIXELS:
         x_fit, offset_fit, misfit = fit_cylinder(points[handle], x_axis, offset_xz, handle_radius)
         # Trust the refinement only near the slice estimate (it can lock on a wrong side)
@@ -181,11 +208,32 @@ def observe_held_rod(
     contours, _ = cv2.findContours(mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     rect = cv2.minAreaRect(np.vstack(contours))
     off_axis = float(np.percentile(rho, OFF_AXIS_PERCENTILE))
+    # Where the parts standing off the handle (a head, a weight) lie around the axis: their
+    # turn between two views is the rod's roll about its own axis, which the axis cannot show.
+    standing = rho > HEAD_RHO * radius + HEAD_MARGIN
+    radial = points - offset - np.outer(along, x_axis)
+    head_ee = radial[standing].mean(axis=0) if standing.sum() >= MIN_HEAD_POINTS else None
+    # Where the handle's visible surface lies along the jaw axis (the camera's depth), as a
+    # line along the rod: its change between two views is the rod shifting along the jaws
+    # and turning out of their plane (the grasp's compliance), which the axis cannot show.
+    depth_line = _depth_line(along[handle], points[handle, 1])
     n_handle = max(int(handle.sum()), 1)
     axis_std = float(np.std(rho[handle] - radius) / np.sqrt(n_handle)) if handle.any() else radius
     return SideView(T_ee_obj, theta, float(hi - lo), grasp_offset, mask, rect,
                     camera.project(ends_cam), camera.project(tcp_cam[None])[0],
-                    float(radius), off_axis, axis_std)  # fmt: skip
+                    float(radius), off_axis, axis_std, tilt_std, head_ee,
+                    int(standing.sum()), *depth_line)  # fmt: skip
+
+
+def _depth_line(along: np.ndarray, y: np.ndarray) -> tuple[float, float, float, float]:
+    """(y at along = 0, dy/d along, and their standard errors) of a line through (along, y)."""
+    if len(along) < 3 or np.ptp(along) <= 0.0:
+        return float(np.median(y)), 0.0, float("inf"), float("inf")
+    A = np.c_[np.ones(len(along)), along]
+    coef, *_ = np.linalg.lstsq(A, y, rcond=None)
+    res = y - A @ coef
+    cov = np.linalg.inv(A.T @ A) * float(res @ res) / max(len(y) - 2, 1)
+    return float(coef[0]), float(coef[1]), float(np.sqrt(cov[0, 0])), float(np.sqrt(cov[1, 1]))
 
 
 def _in_capsule(p: np.ndarray, p0: np.ndarray, p1: np.ndarray, radius: float) -> np.ndarray:

@@ -19,6 +19,7 @@ import numpy as np
 from comgrasp_pin.config import RegraspConfig
 from comgrasp_pin.errors import InvalidInputError, UnobservableError
 from comgrasp_pin.geometry import GraspPose
+from comgrasp_pin.planning.holding import holding_lever
 
 
 @dataclass(frozen=True)
@@ -61,6 +62,19 @@ def decide(
     else:
         return RegraspDecision(False, "grasp holds near the CoM", x_com_obj, grasp_offset_obj)
     return RegraspDecision(True, reason, x_com_obj, grasp_offset_obj)
+
+
+def needs_another_pose(
+    x_com_std: float, mass: float, grip_force: float, config: RegraspConfig
+) -> bool:
+    """Whether the CoM is known too poorly for a regrasp at it to hold: its standard
+    deviation along the rod (m) above ``holding_margin`` of the jaws' holding lever for a
+    payload of ``mass`` (kg) at ``grip_force`` (N per finger, pads as the robot knows them:
+    ``pad_friction``), over 1.96 (a 95 % miss stays within that share of the lever).
+    An unknown std (NaN) counts as too large."""
+    lever = holding_lever(mass, grip_force, config.pad_friction)
+    tolerance = config.holding_margin * lever / 1.96
+    return not (x_com_std <= tolerance)
 
 
 def rod_axis_world(T_world_ee: np.ndarray, T_ee_obj: np.ndarray) -> np.ndarray:

@@ -7,14 +7,15 @@ the side views); ``locate_com`` turns them, with tau_before, into the estimates;
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from comgrasp_pin.config import EpisodeConfig
 from comgrasp_pin.estimation import AxisPrior, ComEstimate, com_along_axis, estimate_com
-from comgrasp_pin.estimation.rod_axis import com_in_rod_frame
 from comgrasp_pin.perception import SideView
+from comgrasp_pin.procedures import uncertainty
+from comgrasp_pin.procedures.rod_motion import rod_motion
 from comgrasp_pin.robot import RobotModel
 
 
@@ -29,9 +30,8 @@ class TrialMeasurement:
         x_com_obj: estimated CoM along the perceived rod from its perceived centre (m).
         x_com_line: the same from the paper's single-pose estimate (the CoM line met with
             the rod axis), from the same measurements.
-        rolled_slip: the rod turned in the jaws at the rolled pose; the two poses were then
-            combined in the rod's frame, each with its own side view (at tilts of at least
-            ``rod_frame_min_tilt_deg``; below it the one-pose estimate is kept).
+        rolled_slip: the rod turned in the jaws by more than ``roll_slip_deg`` at the rolled
+            pose (the two poses are stacked with the rod's motion all the same).
         dropped_at_roll: the side camera found nothing in the jaws at the rolled pose.
         mass_esti: kg. rod_length: as the top view measured it (m).
         grasp_z: eelink height of the grasp (m); rod_axis_z: height of the rod's axis on
@@ -41,6 +41,11 @@ class TrialMeasurement:
             averaged torque readings there (N m).
         T_world_ee: (4, 4) ee pose at the first measurement configuration.
         side_view: the side camera's view at the first measurement pose.
+        x_com_std: standard deviation of the estimated CoM point along the rod (m), from
+            every source the robot knows (``ComLocation.std``); std_parts: by source.
+        com_path: how the CoM was located: "one pose" or "k poses".
+        extra_pose: the CoM was known too poorly after the planned poses
+            (``planning.regrasp.needs_another_pose``), so one more was measured.
     """
 
     theta: float
@@ -61,27 +66,41 @@ class TrialMeasurement:
     tau_after: np.ndarray
     T_world_ee: np.ndarray
     side_view: SideView
+    x_com_std: float
+    std_parts: dict
+    com_path: str
+    extra_pose: bool
 
 
 @dataclass(frozen=True)
 class HeldReadings:
-    """The held rod's readings: torques per pose, the side views, what happened at the roll."""
+    """The held rod's readings at each measurement pose.
+
+    Attributes:
+        after: the averaged torques per pose (``TorqueMeasurement``).
+        tau_before: (n,) the empty arm's torques per pose (N m).
+        views: the side view per pose, None where the camera saw nothing usable.
+        moved: the rod turned in the jaws by more than ``roll_slip_deg`` at a later pose.
+        dropped: the camera found nothing in the jaws at a later pose.
+        slip_seen: the slip monitor's verdict while the rod was lifted and held.
+    """
 
     after: list
-    side: SideView
-    side_rolled: SideView | None
+    tau_before: list
+    views: list
     moved: bool
     dropped: bool
     slip_seen: bool
 
+    @property
+    def side(self) -> SideView:
+        """The view at the first pose (always there)."""
+        return self.views[0]
 
-def _same_direction(T: np.ndarray, T_ref: np.ndarray) -> np.ndarray:
-    """``T`` turned half a turn about its z if its x points against ``T_ref``'s."""
-    if T[:3, 0] @ T_ref[:3, 0] >= 0:
-        return T
-    T = T.copy()
-    T[:3, :2] *= -1.0
-    return T
+    def with_pose(self, after, tau_before: np.ndarray, view: SideView | None) -> HeldReadings:
+        """These readings and one more pose's."""
+        return replace(self, after=[*self.after, after], tau_before=[*self.tau_before,
+                       tau_before], views=[*self.views, view])  # fmt: skip
 
 
 def axis_prior(side: SideView) -> AxisPrior:
@@ -93,52 +112,72 @@ def axis_prior(side: SideView) -> AxisPrior:
     return AxisPrior.from_rod(side.T_ee_obj, std)
 
 
-def locate_com(
-    robot: RobotModel, held: HeldReadings, tau_before: list, config: EpisodeConfig
-) -> tuple[ComEstimate, ComEstimate, float, float]:
-    """(estimate used, the paper's estimate, x_com_obj, x_com_line).
+@dataclass(frozen=True)
+class ComLocation:
+    """Where the CoM lies along the rod, by which path, and how well it is known.
+
+    Attributes:
+        estimate: the estimate used; estimate_line: the paper's (one pose, least squares).
+        x_com: CoM along the perceived rod from its perceived centre (m); x_line: the
+            paper's (the vertical CoM line met with the axis).
+        path: "one pose", or "k poses" with k their number (see ``locate_com``).
+        std: the standard deviation of the CoM point along the rod (m), from every source
+            in ``std_parts`` (``procedures.uncertainty``): estimator, slip, tilt, views.
+    """
+
+    estimate: ComEstimate
+    estimate_line: ComEstimate
+    x_com: float
+    x_line: float
+    path: str
+    std: float
+    std_parts: dict
+
+
+def locate_com(robot: RobotModel, held: HeldReadings, config: EpisodeConfig) -> ComLocation:
+    """The CoM along the rod from the readings.
 
     The paper's: one pose, least squares, the vertical CoM line met with the rod's axis.
     Ours (``estimator``: "ipopt" adds the side view's ``axis_prior``; "lstsq" is the closed
-    form without it): the two-pose 3-D CoM projected on the axis when the rod stayed put;
-    the two poses combined in the rod's frame when it turned (at tilts of at least
-    ``rod_frame_min_tilt_deg``); the first pose alone otherwise. A payload not measurably
-    above zero: EmptyGripperError.
+    form without it): every pose whose view saw the rod, stacked with the rod's motion in
+    the jaws since the first (``rod_motion``), the 3-D CoM projected on the axis; the first
+    pose alone when no other view saw it. A payload not measurably above zero:
+    EmptyGripperError.
     """
     trial, after = config.trial, held.after
     n_std = config.sensors.torque.noise_std / np.sqrt(after[0].n_samples)
     pair_std = max(n_std * (1.0 if trial.tau_before == "measured" else np.sqrt(0.5)), 1e-6)
-    T_obj = held.side.T_ee_obj
+    side, T_obj = held.side, held.side.T_ee_obj
+    use = [i for i, view in enumerate(held.views) if view is not None]
+    q = np.array([after[i].q for i in use])
+    tau_a = np.array([after[i].tau for i in use])
+    tau_b = np.array([held.tau_before[i] for i in use])
+    views = [held.views[i] for i in use]
 
     def estimate(k: int, method: str, prior: AxisPrior | None) -> ComEstimate:
-        q = np.array([m.q for m in after[:k]])
-        tau_a = np.array([m.tau for m in after[:k]])
-        return estimate_com(robot, q, np.array(tau_before[:k]), tau_a, method=method,
+        return estimate_com(robot, q[:k], tau_b[:k], tau_a[:k], method=method,
                             torque_std=pair_std, com_prior=prior)  # fmt: skip
 
     est_line = estimate(1, "lstsq", None)
     x_line = com_along_axis(est_line, T_obj)
-    prior = axis_prior(held.side) if trial.estimator == "ipopt" else None
-    if prior is None:
-        est, x_com = est_line, x_line
-    else:
-        est = estimate(1, "ipopt", prior)
-        x_com = com_along_axis(est, T_obj)
-    two_poses = len(after) > 1
-    if two_poses and not held.moved:
-        est = estimate(len(after), trial.estimator, prior)
-        x_com = com_along_axis(est, T_obj)
-    elif (
-        two_poses
-        and held.side_rolled is not None
-        and abs(held.side.theta) >= np.radians(trial.rod_frame_min_tilt_deg)
-    ):
-        # The rod turned in the jaws between the poses: the CoM is fixed in the rod, so the
-        # two poses still stack when written in the rod's frame, each with its own view.
-        T_rolled = _same_direction(held.side_rolled.T_ee_obj, T_obj)
-        T_views = [T_obj, T_rolled]
-        rod_frame = com_in_rod_frame(robot, [m.q for m in after], tau_before,
-                                     [m.tau for m in after], T_views)  # fmt: skip
-        if rod_frame.condition_number < trial.max_condition:
-            x_com = float(rod_frame.com_obj[0])
-    return est, est_line, x_com, x_line
+    prior = axis_prior(side) if trial.estimator == "ipopt" else None
+    est = est_line if prior is None else estimate(1, "ipopt", prior)
+    x_com, path = com_along_axis(est, T_obj), "one pose"
+    parts = {"tilt": uncertainty.tilt_std_one_view(est, T_obj, side.tilt_std)}
+    if len(use) > 1:
+        # Several poses, the rod where each view saw it: the CoM is fixed in the rod, so
+        # the poses stack with the rod's motion since the first (the grasp's compliance, a
+        # slip).
+        motion = np.stack([np.eye(4)] + [rod_motion(side, v) for v in views[1:]])
+        est = estimate_com(robot, q, tau_b, tau_a, method=trial.estimator, torque_std=pair_std,
+                           com_prior=prior, payload_motion_ee=motion)  # fmt: skip
+        x_com, path = com_along_axis(est, T_obj), f"{len(use)} poses"
+        parts = uncertainty.motion_stds(robot, q, tau_b, tau_a, est, T_obj, views,
+                                        trial.estimator, pair_std, prior)  # fmt: skip
+    parts["estimator"] = uncertainty.estimator_std(est, T_obj)
+    if path == "one pose" and prior is None:
+        # the closed form meets the vertical CoM line with the axis: a CoM off the axis by
+        # h moves that point by h tan(theta) (the prior's std is the h the view allows)
+        parts["off axis"] = axis_prior(side).std * abs(np.tan(side.theta))
+    std = float(np.sqrt(sum(v * v for v in parts.values())))
+    return ComLocation(est, est_line, x_com, x_line, path, std, parts)

@@ -19,16 +19,19 @@ import numpy as np
 from comgrasp_pin.config import EpisodeConfig
 from comgrasp_pin.errors import (
     EmptyGripperError,
+    IKError,
     ObjectNotFoundError,
     PerceptionError,
     RodDroppedError,
     RodSlippedError,
 )
+from comgrasp_pin.estimation.pose_planning import best_next_pose
 from comgrasp_pin.geometry import GraspPose
 from comgrasp_pin.motion.ik import grasp_frame, solve_ik, solve_top_down
 from comgrasp_pin.perception import RodDetection
 from comgrasp_pin.perception.top_down import nearest_on_handle
 from comgrasp_pin.planning import retry
+from comgrasp_pin.planning.regrasp import needs_another_pose
 from comgrasp_pin.planning.retry import heavy_side_from_tilt
 from comgrasp_pin.procedures.cell import Cell, SlipWatch, TorqueMeasurement
 from comgrasp_pin.procedures.measurement import HeldReadings, TrialMeasurement, locate_com
@@ -124,7 +127,9 @@ def grasp_and_lift(
         cell.move_linear(T_up, trial.lift_time)
 
 
-def measure_held(cell: Cell, plan: _Plan, watch: SlipWatch, config: EpisodeConfig) -> HeldReadings:
+def measure_held(
+    cell: Cell, plan: _Plan, watch: SlipWatch, tau_before: list, config: EpisodeConfig
+) -> HeldReadings:
     """Back at the first measurement pose: watch, measure the torques and look; then the
     same at the rolled pose (unwatched: the roll is slow), and back."""
     trial, hint = config.trial, plan.centre_hint
@@ -152,7 +157,39 @@ def measure_held(cell: Cell, plan: _Plan, watch: SlipWatch, config: EpisodeConfi
         except PerceptionError:
             moved = True
         cell.move_to(plan.poses[0], duration=trial.roll_time)
-    return HeldReadings(after, side, side_rolled, moved, dropped, slip_seen)
+    views = [side] if len(plan.poses) == 1 else [side, side_rolled]
+    return HeldReadings(after, list(tau_before), views, moved, dropped, slip_seen)
+
+
+def measure_another_pose(
+    cell: Cell, plan: _Plan, held: HeldReadings, config: EpisodeConfig
+) -> HeldReadings:
+    """One more static pose: the first rolled about ee-x by the D-optimal one of
+    ``extra_rolls_deg``; its empty-arm torques from the model, carried over by the mean
+    difference between the measured and the modelled ones at the other poses."""
+    robot, trial = cell.robot, config.trial
+    candidates = []
+    for roll in config.regrasp.extra_rolls_deg:
+        T = plan.T_meas.copy()
+        T[:3, :3] = plan.T_meas[:3, :3] @ _rot_x(np.radians(roll))
+        try:
+            candidates.append(solve_ik(robot, T, plan.poses[0]))
+        except IKError:
+            continue
+    if not candidates:
+        return held
+    measured_q = np.array([m.q for m in held.after])
+    q = candidates[best_next_pose(robot, measured_q, np.array(candidates))]
+    bias = np.mean([tb - robot.gravity_torques(m.q) for tb, m in zip(held.tau_before,
+                    held.after, strict=True)], axis=0)  # fmt: skip
+    cell.move_to(q, duration=trial.roll_time)
+    after = cell.measure_torques(trial.settle, trial.window)
+    try:
+        view = cell.look_from_side(after.q, plan.detection.length, plan.centre_hint)
+    except PerceptionError:
+        view = None
+    cell.move_to(plan.poses[0], duration=trial.roll_time)
+    return held.with_pose(after, robot.gravity_torques(after.q) + bias, view)
 
 
 def trial_grasp(
@@ -173,30 +210,39 @@ def trial_grasp(
     watch = cell.slip_watch(config.sensors.watch_dt, config.motion.grip_force, detection.length,
                             plan.centre_hint)  # fmt: skip
     grasp_and_lift(cell, plan, watch, careful, config)
-    held = measure_held(cell, plan, watch, config)
+    held = measure_held(cell, plan, watch, tau_before, config)
     try:
-        est, est_line, x_com, x_line = locate_com(cell.robot, held, tau_before, config)
+        loc = locate_com(cell.robot, held, config)
+        extra = needs_another_pose(loc.std, loc.estimate.mass, config.motion.grip_force,
+                                   config.regrasp)  # fmt: skip
+        if extra:
+            held = measure_another_pose(cell, plan, held, config)
+            loc = locate_com(cell.robot, held, config)
     except EmptyGripperError as exc:
         raise RodDroppedError(str(exc), _heavy_side(watch, plan, config)) from exc
     return TrialMeasurement(
         theta=held.side.theta,
         slip_seen=held.slip_seen,
         T_ee_obj=held.side.T_ee_obj,
-        x_com_obj=x_com,
-        x_com_line=x_line,
+        x_com_obj=loc.x_com,
+        x_com_line=loc.x_line,
         rolled_slip=held.moved,
         dropped_at_roll=held.dropped,
-        mass_esti=est.mass,
+        mass_esti=loc.estimate.mass,
         rod_length=detection.length,
         grasp_z=grasp_frame(plan.grasp)[2, 3],
         rod_axis_z=detection.grasp.z,
-        estimate=est,
-        estimate_line=est_line,
+        estimate=loc.estimate,
+        estimate_line=loc.estimate_line,
         q_meas=np.array([m.q for m in held.after]),
-        tau_before=np.array(tau_before),
+        tau_before=np.array(held.tau_before),
         tau_after=np.array([m.tau for m in held.after]),
         T_world_ee=cell.robot.ee_pose(held.after[0].q),
         side_view=held.side,
+        x_com_std=loc.std,
+        std_parts=loc.std_parts,
+        com_path=loc.path,
+        extra_pose=extra,
     )
 
 

@@ -78,6 +78,8 @@ class EpisodeResult:
             "regrasped": int(self.regrasped),
             "reason": self.reason,
             "final_grasp_offset_m": self.final_grasp_offset,
+            "pos_std_m": t.x_com_std if t else nan,
+            "extra_pose": int(t.extra_pose) if t else 0,
             "wall_s": sum(self.timings.values()),
         }
 

@@ -1,4 +1,9 @@
-"""The six rod objects of the experiments and how they enter the MuJoCo world.
+"""The rod objects of the experiments and how they enter the MuJoCo world.
+
+``PAPER_OBJECTS`` (obj1-obj6) are the paper's six rods, kept as they were; ``EXTRA_OBJECTS``
+(obj7, obj8) are rods on which the paper's assumption, the CoM on the rod's axis, fails: a
+claw hammer whose tall head carries the CoM about 2 cm above the axis, and a thick (7 cm)
+rod. Results on the extras are reported apart from the paper's six.
 
 Object frame ``obj`` (docs/design.md section 2): origin at the rod's geometric centre (middle of
 its length, on the handle's axis), x along the long axis (heavy end towards +x), z up when
@@ -80,16 +85,18 @@ class ObjectSpec:
     """A rod object. ``parts[0]`` is the handle (the part the gripper holds).
 
     Attributes:
-        name: "obj1" ... "obj6".
+        name: "obj1" ... "obj8".
         description: what it looks like.
         length: overall length along obj-x (m).
         parts: segments; see ``Part``.
+        paper: one of the paper's six rods (else an extra, reported apart).
     """
 
     name: str
     description: str
     length: float
     parts: tuple[Part, ...]
+    paper: bool = True
 
     @property
     def thickness(self) -> float:
@@ -134,7 +141,7 @@ class ObjectSpec:
 
 
 def _load_objects() -> dict[str, ObjectSpec]:
-    """The six rods, from ``sim/objects.json`` (data, not code)."""
+    """The rods, from ``sim/objects.json`` (data, not code), in the file's order."""
     data = json.loads(sim_path("objects.json").read_text())
     colours = {name: tuple(rgba) for name, rgba in data["colours"].items()}
     objects = {}
@@ -151,15 +158,19 @@ def _load_objects() -> dict[str, ObjectSpec]:
             )  # fmt: skip
             for p in o["parts"]
         )
-        objects[name] = ObjectSpec(name, o["description"], o["length_m"], parts)
+        objects[name] = ObjectSpec(name, o["description"], o["length_m"], parts, o["paper"])
     return objects
 
 
 OBJECTS: dict[str, ObjectSpec] = _load_objects()
+PAPER_OBJECTS: tuple[str, ...] = tuple(n for n, o in OBJECTS.items() if o.paper)
+"""The paper's six rods, obj1-obj6."""
+EXTRA_OBJECTS: tuple[str, ...] = tuple(n for n, o in OBJECTS.items() if not o.paper)
+"""Rods beyond the paper's (obj7, obj8), on which the CoM lies off the axis; reported apart."""
 
 
 def get_object(name: str) -> ObjectSpec:
-    """The object called ``name`` ("obj1" ... "obj6")."""
+    """The object called ``name`` ("obj1" ... "obj8")."""
     if name not in OBJECTS:
         raise InvalidInputError(f"unknown object {name!r}; objects are {sorted(OBJECTS)}")
     return OBJECTS[name]

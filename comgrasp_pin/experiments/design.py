@@ -1,0 +1,414 @@
+"""The accuracy experiment's design: grasps placed for target tilts.
+
+A rod grasped a lever e from its CoM turns in the jaws once its weight's moment m g e
+exceeds what the jaws hold (``planning.holding``); it settles where m g e cos(theta) meets
+that moment, give or take the lift's dynamics. Random grasps therefore either hold level or
+turn far, and the paper's 0-30 deg range stays nearly empty. The design instead
+
+1. measures, once per object, the TRUE settled tilt against the lever ratio r = e / (the
+   nominal holding lever) in trial grasps (``measure_tilt_curve``; ``calibrate`` writes the
+   monotone median curves to ``sim/tilt_calibration.json``),
+2. gives each trial a target tilt, stratified over 5 deg bins (``target_tilt``): of every 7
+   consecutive trials one targets each bin of 0-30 deg and one 30-90 deg, so at the paper's
+   50 trials per object each bin below 30 deg holds at least 7 targets,
+3. inverts the object's curve to a lever ratio (``lever_for_tilt``) and places the grasp
+   that lever from the true CoM on the centre's side (``grasp_for_lever``).
+
+The truth only chooses where to grasp; the robot never sees it. Calibrate with
+``python -m comgrasp_pin.experiments.design --out sim/tilt_calibration.json``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import multiprocessing
+import sys
+import time
+from collections.abc import Sequence
+from concurrent.futures import ProcessPoolExecutor
+from functools import cache
+from pathlib import Path
+
+import numpy as np
+
+from comgrasp_pin._paths import sim_path
+from comgrasp_pin.errors import InvalidInputError, MissingAssetError
+from comgrasp_pin.planning.holding import holding_lever
+
+CALIBRATION_FILE = "tilt_calibration.json"
+BIN_DEG = 5.0  # width of a tilt bin (deg)
+LOW_DEG = 30.0  # the paper's range, 0-30 deg, split into bins of BIN_DEG
+MAX_DEG = 90.0  # the rest of the targets lie in LOW_DEG-MAX_DEG
+LOW_BINS = int(round(LOW_DEG / BIN_DEG))  # 6
+STRATA = LOW_BINS + 1  # the six low bins and 30-90 deg, in turn
+# Lever ratios of the calibration (e / holding lever), before refinement: the rods start
+# to turn at 0.45-0.75 and settle at 50-77 deg above it (farther out the tilt falls again).
+CALIBRATION_LEVERS = (0.3, 0.45, 0.55, 0.6, 0.65, 0.7, 0.75, 0.8, 0.9, 1.0, 1.2)
+CALIBRATION_SEEDS = (0, 1, 2)
+REFINE_ROUNDS = 4  # rounds of bisection where the curve rises steeply through 0-35 deg ...
+REFINE_PER_ROUND = 2  # ... this many intervals per object and round ...
+REFINE_MIN_DEG = 4.0  # ... that span more than this of 0-35 deg ...
+REFINE_MIN_WIDTH = 0.004  # ... and are wider than this (lever ratio)
+GAP_DEG = 20.0  # a rise this steep between calibrated neighbours is a step (no tilts inside)
+CALIBRATION_SEED_BASE = 7_000_000  # far from the experiments' trial seeds
+_GOLDEN = 0.5 * (np.sqrt(5.0) - 1.0)
+
+
+def wrap_tilt(theta: float) -> float:
+    """A tilt (rad) wrapped to [-pi/2, pi/2): a rod's axis has no direction, so a tilt is
+    defined modulo pi."""
+    return float((theta + 0.5 * np.pi) % np.pi - 0.5 * np.pi)
+
+
+# --- where to grasp ----------------------------------------------------------------------
+
+
+def grasp_for_lever(
+    obj: str,
+    lever_ratio: float,
+    rng: np.random.Generator,
+    config,
+    com_range: tuple[float, float],
+    grasp_limit: float,
+) -> tuple[float, float]:
+    """(true CoM, grasp offset) along the rod from its centre (m), the grasp ``lever_ratio``
+    holding levers from the CoM on the centre's side.
+
+    The true CoM's distance from the centre is uniform within ``com_range`` (fractions of
+    the length), either side, but no farther than the grasp can follow: the grasp stays
+    within ``grasp_limit`` (a fraction of the length) of the centre, on the handle, at the
+    requested lever (it is clipped there only against rounding).
+    """
+    from comgrasp_pin.simulation.objects import get_object
+
+    spec = get_object(obj)
+    lever = lever_ratio * holding_lever(
+        spec.mass, config.motion.grip_force, config.world.pad_friction
+    )
+    limit = grasp_limit * spec.length
+    lo, hi = com_range[0] * spec.length, com_range[1] * spec.length
+    sign = rng.choice([-1.0, 1.0])
+    pos_real = sign * rng.uniform(lo, max(lo, min(hi, limit + lever)))
+    offset = pos_real - sign * lever  # towards the centre, and past it for a long lever
+    return float(pos_real), float(np.clip(offset, -limit, limit))
+
+
+# --- target tilts ------------------------------------------------------------------------
+
+
+def target_tilt(trial: int, run_seed: int = 0) -> float:
+    """Target tilt (deg, in [0, 90)) of trial ``trial`` of a run with seed ``run_seed``.
+
+    Trials take the strata in turn: bin b = trial % 7 targets [5 b, 5 b + 5) deg for b < 6,
+    and bin 6 targets [30, 90) deg; within its stratum the j-th visit (j = trial // 7) sits
+    at the golden-ratio sequence's j-th point from a start drawn from the run seed, so
+    targets spread evenly over the bin (uniform in the limit). It depends on the trial
+    index and run seed only: the same trial gets the same target in every run, with any
+    number of trials, on every object, and under ``--resume``.
+    """
+    if trial < 0:
+        raise InvalidInputError(f"trial must be >= 0, got {trial}")
+    stratum, visit = trial % STRATA, trial // STRATA
+    start = np.random.default_rng([int(run_seed), stratum, 11]).random()
+    u = (start + visit * _GOLDEN) % 1.0
+    if stratum < LOW_BINS:
+        return float(BIN_DEG * (stratum + u))
+    return float(LOW_DEG + (MAX_DEG - LOW_DEG) * u)
+
+
+def target_tilts(n_trials: int, run_seed: int = 0) -> np.ndarray:
+    """(n_trials,) ``target_tilt`` of trials 0 .. n_trials - 1 (deg)."""
+    return np.array([target_tilt(k, run_seed) for k in range(n_trials)])
+
+
+# --- the calibrated curves ---------------------------------------------------------------
+
+
+def monotone(y: Sequence[float]) -> np.ndarray:
+    """The non-decreasing sequence nearest ``y`` in least squares (pool adjacent
+    violators): the calibration's medians made monotone."""
+    blocks: list[list[float]] = []  # [mean, count]
+    for v in map(float, y):
+        blocks.append([v, 1.0])
+        while len(blocks) > 1 and blocks[-2][0] > blocks[-1][0]:
+            (m1, n1), (m2, n2) = blocks.pop(-2), blocks.pop()
+            blocks.append([(m1 * n1 + m2 * n2) / (n1 + n2), n1 + n2])
+    return np.concatenate([np.full(int(n), m) for m, n in blocks])
+
+
+def invert_curve(
+    levers: Sequence[float], tilts: Sequence[float], tilt: float, gap_deg: float = GAP_DEG
+) -> float:
+    """The lever ratio at which the monotone curve (``levers`` increasing, ``tilts``
+    non-decreasing, deg) first reaches ``tilt`` (deg), linear between calibrated points.
+
+    A rise of more than ``gap_deg`` between neighbouring points is a step: the rod either
+    stays below it or swings past it, so a target inside it gets the nearer end's lever.
+    Targets beyond the curve's ends get its end levers; on a flat stretch the first point.
+    """
+    r, t = np.asarray(levers, dtype=float), np.asarray(tilts, dtype=float)
+    if r.ndim != 1 or r.shape != t.shape or r.size < 2:
+        raise InvalidInputError(f"levers and tilts must be two equal 1-D sequences of >= 2 "
+                                f"points, got shapes {r.shape}, {t.shape}")  # fmt: skip
+    if np.any(np.diff(r) <= 0) or np.any(np.diff(t) < 0):
+        raise InvalidInputError("levers must increase and tilts must not decrease")
+    if tilt <= t[0]:
+        return float(r[0])
+    if tilt >= t[-1]:
+        return float(r[np.argmax(t >= t[-1])])
+    i = int(np.searchsorted(t, tilt, side="left"))  # t[i - 1] < tilt <= t[i]
+    if t[i] - t[i - 1] > gap_deg:
+        return float(r[i - 1] if tilt - t[i - 1] < t[i] - tilt else r[i])
+    return float(r[i - 1] + (r[i] - r[i - 1]) * (tilt - t[i - 1]) / (t[i] - t[i - 1]))
+
+
+@cache
+def load_calibration(path: str | None = None) -> dict:
+    """The calibration (``sim/tilt_calibration.json`` unless ``path``)."""
+    file = Path(path) if path is not None else sim_path(CALIBRATION_FILE)
+    if not file.exists():
+        raise MissingAssetError(f"no tilt calibration at {file}; run python -m "
+                                "comgrasp_pin.experiments.design --out " + str(file))  # fmt: skip
+    return json.loads(file.read_text())
+
+
+def tilt_curve(obj: str, path: str | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(levers, tilts_deg): the calibrated monotone curve of ``obj``."""
+    objects = load_calibration(path)["objects"]
+    if obj not in objects:
+        raise InvalidInputError(f"{obj!r} is not calibrated; calibrated are {sorted(objects)}")
+    curve = objects[obj]
+    return np.array(curve["lever_ratio"]), np.array(curve["tilt_deg"])
+
+
+def lever_for_tilt(obj: str, tilt_deg: float, path: str | None = None) -> float:
+    """The lever ratio (e / holding lever) at which ``obj`` settles at ``tilt_deg``."""
+    return invert_curve(*tilt_curve(obj, path), tilt_deg)
+
+
+# --- measuring the curves ----------------------------------------------------------------
+
+
+def calibration_seed(obj: str, seed: int) -> int:
+    """The scene seed of calibration seed ``seed`` of ``obj`` (unlike any trial's)."""
+    return CALIBRATION_SEED_BASE + int(obj.removeprefix("obj") or 0) * 1_000 + int(seed)
+
+
+def tilt_trial(task: dict) -> dict:
+    """One calibration grasp: ``task`` has object, lever (ratio) and seed; returns the true
+    settled tilt (deg, wrapped to [-90, 90)), or ``dropped`` when the rod fell."""
+    from comgrasp_pin.errors import ComGraspError
+    from comgrasp_pin.experiments import trials
+    from comgrasp_pin.simulation.episode import measure_and_score
+    from comgrasp_pin.simulation.scene import Scene, World
+
+    obj, lever, seed = task["object"], float(task["lever"]), int(task["seed"])
+    config = trials.episode_config()
+    rng = np.random.default_rng(seed + 17)
+    pos_real, offset = grasp_for_lever(obj, lever, rng, config, trials.ACCURACY_COM_RANGE,
+                                       trials.ACCURACY_GRASP_OFFSET)  # fmt: skip
+    world = World(Scene.sample(obj, seed, pos_real=pos_real), config, seed)
+    out = {**task, "pos_real_m": pos_real, "offset_m": offset}
+    try:
+        _, score = measure_and_score(world, offset)
+        out.update(tilt_deg=float(np.degrees(wrap_tilt(score.theta_true))), dropped=False,
+                   grasp_offset_m=score.grasp_offset)  # fmt: skip
+    except ComGraspError as exc:  # dropped, or lost from view: beyond the usable levers
+        out.update(tilt_deg=float("nan"), dropped=True, error=f"{type(exc).__name__}: {exc}")
+    finally:
+        world.close()
+    return out
+
+
+class _Pool:
+    """``map`` over spawned worker processes (each with its own MuJoCo and OpenGL context),
+    or in this process for one worker."""
+
+    def __init__(self, workers: int):
+        self.workers = int(workers)
+        self._pool = None
+
+    def __enter__(self) -> _Pool:
+        if self.workers > 1:
+            context = multiprocessing.get_context("spawn")
+            self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=context)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(cancel_futures=True)
+
+    def map(self, fn, tasks: list[dict]) -> list[dict]:
+        if self._pool is None:
+            return [fn(t) for t in tasks]
+        return list(self._pool.map(fn, tasks))
+
+
+def _tasks(obj: str, levers: Sequence[float], seeds: Sequence[int]) -> list[dict]:
+    return [{"object": obj, "lever": float(r), "seed": calibration_seed(obj, s)}
+            for r in levers for s in seeds]  # fmt: skip
+
+
+def _tilts(rows: list[dict], levers: Sequence[float], n_seeds: int) -> tuple[np.ndarray, ...]:
+    """(|tilt| (levers, seeds) deg with 90 for a drop, dropped (levers, seeds))."""
+    shape = (len(levers), n_seeds)
+    dropped = np.array([r["dropped"] for r in rows], dtype=bool).reshape(shape)
+    tilt = np.abs(np.array([r["tilt_deg"] for r in rows], dtype=float)).reshape(shape)
+    tilt[dropped] = MAX_DEG
+    return tilt, dropped
+
+
+def measure_tilt_curve(
+    obj: str, levers: Sequence[float], seeds: Sequence[int], workers: int = 1
+) -> dict:
+    """Trial grasps of ``obj`` at each lever ratio and calibration seed; their TRUE settled
+    tilts. Returns {"lever_ratio", "abs_tilt_deg" (levers x seeds; 90 for a drop),
+    "dropped" (levers x seeds), "trials" (every grasp's record)}. The same seed gives the
+    same scene at every lever (common random numbers: the curve's shape is less noisy)."""
+    with _Pool(workers) as pool:
+        rows = pool.map(tilt_trial, _tasks(obj, levers, seeds))
+    tilt, dropped = _tilts(rows, levers, len(seeds))
+    return {"lever_ratio": [float(r) for r in levers], "abs_tilt_deg": tilt.tolist(),
+            "dropped": dropped.tolist(), "trials": rows}  # fmt: skip
+
+
+def refine_levers(levers: Sequence[float], tilts: Sequence[float], n: int) -> list[float]:
+    """Up to ``n`` new lever ratios: the midpoints of the intervals of the (sorted) curve
+    that span most of 0-35 deg, if more than REFINE_MIN_DEG and wider than REFINE_MIN_WIDTH."""
+    r, t = np.asarray(levers, dtype=float), np.asarray(tilts, dtype=float)
+    top = LOW_DEG + BIN_DEG
+    span = np.clip(t[1:], 0.0, top) - np.clip(t[:-1], 0.0, top)
+    ok = (span > REFINE_MIN_DEG) & (np.diff(r) > REFINE_MIN_WIDTH)
+    best = [i for i in np.argsort(-span) if ok[i]][:n]
+    return sorted(round(0.5 * (r[i] + r[i + 1]), 5) for i in best)
+
+
+def curve_entry(levers: Sequence[float], tilt: np.ndarray, dropped: np.ndarray) -> dict:
+    """One object's calibration: per lever ratio (sorted) the |tilt| per seed, their median
+    and the median made monotone (``tilt_deg``, the curve the design inverts)."""
+    order = np.argsort(levers)
+    tilt, dropped = np.asarray(tilt)[order], np.asarray(dropped)[order]
+    median = np.median(tilt, axis=1)
+    return {
+        "lever_ratio": [float(levers[i]) for i in order],
+        "tilt_deg": [round(float(v), 3) for v in monotone(median)],
+        "median_abs_tilt_deg": [round(float(v), 3) for v in median],
+        "abs_tilt_deg": [[round(float(v), 3) for v in row] for row in tilt],
+        "dropped": [[bool(v) for v in row] for row in dropped],
+    }
+
+
+def calibrate(
+    objects: Sequence[str],
+    out: Path,
+    levers: Sequence[float] = CALIBRATION_LEVERS,
+    seeds: Sequence[int] = CALIBRATION_SEEDS,
+    workers: int = 2,
+    rounds: int = REFINE_ROUNDS,
+) -> dict:
+    """Measure every object's curve at ``levers``, refine it ``rounds`` times where it
+    rises steeply through 0-35 deg (``refine_levers``), and write the calibration JSON."""
+    from comgrasp_pin.experiments import trials
+    from comgrasp_pin.simulation.objects import get_object
+
+    config = trials.episode_config()
+    seeds = list(seeds)
+    start = time.perf_counter()
+    grid = {o: [float(r) for r in levers] for o in objects}
+    results: dict[str, dict[float, tuple]] = {o: {} for o in objects}
+    with _Pool(workers) as pool:
+        for _ in range(rounds + 1):
+            todo = [(o, r) for o in objects for r in grid[o] if r not in results[o]]
+            if not todo:
+                break
+            rows = pool.map(tilt_trial, [t for o, r in todo for t in _tasks(o, [r], seeds)])
+            for k, (o, r) in enumerate(todo):
+                tilt, dropped = _tilts(rows[k * len(seeds) : (k + 1) * len(seeds)], [r],
+                                       len(seeds))  # fmt: skip
+                results[o][r] = (tilt[0], dropped[0])
+            for o in objects:
+                rs = sorted(results[o])
+                median = monotone([np.median(results[o][r][0]) for r in rs])
+                grid[o] = sorted({*grid[o], *refine_levers(rs, median, REFINE_PER_ROUND)})
+    curves = {}
+    for o in objects:
+        rs = sorted(results[o])
+        spec = get_object(o)
+        curves[o] = {
+            "holding_lever_m": round(holding_lever(
+                spec.mass, config.motion.grip_force, config.world.pad_friction), 6),
+            **curve_entry(rs, np.array([results[o][r][0] for r in rs]),
+                          np.array([results[o][r][1] for r in rs])),
+        }  # fmt: skip
+    data = {
+        "about": (
+            "Tilt calibration of the accuracy experiment (comgrasp_pin.experiments.design). "
+            "Per object and lever ratio (grasp-to-CoM distance over the nominal holding "
+            "lever holding_lever_m): abs_tilt_deg, the TRUE tilt (deg, from the simulator, "
+            "wrapped to [-90, 90) and made absolute) at which the rod settled in the jaws in "
+            "one trial grasp per calibration seed (90 = it dropped); median_abs_tilt_deg "
+            "their median; tilt_deg that median made monotone (pool adjacent violators), "
+            "the curve the design inverts."
+        ),
+        "made": {
+            "command": f"python -m comgrasp_pin.experiments.design --out {out}",
+            "how": (
+                f"coarse levers {list(levers)}, then {rounds} rounds bisecting up to "
+                f"{REFINE_PER_ROUND} intervals per object that span > {REFINE_MIN_DEG} deg "
+                f"of 0-35 deg and are wider than {REFINE_MIN_WIDTH}; "
+                f"{len(seeds)} seeds per lever"
+            ),
+            "scene_seeds": f"{CALIBRATION_SEED_BASE} + 1000 * object number + {seeds}",
+            "config": "trials.episode_config() (the defaults; torque noise 0.05 N m)",
+            "grip_force_N": config.motion.grip_force,
+            "pad_friction": list(config.world.pad_friction),
+            "com_range": list(trials.ACCURACY_COM_RANGE),
+            "grasp_limit": trials.ACCURACY_GRASP_OFFSET,
+            "workers": workers,
+            "wall_s": round(time.perf_counter() - start, 1),
+        },
+        "objects": curves,
+    }
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(_dumps(data) + "\n")
+    load_calibration.cache_clear()
+    return data
+
+
+def _dumps(data, indent: int = 0) -> str:
+    """JSON with every list of numbers (or of such lists) on one line."""
+    pad = " " * (indent + 1)
+    if isinstance(data, dict) and data:
+        items = (f"{pad}{json.dumps(k)}: {_dumps(v, indent + 1)}" for k, v in data.items())
+        return "{\n" + ",\n".join(items) + "\n" + " " * indent + "}"
+    if isinstance(data, list) and any(isinstance(v, dict) for v in data):
+        return "[\n" + ",\n".join(pad + _dumps(v, indent + 1) for v in data) + "\n]"
+    return json.dumps(data)
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``python -m comgrasp_pin.experiments.design``: measure and write the calibration."""
+    from comgrasp_pin.simulation.objects import OBJECTS
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", default=str(sim_path("scene.xml").parent / CALIBRATION_FILE))
+    parser.add_argument("--objects", default=",".join(OBJECTS))
+    parser.add_argument("--levers", default=",".join(map(str, CALIBRATION_LEVERS)))
+    parser.add_argument("--seeds", type=int, default=len(CALIBRATION_SEEDS))
+    parser.add_argument("--rounds", type=int, default=REFINE_ROUNDS)
+    parser.add_argument("--workers", type=int, default=2)
+    args = parser.parse_args(argv)
+    objects = [o.strip() for o in args.objects.split(",") if o.strip()]
+    levers = [float(v) for v in args.levers.split(",")]
+    data = calibrate(objects, Path(args.out), levers, range(args.seeds), args.workers,
+                     args.rounds)  # fmt: skip
+    for obj, curve in data["objects"].items():
+        pairs = " ".join(f"{r:g}:{t:.1f}" for r, t in zip(curve["lever_ratio"], curve["tilt_deg"]))
+        print(f"{obj}: {pairs}")
+    print(f"written to {args.out} in {data['made']['wall_s']} s")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

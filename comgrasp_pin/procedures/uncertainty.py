@@ -1,0 +1,110 @@
+"""How well the trial grasp knows where the CoM lies along the rod: every error source the
+robot can know, propagated to the position.
+
+The position is a function of the readings: the torques, and each side view's rod pose in
+the jaws. Its variance is the sum of
+- ``estimator``: the torque noise (and the axis prior), the estimate's covariance carried
+  through the projection on the rod's axis (its Jacobian, by finite differences);
+- ``tilt`` (one pose): the view's tilt is known to its standard error (``SideView.tilt_std``):
+  the position recomputed with the view turned by it about the jaw axis;
+- two poses: the rod's motion in the jaws between the poses, measured by the two views
+  (``measurement.rod_motion``), is known to the views' standard errors: ``tilt`` (its turn
+  in the jaws' plane), ``shift`` (along the jaw axis), ``out of plane``; and ``slide``, along
+  the rod's own axis, which the views do not measure well: half their disagreement on where
+  the jaws hold the rod;
+- ``off axis`` (one pose, closed form): the CoM's distance from the axis at the seen tilt.
+Sensitivities are first order (finite differences of the same computation the estimate
+ran), so a source the robot measured small stays small and none is inflated by a factor.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from comgrasp_pin.estimation import AxisPrior, ComEstimate, com_along_axis, estimate_com
+from comgrasp_pin.procedures.rod_motion import rod_motion
+from comgrasp_pin.robot import RobotModel
+
+STEP = 1e-5
+"""Finite-difference step for the CoM (m) and for angles (rad)."""
+
+
+def rotate_about_jaws(T_ee_obj: np.ndarray, angle: float) -> np.ndarray:
+    """``T_ee_obj`` turned by ``angle`` (rad) about the jaw axis (ee-y) through the rod's
+    axis point nearest the TCP: a tilt error, or the rod turning in the jaws."""
+    c, s = np.cos(angle), np.sin(angle)
+    R = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+    x_axis, origin = T_ee_obj[:3, 0], T_ee_obj[:3, 3]
+    pivot = origin - (origin @ x_axis) * x_axis
+    T = T_ee_obj.copy()
+    T[:3, :3] = R @ T_ee_obj[:3, :3]
+    T[:3, 3] = pivot + R @ (origin - pivot)
+    return T
+
+
+def estimator_std(est: ComEstimate, T_ee_obj: np.ndarray) -> float:
+    """Std of ``com_along_axis(est, T_ee_obj)`` from the estimate's covariance (m)."""
+    if est.cov is None:
+        return float("nan")
+    x0 = com_along_axis(est, T_ee_obj)
+    J = np.empty(3)
+    for i in range(3):
+        shifted = replace(est, com_ee=est.com_ee + STEP * np.eye(3)[i])
+        J[i] = (com_along_axis(shifted, T_ee_obj) - x0) / STEP
+    return float(np.sqrt(max(J @ est.cov[1:, 1:] @ J, 0.0)))
+
+
+def tilt_std_one_view(est: ComEstimate, T_ee_obj: np.ndarray, tilt_std: float) -> float:
+    """Change of the position (m) when the view is turned by its tilt's standard error."""
+    x0 = com_along_axis(est, T_ee_obj)
+    return abs(com_along_axis(est, rotate_about_jaws(T_ee_obj, tilt_std)) - x0)
+
+
+def motion_stds(
+    robot: RobotModel,
+    q: np.ndarray,
+    tau_before: np.ndarray,
+    tau_after: np.ndarray,
+    est: ComEstimate,
+    T_ee_obj: np.ndarray,
+    views: list,
+    method: str,
+    torque_std: float,
+    prior: AxisPrior | None,
+) -> dict:
+    """The several-pose position's error sources from the rod's motion between the views (m).
+
+    Each of what the views measure of the motion (``rod_motion``) is moved by its standard
+    error and the position recomputed; the slide along the rod's axis, which the views do
+    not separate from their own error, by half their disagreement on where the jaws hold
+    it. Each source is summed in quadrature over the later views.
+    """
+    first = views[0]
+    x0 = com_along_axis(est, T_ee_obj)
+
+    def position(motions: list) -> float:
+        other = estimate_com(robot, q, tau_before, tau_after, method=method,
+                             torque_std=torque_std, com_prior=prior,
+                             payload_motion_ee=np.stack([np.eye(4), *motions]))  # fmt: skip
+        return com_along_axis(other, T_ee_obj)
+
+    nominal = [rod_motion(first, v) for v in views[1:]]
+    parts = {"tilt": 0.0, "shift": 0.0, "out of plane": 0.0, "slide": 0.0}
+    for i, view in enumerate(views[1:]):
+        changed = {
+            "tilt": (replace(view, T_ee_obj=rotate_about_jaws(
+                view.T_ee_obj, float(np.hypot(first.tilt_std, view.tilt_std)))), 0.0),
+            "shift": (replace(view, surface_y=view.surface_y
+                              + float(np.hypot(first.surface_y_std, view.surface_y_std))), 0.0),
+            "out of plane": (replace(view, surface_slope=view.surface_slope
+                                     + float(np.hypot(first.surface_slope_std,
+                                                      view.surface_slope_std))), 0.0),
+            "slide": (view, 0.5 * abs(abs(first.grasp_offset) - abs(view.grasp_offset))),
+        }  # fmt: skip
+        for name, (other_view, slide) in changed.items():
+            motions = list(nominal)
+            motions[i] = rod_motion(first, other_view, slide)
+            parts[name] += (position(motions) - x0) ** 2
+    return {name: float(np.sqrt(v)) for name, v in parts.items()}
