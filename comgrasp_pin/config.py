@@ -192,6 +192,11 @@ class TrialConfig:
         return_time: from the lift to the first measurement pose (s).
         hold_before_measuring: the side camera watches the held rod this long (s).
         roll_time: move between the two measurement poses (s).
+        max_depth_shift, max_depth_turn_deg: the most the grasp's compliance moves a held
+            rod between two poses along the jaw axis (m) and out of their plane (deg); two
+            views' depth lines that differ by more saw different parts of the handle and
+            are not used (measured: 0.3-1.2 mm at the 1.7-2 N the rolled pose puts along
+            the jaws); that motion is then taken as uniform within the bounds.
         roll_slip_deg: a tilt change above this between the two poses means the rod moved
             in the jaws (deg).
         careful_lift: a careful trial grasp first lifts the rod this much (m) ...
@@ -215,6 +220,8 @@ class TrialConfig:
     hold_before_measuring: float = 0.5
     roll_time: float = 1.0
     roll_slip_deg: float = 0.5
+    max_depth_shift: float = 0.002
+    max_depth_turn_deg: float = 2.0
     careful_lift: float = 0.04
     careful_lift_time: float = 0.6
     careful_hold: float = 0.3

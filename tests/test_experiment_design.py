@@ -1,6 +1,8 @@
 """The accuracy experiment's design: target tilts, the calibrated curves and their
 inversion, and where the grasps go relative to the true CoM."""
 
+import json
+
 import numpy as np
 import pytest
 
@@ -86,29 +88,35 @@ def test_inversion_by_hand_on_a_curve_with_a_plateau_and_a_step():
         invert_curve(levers, [0.0, 5.0, 3.0, 10.0, 20.0], 4.0)
 
 
-def test_every_object_is_calibrated_with_a_monotone_curve_within_the_lever_range():
+SIDES = (1.0, -1.0)
+
+
+def test_every_object_is_calibrated_with_a_monotone_curve_per_side_within_the_lever_range():
     data = load_calibration()
     assert set(data["objects"]) == set(OBJECTS)
     for name in OBJECTS:
-        levers, tilts = tilt_curve(name)
-        assert np.all(np.diff(levers) > 0) and np.all(np.diff(tilts) >= 0)
-        assert ACCURACY_LEVER_RANGE[0] <= levers[0] and levers[-1] <= ACCURACY_LEVER_RANGE[1]
-        # the monotone curve is the pooled median of the raw tilts (made by hand here)
-        raw = np.array(data["objects"][name]["abs_tilt_deg"])
-        np.testing.assert_allclose(tilts, monotone(np.median(raw, axis=1)), atol=2e-3)
-        assert tilts[0] < 2.0 and tilts[-1] > 45.0  # holds level at first, turns far later
+        for side in SIDES:
+            levers, tilts = tilt_curve(name, side)
+            assert np.all(np.diff(levers) > 0) and np.all(np.diff(tilts) >= 0)
+            assert ACCURACY_LEVER_RANGE[0] <= levers[0]
+            assert levers[-1] <= ACCURACY_LEVER_RANGE[1]
+            # the monotone curve is the pooled median of the raw tilts (pooled by hand here)
+            raw = np.array(data["objects"][name][design.side_key(side)]["abs_tilt_deg"])
+            np.testing.assert_allclose(tilts, monotone(np.median(raw, axis=1)), atol=2e-3)
+            assert tilts[0] < 2.0 and tilts[-1] > 45.0  # holds level first, turns far later
 
 
+@pytest.mark.parametrize("side", SIDES)
 @pytest.mark.parametrize("name", sorted(OBJECTS))
-def test_the_inversion_is_monotone_and_hits_calibrated_points_exactly(name):
-    levers, tilts = tilt_curve(name)
+def test_the_inversion_is_monotone_and_hits_calibrated_points_exactly(name, side):
+    levers, tilts = tilt_curve(name, side)
     grid = np.linspace(0.0, 90.0, 1801)
-    inverse = np.array([lever_for_tilt(name, t) for t in grid])
+    inverse = np.array([lever_for_tilt(name, t, side) for t in grid])
     assert np.all(np.diff(inverse) >= 0)
     assert levers[0] <= inverse.min() and inverse.max() <= levers[-1]
     rising = np.flatnonzero(np.diff(tilts) > 0) + 1  # first points reaching their tilt
     for i in rising:
-        assert lever_for_tilt(name, tilts[i]) == levers[i]
+        assert lever_for_tilt(name, tilts[i], side) == levers[i]
 
 
 def test_accuracy_grasps_lie_on_the_handle_at_the_calibrated_lever_from_the_com():
@@ -116,6 +124,7 @@ def test_accuracy_grasps_lie_on_the_handle_at_the_calibrated_lever_from_the_com(
     for name, obj in OBJECTS.items():
         lever = holding_lever(obj.mass, config.motion.grip_force, config.world.pad_friction)
         handle = obj.parts[0]
+        sides = []
         for k in range(PAPER_TRIALS):
             seed = trial_seed(0, name, k)
             pos_real, offset = accuracy_grasp(name, seed, config)
@@ -126,31 +135,55 @@ def test_accuracy_grasps_lie_on_the_handle_at_the_calibrated_lever_from_the_com(
             half_pad = GRIPPER.pad_half[0]
             assert handle.x0 <= offset - half_pad and offset + half_pad <= handle.x1
             # the lever the design asked for, on the centre's side of the CoM
-            ratio = np.clip(lever_for_tilt(name, target_tilt(k, 0)), *ACCURACY_LEVER_RANGE)
+            side = np.sign(pos_real)
+            sides.append(side)
+            ratio = lever_for_tilt(name, target_tilt(k, 0), side)
+            ratio = np.clip(ratio, *ACCURACY_LEVER_RANGE)
             assert abs(offset - pos_real) == pytest.approx(ratio * lever, abs=1e-9)
-            assert np.sign(pos_real - offset) == np.sign(pos_real) or pos_real == 0.0
+            assert np.sign(pos_real - offset) == side
+        assert set(sides) == {1.0, -1.0}  # the CoM either side of the centre
         # The same seed gives the same grasp (baseline/regrasp comparisons, --resume).
         seed = trial_seed(2, name, 3)
         assert accuracy_grasp(name, seed, config) == accuracy_grasp(name, seed, config)
         assert accuracy_grasp(name, seed, config) != accuracy_grasp(name, seed + 1, config)
 
 
-def test_grasps_for_the_strata_order_their_levers_like_their_targets():
-    # a higher target tilt never gets a shorter lever (same object, same run)
+def test_a_higher_target_never_gets_a_shorter_lever():
+    targets = np.sort(target_tilts(PAPER_TRIALS))
     for name in OBJECTS:
-        targets = target_tilts(PAPER_TRIALS)
-        ratios = np.array([lever_for_tilt(name, t) for t in targets])
-        order = np.argsort(targets)
-        assert np.all(np.diff(ratios[order]) >= 0)
+        for side in SIDES:
+            ratios = np.array([lever_for_tilt(name, t, side) for t in targets])
+            assert np.all(np.diff(ratios) >= 0)
 
 
 @pytest.mark.slow
 def test_a_calibrated_grasp_settles_at_its_recorded_tilt():
     """The calibration is current: one of its grasps, run again, settles where it did."""
-    curve = load_calibration()["objects"]["obj4"]
+    curve = load_calibration()["objects"]["obj4"]["+x"]
     i = int(np.argmin(np.abs(np.array(curve["median_abs_tilt_deg"]) - 15.0)))
-    task = {"object": "obj4", "lever": curve["lever_ratio"][i],
-            "seed": design.calibration_seed("obj4", 0)}  # fmt: skip
+    lever = curve["lever_ratio"][i]
+    task = {"object": "obj4", "lever": lever, "side": 1.0,
+            "seed": design.calibration_seed("obj4", lever, 0, 1.0)}  # fmt: skip
     row = design.tilt_trial(task)
     assert not row["dropped"]
     assert abs(row["tilt_deg"]) == pytest.approx(curve["abs_tilt_deg"][i][0], abs=1.0)
+
+
+def test_the_side_whose_curve_reaches_the_target_is_chosen(tmp_path):
+    # +x jumps from 1 to 40 deg between two levers; -x climbs steadily: a 15 deg target
+    # goes to -x, at the lever its curve gives by hand (0.6 + 0.1 * (15 - 10) / 20)
+    jump = {"lever_ratio": [0.5, 0.6, 0.61, 0.9], "tilt_deg": [0.0, 1.0, 40.0, 60.0]}
+    steady = {"lever_ratio": [0.5, 0.6, 0.7, 0.9], "tilt_deg": [0.0, 10.0, 30.0, 60.0]}
+    curve = {"+x": jump, "-x": steady}
+    path = tmp_path / "calibration.json"
+    path.write_text(json.dumps({"objects": {"obj4": curve}}))
+    for u in (0.1, 0.9):
+        side, lever = design.side_and_lever("obj4", 15.0, u, str(path))
+        assert side == -1.0 and lever == pytest.approx(0.625)
+    # where both reach it alike, u decides, half and half
+    flat = {"lever_ratio": [0.5, 0.6, 0.7, 0.8, 0.9], "tilt_deg": [0.0, 15.0, 30.0, 45.0, 60.0]}
+    path.write_text(json.dumps({"objects": {"obj4": {"+x": flat, "-x": flat}}}))
+    load_calibration.cache_clear()
+    assert design.side_and_lever("obj4", 37.5, 0.2, str(path)) == (1.0, pytest.approx(0.75))
+    assert design.side_and_lever("obj4", 37.5, 0.8, str(path)) == (-1.0, pytest.approx(0.75))
+    load_calibration.cache_clear()

@@ -5,14 +5,18 @@ exceeds what the jaws hold (``planning.holding``); it settles where m g e cos(th
 that moment, give or take the lift's dynamics. Random grasps therefore either hold level or
 turn far, and the paper's 0-30 deg range stays nearly empty. The design instead
 
-1. measures, once per object, the TRUE settled tilt against the lever ratio r = e / (the
-   nominal holding lever) in trial grasps (``measure_tilt_curve``; ``calibrate`` writes the
-   monotone median curves to ``sim/tilt_calibration.json``),
+1. measures, once per object and side of its centre the CoM lies on, the TRUE settled
+   tilt against the lever ratio r = e / (the nominal holding lever) in trial grasps
+   (``measure_tilt_curve``; ``calibrate`` writes the monotone median curves to
+   ``sim/tilt_calibration.json``). The side matters: the same lever turns a rod 3-6 deg
+   further one way than the other (a CoM below or above the axis, the perceived centre's
+   bias), and so does the scene (a few deg), so every calibration grasp has its own scene,
 2. gives each trial a target tilt, stratified over 5 deg bins (``target_tilt``): of every 7
    consecutive trials one targets each bin of 0-30 deg and one 30-90 deg, so at the paper's
    50 trials per object each bin below 30 deg holds at least 7 targets,
-3. inverts the object's curve to a lever ratio (``lever_for_tilt``) and places the grasp
-   that lever from the true CoM on the centre's side (``grasp_for_lever``).
+3. picks the side whose curve reaches the target best (``side_and_lever``; at random when
+   both do), inverts that side's curve to a lever ratio (``lever_for_tilt``) and places the
+   grasp that lever from the true CoM on the centre's side (``grasp_for_lever``).
 
 The truth only chooses where to grasp; the robot never sees it. Calibrate with
 ``python -m comgrasp_pin.experiments.design --out sim/tilt_calibration.json``.
@@ -42,15 +46,21 @@ LOW_DEG = 30.0  # the paper's range, 0-30 deg, split into bins of BIN_DEG
 MAX_DEG = 90.0  # the rest of the targets lie in LOW_DEG-MAX_DEG
 LOW_BINS = int(round(LOW_DEG / BIN_DEG))  # 6
 STRATA = LOW_BINS + 1  # the six low bins and 30-90 deg, in turn
+BIN_CORE = 0.7  # targets fill the middle 70 % of their bin (achieved tilts scatter 2-4 deg)
 # Lever ratios of the calibration (e / holding lever), before refinement: the rods start
 # to turn at 0.45-0.75 and settle at 50-77 deg above it (farther out the tilt falls again).
-CALIBRATION_LEVERS = (0.3, 0.45, 0.55, 0.6, 0.65, 0.7, 0.75, 0.8, 0.9, 1.0, 1.2)
-CALIBRATION_SEEDS = (0, 1, 2)
-REFINE_ROUNDS = 4  # rounds of bisection where the curve rises steeply through 0-35 deg ...
-REFINE_PER_ROUND = 2  # ... this many intervals per object and round ...
-REFINE_MIN_DEG = 4.0  # ... that span more than this of 0-35 deg ...
-REFINE_MIN_WIDTH = 0.004  # ... and are wider than this (lever ratio)
+CALIBRATION_LEVERS = (0.3, 0.45, 0.55, 0.65, 0.75, 0.9, 1.2)
+CALIBRATION_SEEDS = (0, 1, 2)  # grasps per lever and side, each in its own scene
+SIDES = {"+x": 1.0, "-x": -1.0}  # the CoM on the heavy end's half of the rod, or the other
+REFINE_ROUNDS = 3  # rounds of bisection where the curve rises steeply through 0-35 deg ...
+REFINE_PER_ROUND = 2  # ... this many intervals per curve and round ...
+REFINE_MIN_DEG = 5.0  # ... that span more than this of 0-35 deg ...
+REFINE_MIN_WIDTH = 0.006  # ... and are wider than this (lever ratio)
 GAP_DEG = 20.0  # a rise this steep between calibrated neighbours is a step (no tilts inside)
+# The lever error of a grasp (its share of the holding lever): perception and the scene
+# put the achieved tilt where the curve is 0.01-0.02 further on or back (measured).
+LEVER_SCATTER = 0.015
+SIDE_TIE_DEG = 2.0  # sides scoring within this (deg) of each other are drawn at random
 CALIBRATION_SEED_BASE = 7_000_000  # far from the experiments' trial seeds
 _GOLDEN = 0.5 * (np.sqrt(5.0) - 1.0)
 
@@ -71,14 +81,16 @@ def grasp_for_lever(
     config,
     com_range: tuple[float, float],
     grasp_limit: float,
+    side: float | None = None,
 ) -> tuple[float, float]:
     """(true CoM, grasp offset) along the rod from its centre (m), the grasp ``lever_ratio``
     holding levers from the CoM on the centre's side.
 
-    The true CoM's distance from the centre is uniform within ``com_range`` (fractions of
-    the length), either side, but no farther than the grasp can follow: the grasp stays
-    within ``grasp_limit`` (a fraction of the length) of the centre, on the handle, at the
-    requested lever (it is clipped there only against rounding).
+    The true CoM lies on ``side`` (+1: towards +x, the heavy end; -1; None: drawn) of the
+    centre, its distance uniform within ``com_range`` (fractions of the length) but no
+    farther than the grasp can follow: the grasp stays within ``grasp_limit`` (a fraction of
+    the length) of the centre, on the handle, at the requested lever (it is clipped there
+    only against rounding).
     """
     from comgrasp_pin.simulation.objects import get_object
 
@@ -88,7 +100,7 @@ def grasp_for_lever(
     )
     limit = grasp_limit * spec.length
     lo, hi = com_range[0] * spec.length, com_range[1] * spec.length
-    sign = rng.choice([-1.0, 1.0])
+    sign = float(rng.choice([-1.0, 1.0]) if side is None else np.sign(side))
     pos_real = sign * rng.uniform(lo, max(lo, min(hi, limit + lever)))
     offset = pos_real - sign * lever  # towards the centre, and past it for a long lever
     return float(pos_real), float(np.clip(offset, -limit, limit))
@@ -100,10 +112,11 @@ def grasp_for_lever(
 def target_tilt(trial: int, run_seed: int = 0) -> float:
     """Target tilt (deg, in [0, 90)) of trial ``trial`` of a run with seed ``run_seed``.
 
-    Trials take the strata in turn: bin b = trial % 7 targets [5 b, 5 b + 5) deg for b < 6,
-    and bin 6 targets [30, 90) deg; within its stratum the j-th visit (j = trial // 7) sits
-    at the golden-ratio sequence's j-th point from a start drawn from the run seed, so
-    targets spread evenly over the bin (uniform in the limit). It depends on the trial
+    Trials take the strata in turn: bin b = trial % 7 targets the middle 70 % of
+    [5 b, 5 b + 5) deg for b < 6 (achieved tilts scatter by a few degrees), and bin 6
+    targets [30, 90) deg; within its stratum the j-th visit (j = trial // 7) sits at the
+    golden-ratio sequence's j-th point from a start drawn from the run seed, so targets
+    spread evenly over it (uniform in the limit). It depends on the trial
     index and run seed only: the same trial gets the same target in every run, with any
     number of trials, on every object, and under ``--resume``.
     """
@@ -112,8 +125,8 @@ def target_tilt(trial: int, run_seed: int = 0) -> float:
     stratum, visit = trial % STRATA, trial // STRATA
     start = np.random.default_rng([int(run_seed), stratum, 11]).random()
     u = (start + visit * _GOLDEN) % 1.0
-    if stratum < LOW_BINS:
-        return float(BIN_DEG * (stratum + u))
+    if stratum < LOW_BINS:  # the middle of the bin: a tilt that scatters stays in it
+        return float(BIN_DEG * (stratum + 0.5 + BIN_CORE * (u - 0.5)))
     return float(LOW_DEG + (MAX_DEG - LOW_DEG) * u)
 
 
@@ -173,31 +186,77 @@ def load_calibration(path: str | None = None) -> dict:
     return json.loads(file.read_text())
 
 
-def tilt_curve(obj: str, path: str | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """(levers, tilts_deg): the calibrated monotone curve of ``obj``."""
+def side_key(side: float) -> str:
+    """The calibration's key for the CoM's side of the centre: "+x" or "-x"."""
+    if side not in (1, -1):
+        raise InvalidInputError(f"side must be +1 or -1, got {side}")
+    return "+x" if side > 0 else "-x"
+
+
+def tilt_curve(
+    obj: str, side: float = 1.0, path: str | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """(levers, tilts_deg): the calibrated monotone curve of ``obj`` with its CoM on
+    ``side`` (+1 or -1) of the centre."""
     objects = load_calibration(path)["objects"]
     if obj not in objects:
         raise InvalidInputError(f"{obj!r} is not calibrated; calibrated are {sorted(objects)}")
-    curve = objects[obj]
+    curve = objects[obj][side_key(side)]
     return np.array(curve["lever_ratio"]), np.array(curve["tilt_deg"])
 
 
-def lever_for_tilt(obj: str, tilt_deg: float, path: str | None = None) -> float:
-    """The lever ratio (e / holding lever) at which ``obj`` settles at ``tilt_deg``."""
-    return invert_curve(*tilt_curve(obj, path), tilt_deg)
+def lever_for_tilt(obj: str, tilt_deg: float, side: float = 1.0, path: str | None = None) -> float:
+    """The lever ratio (e / holding lever) at which ``obj``, its CoM on ``side`` of the
+    centre, settles at ``tilt_deg``."""
+    return invert_curve(*tilt_curve(obj, side, path), tilt_deg)
+
+
+def curve_at(levers: Sequence[float], tilts: Sequence[float], lever: float) -> float:
+    """The monotone curve's tilt (deg) at ``lever``, linear between calibrated points."""
+    return float(np.interp(lever, levers, tilts))
+
+
+def side_and_lever(obj: str, tilt_deg: float, u: float, path: str | None = None) -> tuple:
+    """(side, lever ratio) for a grasp of ``obj`` aimed at ``tilt_deg``: the side of the
+    centre to put the true CoM on, and that side's lever for the target.
+
+    The two sides' curves differ (one may jump where the other climbs steadily), so the
+    side whose curve lands nearest the target and least steeply there is taken: its score
+    is the miss |curve(r) - target| plus half the curve's rise over r +- LEVER_SCATTER (how
+    far a grasp's usual lever error moves the tilt). Sides that score within SIDE_TIE_DEG
+    of each other are chosen between by ``u`` (uniform in [0, 1)), half and half.
+    """
+    scores, levers = {}, {}
+    for key, side in SIDES.items():
+        r, t = tilt_curve(obj, side, path)
+        lever = invert_curve(r, t, tilt_deg)
+        rise = curve_at(r, t, lever + LEVER_SCATTER) - curve_at(r, t, lever - LEVER_SCATTER)
+        scores[key] = abs(curve_at(r, t, lever) - tilt_deg) + 0.5 * rise
+        levers[key] = lever
+    if abs(scores["+x"] - scores["-x"]) <= SIDE_TIE_DEG:
+        key = "+x" if u < 0.5 else "-x"
+    else:
+        key = min(scores, key=scores.get)
+    return SIDES[key], levers[key]
 
 
 # --- measuring the curves ----------------------------------------------------------------
 
 
-def calibration_seed(obj: str, seed: int) -> int:
-    """The scene seed of calibration seed ``seed`` of ``obj`` (unlike any trial's)."""
-    return CALIBRATION_SEED_BASE + int(obj.removeprefix("obj") or 0) * 1_000 + int(seed)
+def calibration_seed(obj: str, lever: float, seed: int, side: float) -> int:
+    """The scene seed of one calibration grasp: its own for every object, lever, seed (< 5)
+    and side, and unlike any trial's."""
+    if not 0 <= int(seed) < 5:
+        raise InvalidInputError(f"calibration seeds are 0-4, got {seed}")
+    k = int(seed) + (0 if side > 0 else 5)
+    return (CALIBRATION_SEED_BASE + int(obj.removeprefix("obj") or 0) * 100_000
+            + int(round(float(lever) * 10_000)) * 10 + k)  # fmt: skip
 
 
 def tilt_trial(task: dict) -> dict:
-    """One calibration grasp: ``task`` has object, lever (ratio) and seed; returns the true
-    settled tilt (deg, wrapped to [-90, 90)), or ``dropped`` when the rod fell."""
+    """One calibration grasp: ``task`` has object, lever (ratio), side (+1, -1) and seed (the
+    scene's); returns the true settled tilt (deg, wrapped to [-90, 90)), or ``dropped``
+    when the rod fell."""
     from comgrasp_pin.errors import ComGraspError
     from comgrasp_pin.experiments import trials
     from comgrasp_pin.simulation.episode import measure_and_score
@@ -207,7 +266,7 @@ def tilt_trial(task: dict) -> dict:
     config = trials.episode_config()
     rng = np.random.default_rng(seed + 17)
     pos_real, offset = grasp_for_lever(obj, lever, rng, config, trials.ACCURACY_COM_RANGE,
-                                       trials.ACCURACY_GRASP_OFFSET)  # fmt: skip
+                                       trials.ACCURACY_GRASP_OFFSET, task["side"])  # fmt: skip
     world = World(Scene.sample(obj, seed, pos_real=pos_real), config, seed)
     out = {**task, "pos_real_m": pos_real, "offset_m": offset}
     try:
@@ -245,9 +304,9 @@ class _Pool:
         return list(self._pool.map(fn, tasks))
 
 
-def _tasks(obj: str, levers: Sequence[float], seeds: Sequence[int]) -> list[dict]:
-    return [{"object": obj, "lever": float(r), "seed": calibration_seed(obj, s)}
-            for r in levers for s in seeds]  # fmt: skip
+def _tasks(obj: str, levers: Sequence[float], seeds: Sequence[int], side: float) -> list[dict]:
+    return [{"object": obj, "lever": float(r), "side": float(side),
+             "seed": calibration_seed(obj, r, s, side)} for r in levers for s in seeds]  # fmt: skip
 
 
 def _tilts(rows: list[dict], levers: Sequence[float], n_seeds: int) -> tuple[np.ndarray, ...]:
@@ -260,14 +319,18 @@ def _tilts(rows: list[dict], levers: Sequence[float], n_seeds: int) -> tuple[np.
 
 
 def measure_tilt_curve(
-    obj: str, levers: Sequence[float], seeds: Sequence[int], workers: int = 1
+    obj: str,
+    levers: Sequence[float],
+    seeds: Sequence[int],
+    side: float = 1.0,
+    workers: int = 1,
 ) -> dict:
-    """Trial grasps of ``obj`` at each lever ratio and calibration seed; their TRUE settled
-    tilts. Returns {"lever_ratio", "abs_tilt_deg" (levers x seeds; 90 for a drop),
-    "dropped" (levers x seeds), "trials" (every grasp's record)}. The same seed gives the
-    same scene at every lever (common random numbers: the curve's shape is less noisy)."""
+    """Trial grasps of ``obj``, its true CoM on ``side`` of the centre, at each lever ratio
+    and calibration seed (each grasp in its own scene); their TRUE settled tilts. Returns
+    {"lever_ratio", "abs_tilt_deg" (levers x seeds; 90 for a drop), "dropped" (levers x
+    seeds), "trials" (every grasp's record)}."""
     with _Pool(workers) as pool:
-        rows = pool.map(tilt_trial, _tasks(obj, levers, seeds))
+        rows = pool.map(tilt_trial, _tasks(obj, levers, seeds, side))
     tilt, dropped = _tilts(rows, levers, len(seeds))
     return {"lever_ratio": [float(r) for r in levers], "abs_tilt_deg": tilt.tolist(),
             "dropped": dropped.tolist(), "trials": rows}  # fmt: skip
@@ -307,59 +370,62 @@ def calibrate(
     workers: int = 2,
     rounds: int = REFINE_ROUNDS,
 ) -> dict:
-    """Measure every object's curve at ``levers``, refine it ``rounds`` times where it
-    rises steeply through 0-35 deg (``refine_levers``), and write the calibration JSON."""
+    """Measure every object's two curves (its CoM either side of the centre) at ``levers``,
+    refine each ``rounds`` times where it rises steeply through 0-35 deg
+    (``refine_levers``), and write the calibration JSON to ``out``."""
     from comgrasp_pin.experiments import trials
     from comgrasp_pin.simulation.objects import get_object
 
     config = trials.episode_config()
     seeds = list(seeds)
     start = time.perf_counter()
-    grid = {o: [float(r) for r in levers] for o in objects}
-    results: dict[str, dict[float, tuple]] = {o: {} for o in objects}
+    curves_of = [(o, key) for o in objects for key in SIDES]
+    grid = {c: [float(r) for r in levers] for c in curves_of}
+    results: dict[tuple, dict[float, tuple]] = {c: {} for c in curves_of}
     with _Pool(workers) as pool:
         for _ in range(rounds + 1):
-            todo = [(o, r) for o in objects for r in grid[o] if r not in results[o]]
+            todo = [(c, r) for c in curves_of for r in grid[c] if r not in results[c]]
             if not todo:
                 break
-            rows = pool.map(tilt_trial, [t for o, r in todo for t in _tasks(o, [r], seeds)])
-            for k, (o, r) in enumerate(todo):
+            tasks = [t for (o, key), r in todo for t in _tasks(o, [r], seeds, SIDES[key])]
+            rows = pool.map(tilt_trial, tasks)
+            for k, (c, r) in enumerate(todo):
                 tilt, dropped = _tilts(rows[k * len(seeds) : (k + 1) * len(seeds)], [r],
                                        len(seeds))  # fmt: skip
-                results[o][r] = (tilt[0], dropped[0])
-            for o in objects:
-                rs = sorted(results[o])
-                median = monotone([np.median(results[o][r][0]) for r in rs])
-                grid[o] = sorted({*grid[o], *refine_levers(rs, median, REFINE_PER_ROUND)})
-    curves = {}
-    for o in objects:
-        rs = sorted(results[o])
+                results[c][r] = (tilt[0], dropped[0])
+            for c in curves_of:
+                rs = sorted(results[c])
+                median = monotone([np.median(results[c][r][0]) for r in rs])
+                grid[c] = sorted({*grid[c], *refine_levers(rs, median, REFINE_PER_ROUND)})
+    curves: dict[str, dict] = {}
+    for o, key in curves_of:
         spec = get_object(o)
-        curves[o] = {
-            "holding_lever_m": round(holding_lever(
-                spec.mass, config.motion.grip_force, config.world.pad_friction), 6),
-            **curve_entry(rs, np.array([results[o][r][0] for r in rs]),
-                          np.array([results[o][r][1] for r in rs])),
-        }  # fmt: skip
+        entry = curves.setdefault(o, {"holding_lever_m": round(holding_lever(
+            spec.mass, config.motion.grip_force, config.world.pad_friction), 6)})  # fmt: skip
+        rs = sorted(results[(o, key)])
+        entry[key] = curve_entry(rs, np.array([results[(o, key)][r][0] for r in rs]),
+                                 np.array([results[(o, key)][r][1] for r in rs]))  # fmt: skip
+    n_grasps = sum(len(v) for v in results.values()) * len(seeds)
     data = {
         "about": (
             "Tilt calibration of the accuracy experiment (comgrasp_pin.experiments.design). "
-            "Per object and lever ratio (grasp-to-CoM distance over the nominal holding "
-            "lever holding_lever_m): abs_tilt_deg, the TRUE tilt (deg, from the simulator, "
-            "wrapped to [-90, 90) and made absolute) at which the rod settled in the jaws in "
-            "one trial grasp per calibration seed (90 = it dropped); median_abs_tilt_deg "
-            "their median; tilt_deg that median made monotone (pool adjacent violators), "
-            "the curve the design inverts."
+            "Per object and side of the centre its true CoM lies on (+x: the heavy end's "
+            "half, -x: the other) and per lever ratio (grasp-to-CoM distance over the "
+            "nominal holding lever holding_lever_m): abs_tilt_deg, the TRUE tilt (deg, from "
+            "the simulator, wrapped to [-90, 90) and made absolute) at which the rod "
+            "settled in the jaws, one trial grasp per calibration seed, each in its own "
+            "scene (90 = it dropped); median_abs_tilt_deg their median; tilt_deg that "
+            "median made monotone (pool adjacent violators), the curve the design inverts."
         ),
         "made": {
             "command": f"python -m comgrasp_pin.experiments.design --out {out}",
             "how": (
                 f"coarse levers {list(levers)}, then {rounds} rounds bisecting up to "
-                f"{REFINE_PER_ROUND} intervals per object that span > {REFINE_MIN_DEG} deg "
-                f"of 0-35 deg and are wider than {REFINE_MIN_WIDTH}; "
-                f"{len(seeds)} seeds per lever"
+                f"{REFINE_PER_ROUND} intervals per curve that span > {REFINE_MIN_DEG} deg "
+                f"of 0-35 deg and are wider than {REFINE_MIN_WIDTH}; {len(seeds)} grasps "
+                f"per lever and side; {n_grasps} grasps in all"
             ),
-            "scene_seeds": f"{CALIBRATION_SEED_BASE} + 1000 * object number + {seeds}",
+            "scene_seeds": "design.calibration_seed(object, lever, seed, side)",
             "config": "trials.episode_config() (the defaults; torque noise 0.05 N m)",
             "grip_force_N": config.motion.grip_force,
             "pad_friction": list(config.world.pad_friction),
@@ -403,9 +469,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     levers = [float(v) for v in args.levers.split(",")]
     data = calibrate(objects, Path(args.out), levers, range(args.seeds), args.workers,
                      args.rounds)  # fmt: skip
-    for obj, curve in data["objects"].items():
-        pairs = " ".join(f"{r:g}:{t:.1f}" for r, t in zip(curve["lever_ratio"], curve["tilt_deg"]))
-        print(f"{obj}: {pairs}")
+    for obj, entry in data["objects"].items():
+        for key in SIDES:
+            c = entry[key]
+            pairs = " ".join(f"{r:g}:{t:.1f}" for r, t in zip(c["lever_ratio"], c["tilt_deg"]))
+            print(f"{obj} {key}: {pairs}")
     print(f"written to {args.out} in {data['made']['wall_s']} s")
     return 0
 

@@ -13,7 +13,7 @@ from dataclasses import asdict
 import numpy as np
 
 from comgrasp_pin.config import EpisodeConfig, SensorConfig, TorqueSensorConfig, TrialConfig
-from comgrasp_pin.experiments.design import grasp_for_lever, lever_for_tilt, target_tilt
+from comgrasp_pin.experiments.design import grasp_for_lever, side_and_lever, target_tilt
 
 ACCURACY_COLUMNS = [
     "object", "trial", "method", "seed", "length_m", "pos_real_m", "pos_esti_m", "theta_deg",
@@ -21,7 +21,7 @@ ACCURACY_COLUMNS = [
     "com_std_m", "residual_rms_Nm", "slip_seen", "pos_esti_line_m", "accuracy_line",
     "rolled_slip", "dropped_at_roll", "pos_std_m", "com_path", "extra_pose", "estimator",
     *(f"pos_std_{part}_m" for part in
-      ("estimator", "tilt", "shift", "out_of_plane", "slide", "off_axis")),
+      ("estimator", "tilt", "shift", "out_of_plane", "slide", "creep", "off_axis")),
     "wall_s",
 ]  # fmt: skip
 REGRASP_COLUMNS = [
@@ -35,7 +35,7 @@ ACCURACY_GRASP_OFFSET = 0.25  # grasp offsets from the rectangle's centre, |offs
 # span the tilt calibration covers (sim/tilt_calibration.json) and the grasps keep to. Each
 # grasp gets a target tilt (``design.target_tilt``: each 5 deg bin of 0-30 deg and 30-90 deg
 # in turn) and the lever at which the calibration saw its object settle there.
-ACCURACY_LEVER_RANGE = (0.3, 2.0)
+ACCURACY_LEVER_RANGE = (0.3, 1.2)
 
 
 def trial_seed(run_seed: int, obj: str, trial: int) -> int:
@@ -67,18 +67,20 @@ def accuracy_grasp(obj: str, seed: int, config) -> tuple[float, float]:
     """(true CoM, grasp offset) along the rod from its centre (m) for one accuracy grasp.
 
     The grasp targets a tilt (``design.target_tilt`` of the trial index, ``seed`` % 1000,
-    and the run seed, ``seed`` // 100000, as ``trial_seed`` composes them); the object's
-    tilt calibration gives the lever ratio for it (within ACCURACY_LEVER_RANGE). The true
-    CoM is uniform within ACCURACY_COM_RANGE of the length, either side, capped so that the
-    grasp that lever away on the centre's side stays within ACCURACY_GRASP_OFFSET of the
-    length from the centre (on the handle). The experiment designer uses the truth to
-    spread the tilts; the robot never sees it.
+    and the run seed, ``seed`` // 100000, as ``trial_seed`` composes them). The object's
+    tilt calibration gives the side of the centre the true CoM lies on and the lever ratio
+    for the target (``design.side_and_lever``, within ACCURACY_LEVER_RANGE). Its distance from the
+    centre is uniform within ACCURACY_COM_RANGE of the length, capped so that the grasp that
+    lever away on the centre's side stays within ACCURACY_GRASP_OFFSET of the length from
+    the centre (on the handle). The experiment designer uses the truth to spread the tilts;
+    the robot never sees it.
     """
     trial, run_seed = int(seed) % 1_000, int(seed) // 100_000
-    ratio = np.clip(lever_for_tilt(obj, target_tilt(trial, run_seed)), *ACCURACY_LEVER_RANGE)
     rng = np.random.default_rng(seed + 17)
-    return grasp_for_lever(obj, float(ratio), rng, config, ACCURACY_COM_RANGE,
-                           ACCURACY_GRASP_OFFSET)  # fmt: skip
+    side, ratio = side_and_lever(obj, target_tilt(trial, run_seed), rng.random())
+    ratio = float(np.clip(ratio, *ACCURACY_LEVER_RANGE))
+    return grasp_for_lever(obj, ratio, rng, config, ACCURACY_COM_RANGE, ACCURACY_GRASP_OFFSET,
+                           side)  # fmt: skip
 
 
 def accuracy_trial(task: dict) -> dict:

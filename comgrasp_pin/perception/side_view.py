@@ -73,6 +73,8 @@ class SideView:
             the handle's points); between two views they give the rod's shift along the jaw
             axis and its turn out of the jaws' plane. surface_y_std, surface_slope_std: their
             standard errors.
+        creep: (4, 4) the rod's motion in the jaws while the view was averaged over a torque
+            window (from a view at its start to one at its end), or None for a single frame.
     """
 
     T_ee_obj: np.ndarray
@@ -93,6 +95,7 @@ class SideView:
     surface_slope: float
     surface_y_std: float
     surface_slope_std: float
+    creep: np.ndarray | None = None
 
 
 def _gripper_volume(p: np.ndarray) -> np.ndarray:

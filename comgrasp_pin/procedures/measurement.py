@@ -15,7 +15,7 @@ from comgrasp_pin.config import EpisodeConfig
 from comgrasp_pin.estimation import AxisPrior, ComEstimate, com_along_axis, estimate_com
 from comgrasp_pin.perception import SideView
 from comgrasp_pin.procedures import uncertainty
-from comgrasp_pin.procedures.rod_motion import rod_motion
+from comgrasp_pin.procedures.rod_motion import depth_agrees, rod_motion
 from comgrasp_pin.robot import RobotModel
 
 
@@ -168,12 +168,17 @@ def locate_com(robot: RobotModel, held: HeldReadings, config: EpisodeConfig) -> 
         # Several poses, the rod where each view saw it: the CoM is fixed in the rod, so
         # the poses stack with the rod's motion since the first (the grasp's compliance, a
         # slip).
-        motion = np.stack([np.eye(4)] + [rod_motion(side, v) for v in views[1:]])
+        bounds = (trial.max_depth_shift, np.radians(trial.max_depth_turn_deg))
+        depth = [depth_agrees(side, v, *bounds) for v in views[1:]]
+        motion = np.stack(
+            [np.eye(4)]
+            + [rod_motion(side, v, depth=d) for v, d in zip(views[1:], depth, strict=True)]
+        )
         est = estimate_com(robot, q, tau_b, tau_a, method=trial.estimator, torque_std=pair_std,
                            com_prior=prior, payload_motion_ee=motion)  # fmt: skip
         x_com, path = com_along_axis(est, T_obj), f"{len(use)} poses"
-        parts = uncertainty.motion_stds(robot, q, tau_b, tau_a, est, T_obj, views,
-                                        trial.estimator, pair_std, prior)  # fmt: skip
+        parts = uncertainty.motion_stds(robot, q, tau_b, tau_a, est, T_obj, views, depth,
+                                        bounds, trial.estimator, pair_std, prior)  # fmt: skip
     parts["estimator"] = uncertainty.estimator_std(est, T_obj)
     if path == "one pose" and prior is None:
         # the closed form meets the vertical CoM line with the axis: a CoM off the axis by

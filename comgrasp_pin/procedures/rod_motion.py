@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from comgrasp_pin.perception import SideView
@@ -16,13 +18,28 @@ def _same_direction(T: np.ndarray, T_ref: np.ndarray) -> np.ndarray:
     return T
 
 
-def rod_motion(first: SideView, second: SideView, slide: float = 0.0) -> np.ndarray:
+def depth_agrees(first: SideView, second: SideView, max_shift: float, max_turn: float) -> bool:
+    """Whether the two views' depth lines differ no more than a grasp's compliance moves a
+    rod (``max_shift`` m along the jaw axis, ``max_turn`` rad out of the jaws' plane); more
+    means the views saw different parts of the handle (a finger in the way), not a motion."""
+    T2 = _same_direction(second.T_ee_obj, first.T_ee_obj)
+    sign = 1.0 if T2 is second.T_ee_obj else -1.0
+    shift = abs(second.surface_y - first.surface_y)
+    turn = abs(np.arctan(sign * second.surface_slope) - np.arctan(first.surface_slope))
+    return bool(shift <= max_shift and turn <= max_turn)
+
+
+def rod_motion(
+    first: SideView, second: SideView, slide: float = 0.0, depth: bool = True
+) -> np.ndarray:
     """(4, 4) rigid motion in the ee frame that carried the rod from where the ``first`` view
     saw it to where the ``second`` saw it, from what a view measures well: the axis' turn in
     the jaws' plane (tilt), its turn out of that plane and its shift along the jaw axis (the
     change of the handle's depth line, ``surface_y`` and ``surface_slope``), the axis'
     offset across itself; the rod's slide along its own axis is ``slide`` (m; the views
-    measure it poorly) and its roll about its axis is taken as none.
+    measure it poorly) and its roll about its axis is taken as none. ``depth`` False: the
+    depth lines are not used (``depth_agrees`` said they disagree), the rod taken as not
+    shifted along the jaws nor turned out of their plane.
     """
 
     def axis_and_foot(view: SideView, T: np.ndarray, dy: float, dslope: float):
@@ -36,8 +53,9 @@ def rod_motion(first: SideView, second: SideView, slide: float = 0.0) -> np.ndar
     T2 = _same_direction(second.T_ee_obj, T1)
     sign = 1.0 if T2 is second.T_ee_obj else -1.0
     a1, p1 = axis_and_foot(first, T1, 0.0, 0.0)
-    a2, p2 = axis_and_foot(second, T2, second.surface_y - first.surface_y,
-                           sign * second.surface_slope - first.surface_slope)  # fmt: skip
+    dy = second.surface_y - first.surface_y if depth else 0.0
+    dslope = sign * second.surface_slope - first.surface_slope if depth else 0.0
+    a2, p2 = axis_and_foot(second, T2, dy, dslope)
     R = _rotation_between(a1, a2)
     M = np.eye(4)
     M[:3, :3] = R
@@ -52,3 +70,34 @@ def _rotation_between(a: np.ndarray, b: np.ndarray) -> np.ndarray:
         return np.eye(3)
     K = np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
     return np.eye(3) + K + K @ K / (1.0 + c)
+
+
+def mid_window_view(start: SideView | None, end: SideView) -> SideView:
+    """The rod where it was, on average, while the torques were averaged between two views
+    (the rod may creep in the jaws meanwhile): halfway from ``end`` back to ``start``, whose
+    difference is kept as ``creep`` (the motion start to end). ``end`` alone when there is no
+    start view."""
+    if start is None:
+        return end
+    S = _same_direction(start.T_ee_obj, end.T_ee_obj)
+    sign = 1.0 if S is start.T_ee_obj else -1.0
+    half_turn = 0.5 * float(
+        np.arctan2(-S[2, 0], S[0, 0]) - np.arctan2(-end.T_ee_obj[2, 0], end.T_ee_obj[0, 0])
+    )
+    c, s = np.cos(half_turn), np.sin(half_turn)
+    R = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
+    x, o = end.T_ee_obj[:3, 0], end.T_ee_obj[:3, 3]
+    foot_end = o - (o @ x) * x
+    foot_start = S[:3, 3] - (S[:3, 3] @ S[:3, 0]) * S[:3, 0]
+    T = end.T_ee_obj.copy()
+    T[:3, :3] = R @ T[:3, :3]
+    T[:3, 3] = foot_end + R @ (o - foot_end) + 0.5 * (foot_start - foot_end)
+    return replace(
+        end,
+        T_ee_obj=T,
+        theta=float(np.arctan2(-T[2, 0], T[0, 0])),
+        grasp_offset=float(-(T[:3, 3] @ T[:3, 0])),
+        surface_y=0.5 * (start.surface_y + end.surface_y),
+        surface_slope=0.5 * (sign * start.surface_slope + end.surface_slope),
+        creep=rod_motion(start, end),
+    )

@@ -35,6 +35,7 @@ from comgrasp_pin.planning.regrasp import needs_another_pose
 from comgrasp_pin.planning.retry import heavy_side_from_tilt
 from comgrasp_pin.procedures.cell import Cell, SlipWatch, TorqueMeasurement
 from comgrasp_pin.procedures.measurement import HeldReadings, TrialMeasurement, locate_com
+from comgrasp_pin.procedures.rod_motion import mid_window_view
 from comgrasp_pin.workcell import Q_PARK
 
 MEASURED = "trial grasp: the held rod is measured"
@@ -127,6 +128,18 @@ def grasp_and_lift(
         cell.move_linear(T_up, trial.lift_time)
 
 
+def _measure_window(cell: Cell, plan: _Plan, config: EpisodeConfig):
+    """Settle, look, average the torques: the measurement and the view at its start (None
+    if the camera saw nothing usable), so that the rod's creep during it is known."""
+    trial = config.trial
+    cell.hold(trial.settle)
+    try:
+        start = cell.look_from_side(cell.q_des, plan.detection.length, plan.centre_hint)
+    except PerceptionError:
+        start = None
+    return cell.measure_torques(0.0, trial.window), start
+
+
 def measure_held(
     cell: Cell, plan: _Plan, watch: SlipWatch, tau_before: list, config: EpisodeConfig
 ) -> HeldReadings:
@@ -138,9 +151,10 @@ def measure_held(
         cell.move_to(plan.poses[0], duration=trial.return_time)
         cell.hold(trial.hold_before_measuring)
         watch.sample_now()
-    after: list[TorqueMeasurement] = [cell.measure_torques(trial.settle, trial.window)]
+    first, start = _measure_window(cell, plan, config)
+    after: list[TorqueMeasurement] = [first]
     try:
-        side = cell.look_from_side(after[0].q, length, hint)
+        side = mid_window_view(start, cell.look_from_side(after[0].q, length, hint))
     except ObjectNotFoundError as exc:
         raise RodDroppedError(str(exc), _heavy_side(watch, plan, config)) from exc
     cell.announce(MEASURED)
@@ -148,9 +162,10 @@ def measure_held(
     moved, side_rolled, dropped = False, None, False
     if len(plan.poses) > 1:
         cell.move_to(plan.poses[1], duration=trial.roll_time)
-        after.append(cell.measure_torques(trial.settle, trial.window))
+        rolled, start = _measure_window(cell, plan, config)
+        after.append(rolled)
         try:
-            side_rolled = cell.look_from_side(after[1].q, length, hint)
+            side_rolled = mid_window_view(start, cell.look_from_side(after[1].q, length, hint))
             moved = abs(side_rolled.theta - side.theta) > np.radians(trial.roll_slip_deg)
         except ObjectNotFoundError:
             moved = dropped = True

@@ -70,6 +70,8 @@ def motion_stds(
     est: ComEstimate,
     T_ee_obj: np.ndarray,
     views: list,
+    depth: list,
+    bounds: tuple[float, float],
     method: str,
     torque_std: float,
     prior: AxisPrior | None,
@@ -79,7 +81,9 @@ def motion_stds(
     Each of what the views measure of the motion (``rod_motion``) is moved by its standard
     error and the position recomputed; the slide along the rod's axis, which the views do
     not separate from their own error, by half their disagreement on where the jaws hold
-    it. Each source is summed in quadrature over the later views.
+    it. Each source is summed in quadrature over the later views. Where a view's depth line
+    was not used (``depth`` False), the shift and the out-of-plane turn are taken as uniform
+    within the compliance's bounds (``bounds``: m, rad), standard error bound / sqrt 3.
     """
     first = views[0]
     x0 = com_along_axis(est, T_ee_obj)
@@ -90,21 +94,53 @@ def motion_stds(
                              payload_motion_ee=np.stack([np.eye(4), *motions]))  # fmt: skip
         return com_along_axis(other, T_ee_obj)
 
-    nominal = [rod_motion(first, v) for v in views[1:]]
+    nominal = [rod_motion(first, v, depth=d) for v, d in zip(views[1:], depth, strict=True)]
     parts = {"tilt": 0.0, "shift": 0.0, "out of plane": 0.0, "slide": 0.0}
     for i, view in enumerate(views[1:]):
+        if depth[i]:
+            dy = float(np.hypot(first.surface_y_std, view.surface_y_std))
+            dslope = float(np.hypot(first.surface_slope_std, view.surface_slope_std))
+        else:  # the depth lines disagree: the motion is within the compliance's bounds,
+            # uniform there (std: bound / sqrt 3)
+            dy, dslope = bounds[0] / np.sqrt(3.0), float(np.tan(bounds[1])) / np.sqrt(3.0)
+            view = replace(view, surface_y=first.surface_y, surface_slope=(
+                first.surface_slope if view.T_ee_obj[:3, 0] @ first.T_ee_obj[:3, 0] >= 0
+                else -first.surface_slope))  # fmt: skip
         changed = {
             "tilt": (replace(view, T_ee_obj=rotate_about_jaws(
                 view.T_ee_obj, float(np.hypot(first.tilt_std, view.tilt_std)))), 0.0),
-            "shift": (replace(view, surface_y=view.surface_y
-                              + float(np.hypot(first.surface_y_std, view.surface_y_std))), 0.0),
-            "out of plane": (replace(view, surface_slope=view.surface_slope
-                                     + float(np.hypot(first.surface_slope_std,
-                                                      view.surface_slope_std))), 0.0),
+            "shift": (replace(view, surface_y=view.surface_y + dy), 0.0),
+            "out of plane": (replace(view, surface_slope=view.surface_slope + dslope), 0.0),
             "slide": (view, 0.5 * abs(abs(first.grasp_offset) - abs(view.grasp_offset))),
         }  # fmt: skip
         for name, (other_view, slide) in changed.items():
             motions = list(nominal)
-            motions[i] = rod_motion(first, other_view, slide)
+            motions[i] = rod_motion(first, other_view, slide, depth=True)
             parts[name] += (position(motions) - x0) ** 2
+    parts["creep"] = _creep_std(robot, q, tau_before, tau_after, views, depth, method,
+                                torque_std, prior, x0)  # fmt: skip
     return {name: float(np.sqrt(v)) for name, v in parts.items()}
+
+
+def _creep_std(robot, q, tau_before, tau_after, views, depth, method, torque_std, prior, x0):
+    """Variance (m^2) from the rod creeping in the jaws while the torques were averaged: the
+    mean position is taken halfway between the window's start and end views; where in
+    between it really was is uniform over half the creep either way (std: half / sqrt 3),
+    each view turned by that much about the jaws in turn."""
+    total = 0.0
+    for i, view in enumerate(views):
+        if view.creep is None:
+            continue
+        creep_tilt = float(np.arctan2(view.creep[0, 2], view.creep[0, 0]))
+        turned = list(views)
+        turned[i] = replace(
+            view, T_ee_obj=rotate_about_jaws(view.T_ee_obj, 0.5 * creep_tilt / np.sqrt(3.0))
+        )
+        motions = [
+            rod_motion(turned[0], v, depth=d) for v, d in zip(turned[1:], depth, strict=True)
+        ]
+        other = estimate_com(robot, q, tau_before, tau_after, method=method,
+                             torque_std=torque_std, com_prior=prior,
+                             payload_motion_ee=np.stack([np.eye(4), *motions]))  # fmt: skip
+        total += (com_along_axis(other, turned[0].T_ee_obj) - x0) ** 2
+    return total
