@@ -7,10 +7,11 @@ turn far, and the paper's 0-30 deg range stays nearly empty. The design instead
 
 1. measures, once per object and side of its centre the CoM lies on, the TRUE settled
    tilt against the lever ratio r = e / (the nominal holding lever) in trial grasps
-   (``measure_tilt_curve``; ``calibrate`` writes the monotone median curves to
-   ``sim/tilt_calibration.json``). The side matters: the same lever turns a rod 3-6 deg
-   further one way than the other (a CoM below or above the axis, the perceived centre's
-   bias), and so does the scene (a few deg), so every calibration grasp has its own scene,
+   (``measure_tilt_curve``; ``calibrate`` writes the curves of the median tilt, pooled
+   over neighbouring levers and made monotone, to ``sim/tilt_calibration.json``). The side
+   matters: the same lever turns a rod 3-6 deg further one way than the other (measured;
+   a CoM below or above the axis and a bias of the perceived centre would both do it), and
+   so does the scene (a few deg), so every calibration grasp has its own scene,
 2. gives each trial a target tilt, stratified over 5 deg bins (``target_tilt``): of every 7
    consecutive trials one targets each bin of 0-30 deg and one 30-90 deg, so at the paper's
    50 trials per object each bin below 30 deg holds at least 7 targets,
@@ -27,10 +28,11 @@ from __future__ import annotations
 import argparse
 import json
 import multiprocessing
+import os
 import sys
 import time
 from collections.abc import Sequence
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from functools import cache
 from pathlib import Path
 
@@ -41,25 +43,28 @@ from comgrasp_pin.errors import InvalidInputError, MissingAssetError
 from comgrasp_pin.planning.holding import holding_lever
 
 CALIBRATION_FILE = "tilt_calibration.json"
+CALIBRATION_ENV = "COMGRASP_TILT_CALIBRATION"
 BIN_DEG = 5.0  # width of a tilt bin (deg)
 LOW_DEG = 30.0  # the paper's range, 0-30 deg, split into bins of BIN_DEG
 MAX_DEG = 90.0  # the rest of the targets lie in LOW_DEG-MAX_DEG
 LOW_BINS = int(round(LOW_DEG / BIN_DEG))  # 6
 STRATA = LOW_BINS + 1  # the six low bins and 30-90 deg, in turn
 BIN_CORE = 0.7  # targets fill the middle 70 % of their bin (achieved tilts scatter 2-4 deg)
-# Lever ratios of the calibration (e / holding lever), before refinement: the rods start
-# to turn at 0.45-0.75 and settle at 50-77 deg above it (farther out the tilt falls again).
-CALIBRATION_LEVERS = (0.3, 0.45, 0.55, 0.65, 0.75, 0.9, 1.2)
-CALIBRATION_SEEDS = (0, 1, 2)  # grasps per lever and side, each in its own scene
+# The calibration: coarse lever ratios (e / holding lever) find where each curve rises (the
+# rods start to turn at 0.45-0.8 and settle at 50-77 deg beyond 0.9), then DENSE_LEVERS
+# evenly spaced levers cover that rise, from the last coarse lever below RISE_DEG[0] to
+# the first above RISE_DEG[1]; every lever has one grasp per seed and side, each in its own
+# scene, and the curve is the median over the grasps within POOL_WIDTH of each lever.
+CALIBRATION_LEVERS = (0.35, 0.45, 0.55, 0.65, 0.75, 0.85, 1.0)
+CALIBRATION_SEEDS = (0, 1)
+DENSE_LEVERS = 10
+RISE_DEG = (1.0, 32.0)
 SIDES = {"+x": 1.0, "-x": -1.0}  # the CoM on the heavy end's half of the rod, or the other
-REFINE_ROUNDS = 3  # rounds of bisection where the curve rises steeply through 0-35 deg ...
-REFINE_PER_ROUND = 2  # ... this many intervals per curve and round ...
-REFINE_MIN_DEG = 5.0  # ... that span more than this of 0-35 deg ...
-REFINE_MIN_WIDTH = 0.006  # ... and are wider than this (lever ratio)
 GAP_DEG = 20.0  # a rise this steep between calibrated neighbours is a step (no tilts inside)
 # The lever error of a grasp (its share of the holding lever): perception and the scene
 # put the achieved tilt where the curve is 0.01-0.02 further on or back (measured).
 LEVER_SCATTER = 0.015
+POOL_WIDTH = LEVER_SCATTER + 1e-6  # grasps this close in lever pool into one median
 SIDE_TIE_DEG = 2.0  # sides scoring within this (deg) of each other are drawn at random
 CALIBRATION_SEED_BASE = 7_000_000  # far from the experiments' trial seeds
 _GOLDEN = 0.5 * (np.sqrt(5.0) - 1.0)
@@ -178,7 +183,10 @@ def invert_curve(
 
 @cache
 def load_calibration(path: str | None = None) -> dict:
-    """The calibration (``sim/tilt_calibration.json`` unless ``path``)."""
+    """The calibration: ``path``, else the file named by the environment variable
+    COMGRASP_TILT_CALIBRATION (to try a new one; worker processes inherit it), else
+    ``sim/tilt_calibration.json``."""
+    path = path or os.environ.get(CALIBRATION_ENV) or None
     file = Path(path) if path is not None else sim_path(CALIBRATION_FILE)
     if not file.exists():
         raise MissingAssetError(f"no tilt calibration at {file}; run python -m "
@@ -282,10 +290,19 @@ def tilt_trial(task: dict) -> dict:
 
 class _Pool:
     """``map`` over spawned worker processes (each with its own MuJoCo and OpenGL context),
-    or in this process for one worker."""
+    or in this process for one worker. With a ``log`` (a JSON-lines file) every result is
+    appended as it comes, and a task already in the log is not run again: an interrupted
+    calibration resumes where it stopped."""
 
-    def __init__(self, workers: int):
+    def __init__(self, workers: int, log: Path | None = None):
         self.workers = int(workers)
+        self.log = log
+        self.done: dict[str, dict] = {}
+        if log is not None and log.exists():
+            for line in log.read_text().splitlines():
+                if line.strip():
+                    row = json.loads(line)
+                    self.done[_task_key(row)] = row
         self._pool = None
 
     def __enter__(self) -> _Pool:
@@ -298,10 +315,25 @@ class _Pool:
         if self._pool is not None:
             self._pool.shutdown(cancel_futures=True)
 
+    def _record(self, row: dict) -> None:
+        self.done[_task_key(row)] = row
+        if self.log is not None:
+            with self.log.open("a") as f:
+                f.write(json.dumps(row) + "\n")
+
     def map(self, fn, tasks: list[dict]) -> list[dict]:
+        todo = [t for t in tasks if _task_key(t) not in self.done]
         if self._pool is None:
-            return [fn(t) for t in tasks]
-        return list(self._pool.map(fn, tasks))
+            for t in todo:
+                self._record(fn(t))
+        else:
+            for future in as_completed([self._pool.submit(fn, t) for t in todo]):
+                self._record(future.result())
+        return [self.done[_task_key(t)] for t in tasks]
+
+
+def _task_key(task: dict) -> str:
+    return f"{task['object']}|{float(task['lever']):.5f}|{float(task['side']):+.0f}|{task['seed']}"
 
 
 def _tasks(obj: str, levers: Sequence[float], seeds: Sequence[int], side: float) -> list[dict]:
@@ -336,29 +368,39 @@ def measure_tilt_curve(
             "dropped": dropped.tolist(), "trials": rows}  # fmt: skip
 
 
-def refine_levers(levers: Sequence[float], tilts: Sequence[float], n: int) -> list[float]:
-    """Up to ``n`` new lever ratios: the midpoints of the intervals of the (sorted) curve
-    that span most of 0-35 deg, if more than REFINE_MIN_DEG and wider than REFINE_MIN_WIDTH."""
+def dense_levers(levers: Sequence[float], tilts: Sequence[float], n: int) -> list[float]:
+    """``n`` lever ratios evenly inside the rise of the (sorted, monotone) coarse curve:
+    from its last lever below RISE_DEG[0] to its first above RISE_DEG[1]."""
     r, t = np.asarray(levers, dtype=float), np.asarray(tilts, dtype=float)
-    top = LOW_DEG + BIN_DEG
-    span = np.clip(t[1:], 0.0, top) - np.clip(t[:-1], 0.0, top)
-    ok = (span > REFINE_MIN_DEG) & (np.diff(r) > REFINE_MIN_WIDTH)
-    best = [i for i in np.argsort(-span) if ok[i]][:n]
-    return sorted(round(0.5 * (r[i] + r[i + 1]), 5) for i in best)
+    below, above = np.flatnonzero(t < RISE_DEG[0]), np.flatnonzero(t > RISE_DEG[1])
+    lo = r[below[-1]] if below.size else r[0]
+    hi = r[above[0]] if above.size else r[-1]
+    return [round(float(v), 5) for v in np.linspace(lo, hi, n + 2)[1:-1]]
 
 
-def curve_entry(levers: Sequence[float], tilt: np.ndarray, dropped: np.ndarray) -> dict:
-    """One object's calibration: per lever ratio (sorted) the |tilt| per seed, their median
-    and the median made monotone (``tilt_deg``, the curve the design inverts)."""
+def pooled_median(levers: Sequence[float], tilts: Sequence[Sequence[float]]) -> np.ndarray:
+    """Per lever (sorted), the median |tilt| of every grasp at a lever within POOL_WIDTH of
+    it: the tilt a grasp aimed there lands at, its usual lever error included."""
+    r = np.asarray(levers, dtype=float)
+    return np.array([np.median(np.concatenate([np.ravel(tilts[j]) for j in
+                     np.flatnonzero(np.abs(r - x) <= POOL_WIDTH)])) for x in r])  # fmt: skip
+
+
+def curve_entry(levers: Sequence[float], tilt: Sequence, dropped: Sequence) -> dict:
+    """One calibration curve: per lever ratio (sorted) the |tilt| of each grasp, their
+    median, the median pooled over neighbouring levers (``pooled_median``) and that made
+    monotone (``tilt_deg``, the curve the design inverts)."""
     order = np.argsort(levers)
-    tilt, dropped = np.asarray(tilt)[order], np.asarray(dropped)[order]
-    median = np.median(tilt, axis=1)
+    r = [float(levers[i]) for i in order]
+    tilt = [list(map(float, tilt[i])) for i in order]
+    pooled = pooled_median(r, tilt)
     return {
-        "lever_ratio": [float(levers[i]) for i in order],
-        "tilt_deg": [round(float(v), 3) for v in monotone(median)],
-        "median_abs_tilt_deg": [round(float(v), 3) for v in median],
-        "abs_tilt_deg": [[round(float(v), 3) for v in row] for row in tilt],
-        "dropped": [[bool(v) for v in row] for row in dropped],
+        "lever_ratio": r,
+        "tilt_deg": [round(float(v), 3) for v in monotone(pooled)],
+        "pooled_median_deg": [round(float(v), 3) for v in pooled],
+        "median_abs_tilt_deg": [round(float(np.median(v)), 3) for v in tilt],
+        "abs_tilt_deg": [[round(v, 3) for v in row] for row in tilt],
+        "dropped": [[bool(v) for v in dropped[i]] for i in order],
     }
 
 
@@ -368,11 +410,12 @@ def calibrate(
     levers: Sequence[float] = CALIBRATION_LEVERS,
     seeds: Sequence[int] = CALIBRATION_SEEDS,
     workers: int = 2,
-    rounds: int = REFINE_ROUNDS,
+    dense: int = DENSE_LEVERS,
 ) -> dict:
-    """Measure every object's two curves (its CoM either side of the centre) at ``levers``,
-    refine each ``rounds`` times where it rises steeply through 0-35 deg
-    (``refine_levers``), and write the calibration JSON to ``out``."""
+    """Measure every object's two curves (its CoM either side of the centre) at the coarse
+    ``levers``, then at ``dense`` levers across each curve's rise (``dense_levers``), and
+    write the calibration JSON to ``out``. Grasps are logged beside it as they finish
+    (``<out>.partial.jsonl``), so that a run that was stopped resumes."""
     from comgrasp_pin.experiments import trials
     from comgrasp_pin.simulation.objects import get_object
 
@@ -380,31 +423,33 @@ def calibrate(
     seeds = list(seeds)
     start = time.perf_counter()
     curves_of = [(o, key) for o in objects for key in SIDES]
-    grid = {c: [float(r) for r in levers] for c in curves_of}
     results: dict[tuple, dict[float, tuple]] = {c: {} for c in curves_of}
-    with _Pool(workers) as pool:
-        for _ in range(rounds + 1):
-            todo = [(c, r) for c in curves_of for r in grid[c] if r not in results[c]]
-            if not todo:
-                break
-            tasks = [t for (o, key), r in todo for t in _tasks(o, [r], seeds, SIDES[key])]
-            rows = pool.map(tilt_trial, tasks)
-            for k, (c, r) in enumerate(todo):
-                tilt, dropped = _tilts(rows[k * len(seeds) : (k + 1) * len(seeds)], [r],
-                                       len(seeds))  # fmt: skip
-                results[c][r] = (tilt[0], dropped[0])
-            for c in curves_of:
-                rs = sorted(results[c])
-                median = monotone([np.median(results[c][r][0]) for r in rs])
-                grid[c] = sorted({*grid[c], *refine_levers(rs, median, REFINE_PER_ROUND)})
+
+    def measure(pool: _Pool, todo: list[tuple]) -> None:
+        tasks = [t for (o, key), r in todo for t in _tasks(o, [r], seeds, SIDES[key])]
+        rows = pool.map(tilt_trial, tasks)
+        for k, (c, r) in enumerate(todo):
+            tilt, dropped = _tilts(rows[k * len(seeds) : (k + 1) * len(seeds)], [r], len(seeds))
+            results[c][r] = (tilt[0], dropped[0])
+
+    log = out.with_name(out.stem + ".partial.jsonl")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    with _Pool(workers, log) as pool:
+        measure(pool, [(c, float(r)) for c in curves_of for r in levers])
+        todo = []
+        for c in curves_of:
+            rs = sorted(results[c])
+            coarse = monotone([np.median(results[c][r][0]) for r in rs])
+            todo += [(c, r) for r in dense_levers(rs, coarse, dense) if r not in results[c]]
+        measure(pool, todo)
     curves: dict[str, dict] = {}
     for o, key in curves_of:
         spec = get_object(o)
         entry = curves.setdefault(o, {"holding_lever_m": round(holding_lever(
             spec.mass, config.motion.grip_force, config.world.pad_friction), 6)})  # fmt: skip
         rs = sorted(results[(o, key)])
-        entry[key] = curve_entry(rs, np.array([results[(o, key)][r][0] for r in rs]),
-                                 np.array([results[(o, key)][r][1] for r in rs]))  # fmt: skip
+        entry[key] = curve_entry(rs, [results[(o, key)][r][0] for r in rs],
+                                 [results[(o, key)][r][1] for r in rs])  # fmt: skip
     n_grasps = sum(len(v) for v in results.values()) * len(seeds)
     data = {
         "about": (
@@ -414,16 +459,17 @@ def calibrate(
             "nominal holding lever holding_lever_m): abs_tilt_deg, the TRUE tilt (deg, from "
             "the simulator, wrapped to [-90, 90) and made absolute) at which the rod "
             "settled in the jaws, one trial grasp per calibration seed, each in its own "
-            "scene (90 = it dropped); median_abs_tilt_deg their median; tilt_deg that "
-            "median made monotone (pool adjacent violators), the curve the design inverts."
+            "scene (90 = it dropped); median_abs_tilt_deg their median; pooled_median_deg "
+            f"the median over the grasps within {LEVER_SCATTER} of the lever; tilt_deg that "
+            "made monotone (pool adjacent violators), the curve the design inverts."
         ),
         "made": {
             "command": f"python -m comgrasp_pin.experiments.design --out {out}",
             "how": (
-                f"coarse levers {list(levers)}, then {rounds} rounds bisecting up to "
-                f"{REFINE_PER_ROUND} intervals per curve that span > {REFINE_MIN_DEG} deg "
-                f"of 0-35 deg and are wider than {REFINE_MIN_WIDTH}; {len(seeds)} grasps "
-                f"per lever and side; {n_grasps} grasps in all"
+                f"coarse levers {list(levers)}, then {dense} levers evenly across each "
+                f"curve's rise (from the last coarse lever below {RISE_DEG[0]} deg to the "
+                f"first above {RISE_DEG[1]} deg); {len(seeds)} grasps per lever and side; "
+                f"{n_grasps} grasps in all"
             ),
             "scene_seeds": "design.calibration_seed(object, lever, seed, side)",
             "config": "trials.episode_config() (the defaults; torque noise 0.05 N m)",
@@ -436,8 +482,8 @@ def calibrate(
         },
         "objects": curves,
     }
-    out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(_dumps(data) + "\n")
+    log.unlink(missing_ok=True)
     load_calibration.cache_clear()
     return data
 
@@ -462,13 +508,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--objects", default=",".join(OBJECTS))
     parser.add_argument("--levers", default=",".join(map(str, CALIBRATION_LEVERS)))
     parser.add_argument("--seeds", type=int, default=len(CALIBRATION_SEEDS))
-    parser.add_argument("--rounds", type=int, default=REFINE_ROUNDS)
+    parser.add_argument("--dense", type=int, default=DENSE_LEVERS)
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args(argv)
     objects = [o.strip() for o in args.objects.split(",") if o.strip()]
     levers = [float(v) for v in args.levers.split(",")]
     data = calibrate(objects, Path(args.out), levers, range(args.seeds), args.workers,
-                     args.rounds)  # fmt: skip
+                     args.dense)  # fmt: skip
     for obj, entry in data["objects"].items():
         for key in SIDES:
             c = entry[key]
