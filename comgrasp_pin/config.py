@@ -166,8 +166,7 @@ class MotionConfig:
     park_rest: float = 0.3
 
 
-ESTIMATORS = ("lstsq", "ipopt")
-TAU_BEFORE = ("measured", "model")
+ESTIMATORS, TAU_BEFORE = ("lstsq", "ipopt"), ("measured", "model")
 
 
 @dataclass(frozen=True)
@@ -292,7 +291,7 @@ class RegraspConfig:
 
 @dataclass(frozen=True)
 class EpisodeConfig:
-    """The whole tree (see the module docstring). ``asdict`` of it is a run's record."""
+    """The whole tree (see the module docstring); ``asdict`` of it is a run's record."""
 
     trial: TrialConfig = field(default_factory=TrialConfig)
     regrasp: RegraspConfig = field(default_factory=RegraspConfig)

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from comgrasp_pin.config import EpisodeConfig
-from comgrasp_pin.experiments import design
+from comgrasp_pin.experiments import design, tilt_calibration
 from comgrasp_pin.experiments.design import (
     invert_curve,
     lever_for_tilt,
@@ -163,8 +163,8 @@ def test_a_calibrated_grasp_settles_at_its_recorded_tilt():
     i = int(np.argmin(np.abs(np.array(curve["median_abs_tilt_deg"]) - 15.0)))
     lever = curve["lever_ratio"][i]
     task = {"object": "obj4", "lever": lever, "side": 1.0,
-            "seed": design.calibration_seed("obj4", lever, 0, 1.0)}  # fmt: skip
-    row = design.tilt_trial(task)
+            "seed": tilt_calibration.calibration_seed("obj4", lever, 0, 1.0)}  # fmt: skip
+    row = tilt_calibration.tilt_trial(task)
     assert not row["dropped"]
     assert abs(row["tilt_deg"]) == pytest.approx(curve["abs_tilt_deg"][i][0], abs=1.0)
 

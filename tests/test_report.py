@@ -8,9 +8,12 @@ import pytest
 from comgrasp_pin.experiments import report
 from comgrasp_pin.experiments.report import (
     accuracy_figure,
+    accuracy_plot,
     accuracy_table,
+    accuracy_tables,
     calibration_figure,
     calibration_table,
+    common,
     extra_pose_summary,
     method_comparison,
     regrasp_figure,
@@ -69,7 +72,7 @@ def test_empty_bins_break_the_accuracy_curves():
         {"object": "obj1", "theta_deg": 13.0, "accuracy": 0.90, "accuracy_line": 0.80},
         {"object": "obj1", "theta_deg": 70.0, "accuracy": 0.95, "accuracy_line": 0.50},
     ]
-    fig, curves = report._accuracy_plot(rows)
+    fig, curves = accuracy_plot._accuracy_plot(rows)
     try:
         for kind, first in (("ours", 98.0), ("line", 97.5)):
             y = np.asarray(curves["obj1"][kind].get_ydata(), float)
@@ -78,7 +81,7 @@ def test_empty_bins_break_the_accuracy_curves():
             assert np.isnan(y[1:5]).all() and np.isfinite(y[5]) and np.isnan(y[6:11]).all()
             assert np.isfinite(y[11])
     finally:
-        report._pyplot().close(fig)
+        common._pyplot().close(fig)
 
 
 def _acc_row(obj, theta, acc, **extra):
@@ -227,7 +230,7 @@ def test_method_comparison_by_hand():
 
 def test_method_comparison_explains_with_the_offset_of_the_com(monkeypatch):
     # The paper's one-pose line misses by h·tan θ with h = 13 mm; ours by 1 mm·tan θ.
-    monkeypatch.setattr(report, "com_off_axis_m", lambda obj: 0.013)
+    monkeypatch.setattr(accuracy_tables, "com_off_axis_m", lambda obj: 0.013)
     rows = []
     for theta in (15.0, 25.0, 40.0, 60.0):
         t = math.tan(math.radians(theta))
@@ -248,7 +251,7 @@ def test_method_comparison_without_the_column():
 
 
 def test_object_groups_without_paper_objects_from_the_simulation(monkeypatch):
-    monkeypatch.setattr(report, "paper_objects", lambda: report.DEFAULT_PAPER_OBJECTS)
+    monkeypatch.setattr(common, "paper_objects", lambda: report.DEFAULT_PAPER_OBJECTS)
     rows = [{"object": o} for o in ("obj7", "obj10", "obj1", "obj9", "obj6")]
     assert report.object_groups(rows) == (["obj1", "obj6"], ["obj7", "obj9", "obj10"])
 
@@ -285,7 +288,7 @@ def test_extra_objects_never_enter_the_paper_comparison(tmp_path):
     assert "### obj7" in section and "Objects obj7;" in section and "obj1" not in section
     assert report.extra_objects_section(paper_rows, reg_paper) == "No extra objects in this run."
     # The accuracy figure gives obj7 a panel of its own, away from the paper's.
-    fig, curves = report._accuracy_plot(both)
+    fig, curves = accuracy_plot._accuracy_plot(both)
     try:
         obj1_ax, obj7_ax = curves["obj1"]["ours"].axes, curves["obj7"]["ours"].axes
         assert obj1_ax is not obj7_ax
@@ -294,7 +297,7 @@ def test_extra_objects_never_enter_the_paper_comparison(tmp_path):
             curves["obj7"]["line"] in obj7_ax.lines and curves["obj7"]["ours"] not in obj1_ax.lines
         )
     finally:
-        report._pyplot().close(fig)
+        common._pyplot().close(fig)
     assert accuracy_figure(both, tmp_path / "a.png").stat().st_size > 20_000
     assert calibration_figure(both, tmp_path / "c.png").stat().st_size > 20_000
 

@@ -1,0 +1,252 @@
+"""The calibration figure: z against N(0, 1), coverage and rms z per tilt bin."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from comgrasp_pin.experiments.report.calibration import calibration_table, calibration_z
+from comgrasp_pin.experiments.report.common import (
+    N01_COV68,
+    NOT_RECORDED,
+    TARGET_COV95_BIN,
+    TARGET_COV95_OVERALL,
+    TARGET_RMS_Z,
+    _abs_theta,
+    _bin_name,
+    _group,
+    _ok,
+    _pyplot,
+    _select,
+    object_groups,
+    recorded,
+)
+from comgrasp_pin.experiments.stats import (
+    CALIBRATION_BINS_DEG,
+    binned_calibration,
+    calibration,
+    wilson_interval,
+)
+
+
+def _calibration_row(axes, rows, objects, edges, colours, markers, extra: bool):
+    """One row of the calibration figure: histogram of z, coverage per bin, rms z per bin."""
+    ax_h, ax_c, ax_r = axes
+    span = 5.0
+    grid = np.linspace(-span, span, 400)
+    width = 0.5
+    bins = np.arange(-span, span + 1e-9, width)
+    positions = np.arange(len(edges))  # the bins and "all"
+    labels = [_bin_name(lo, hi) for lo, hi in zip(edges[:-1], edges[1:])] + ["all"]
+    n_tick = [[] for _ in positions]
+    groups = [("paper's six", objects)] if not extra else [(o, [o]) for o in objects]
+    total = 0
+    for g, (name, objs) in enumerate(groups):
+        sel = _select(rows, objs)
+        z, theta = calibration_z(sel), _abs_theta(sel)
+        good = np.isfinite(z)
+        z, theta = z[good], theta[good]
+        total += len(z)
+        colour, marker = colours[g % len(colours)], markers[g % len(markers)]
+        clipped = np.clip(z, -span + 1e-9, span - 1e-9)
+        out_lo, out_hi = int(np.sum(z <= -span)), int(np.sum(z >= span))
+        label = f"{name}, n = {len(z)}"
+        if out_lo or out_hi:
+            label += f"\n({out_lo} below −{span:g}, {out_hi} above +{span:g}: in the end bins)"
+        ax_h.hist(
+            clipped,
+            bins=bins,
+            histtype="stepfilled" if not extra else "step",
+            color=colour,
+            alpha=0.55 if not extra else 1.0,
+            lw=1.5,
+            label=label,
+        )
+        per_bin = binned_calibration(theta, z, edges) + [(0, 0, calibration(z))]
+        dodge = 0.0 if not extra else (g - 0.5 * (len(groups) - 1)) * 0.25
+        for level, (attr, mk, filled) in enumerate(
+            (("inside95", marker, True), ("inside68", "o" if not extra else marker, False))
+        ):
+            xs, ps, lo_err, hi_err = [], [], [], []
+            for p, (_, _, c) in zip(positions, per_bin):
+                if not c.n:
+                    continue
+                k = getattr(c, attr)
+                lo, hi = wilson_interval(k, c.n)
+                xs.append(p + dodge + (0.0 if level == 0 else 0.12))
+                ps.append(100 * k / c.n)
+                lo_err.append(max(0.0, 100 * k / c.n - 100 * lo))
+                hi_err.append(max(0.0, 100 * hi - 100 * k / c.n))
+            ax_c.errorbar(
+                xs,
+                ps,
+                yerr=[lo_err, hi_err],
+                fmt=mk,
+                color=colour,
+                mfc=colour if filled else "white",
+                ms=6,
+                capsize=2.5,
+                lw=1.0,
+                label=(f"{name}: " if extra else "")
+                + ("inside ±1.96σ (95 %)" if level == 0 else "inside ±1σ (68 %)"),
+            )
+        xs = [p + dodge for p, (_, _, c) in zip(positions, per_bin) if c.n]
+        ax_r.plot(
+            xs,
+            [c.rms for _, _, c in per_bin if c.n],
+            ls="none",
+            marker=marker,
+            ms=7,
+            color=colour,
+            label=name if extra else "rms z",
+        )
+        for p, (_, _, c) in zip(positions, per_bin):
+            n_tick[p].append(str(c.n))
+    n_ref = total / max(1, len(groups))
+    ax_h.plot(
+        grid,
+        n_ref * width * np.exp(-0.5 * grid**2) / math.sqrt(2 * math.pi),
+        "k--",
+        lw=1.3,
+        label=f"N(0, 1) for n = {n_ref:.0f}",
+    )
+    ax_h.set_xlim(-span, span)
+    ax_h.set_xlabel("z = (pos_esti − pos_real) / pos_std", fontsize=9)
+    ax_h.set_ylabel("grasps per 0.5 of z", fontsize=9)
+    ax_h.legend(fontsize=7, loc="upper left")
+    ax_h.set_ylim(0, 1.35 * ax_h.get_ylim()[1])  # room for the legend
+    ax_h.set_title("distribution of z (|z| > 5 in the end bins)", fontsize=9, loc="left")
+    ax_c.axhspan(
+        100 * TARGET_COV95_OVERALL[0],
+        100 * TARGET_COV95_OVERALL[1],
+        color="#cfe8cf",
+        zorder=0,
+        label="95 % target, overall (93–97 %)",
+    )
+    ax_c.axhline(
+        100 * TARGET_COV95_BIN, color="0.35", ls="--", lw=1, label="95 % target, every bin (≥ 90 %)"
+    )
+    ax_c.axhline(100 * N01_COV68, color="0.35", ls=":", lw=1, label="N(0, 1) inside ±1σ: 68.3 %")
+    ax_c.set_ylim(0, 103)
+    ax_c.set_ylabel("grasps inside the interval (%)", fontsize=9)
+    ax_c.set_title("coverage per |θ| bin (95 % Wilson intervals)", fontsize=9, loc="left")
+    ax_r.axhspan(
+        TARGET_RMS_Z[0], TARGET_RMS_Z[1], color="#cfe8cf", zorder=0, label="target 0.9–1.1"
+    )
+    ax_r.axhline(1.0, color="0.35", ls=":", lw=1)
+    top = max(
+        [1.2]
+        + [
+            v
+            for line in ax_r.get_lines()
+            for v in np.asarray(line.get_ydata(), float)
+            if np.isfinite(v)
+        ]
+    )
+    if top > 3.0:  # heavy tails: a log axis with plain numbers
+        from matplotlib.ticker import FixedLocator, FuncFormatter, NullLocator
+
+        ax_r.set_yscale("log")
+        bottom = min(
+            v
+            for line in ax_r.get_lines()
+            for v in np.asarray(line.get_ydata(), float)
+            if np.isfinite(v) and v > 0
+        )
+        every = (0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)
+        ticks = [t for t in every if bottom / 2.5 <= t <= 2.5 * top]
+        ax_r.yaxis.set_major_locator(FixedLocator(ticks))
+        ax_r.yaxis.set_minor_locator(NullLocator())
+        ax_r.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+        ax_r.set_ylabel("rms z (log scale)", fontsize=9)
+    else:
+        ax_r.set_ylim(0, max(1.5, 1.1 * top))
+        ax_r.set_ylabel("rms z", fontsize=9)
+    ax_r.set_title("rms z per |θ| bin", fontsize=9, loc="left")
+    for ax in (ax_c, ax_r):
+        ticks = [f"{lab}\nn={'/'.join(ns)}" for lab, ns in zip(labels, n_tick)]
+        ax.set_xticks(positions, ticks, fontsize=7)
+        ax.set_xlabel("|θ| bin (deg)" + (f"; n = {'/'.join(objects)}" if extra else ""), fontsize=9)
+        ax.axvline(positions[-1] - 0.5, color="0.6", lw=0.8)
+        ax.set_xlim(-0.6, positions[-1] + 0.6)
+        ax.legend(
+            fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.24), ncol=2, frameon=False
+        )
+    for ax in axes:
+        ax.grid(alpha=0.3, lw=0.6)
+        ax.tick_params(labelsize=8)
+
+
+def calibration_figure(rows: Sequence[dict], path: Path) -> Path:
+    """z = (pos_esti − pos_real) / pos_std against N(0, 1): histogram with the N(0, 1)
+    reference, coverage of the ±1σ and ±1.96σ intervals per |θ| bin with the targets, rms z
+    per bin; the paper's six objects in the top row, extra objects in a row of their own."""
+    plt = _pyplot()
+    ok = _ok(rows)
+    paper_objs, extra = object_groups(ok)
+    groups = [
+        (g, objs)
+        for g, objs in (("paper", paper_objs), ("extra", extra))
+        if objs and recorded(_select(ok, objs), "pos_std_m")
+    ]
+    if not groups:
+        fig, ax = plt.subplots(figsize=(6, 1.6))
+        ax.axis("off")
+        ax.text(
+            0.5,
+            0.5,
+            f"pos_std_m {NOT_RECORDED} in these rows: no calibration",
+            ha="center",
+            va="center",
+            fontsize=11,
+        )
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+        return Path(path)
+    fig = plt.figure(figsize=(16, 4.6 * len(groups)), layout="constrained")
+    subfigs = fig.subfigures(len(groups), 1, squeeze=False)[:, 0]
+    for sub, (group, objs) in zip(subfigs, groups):
+        axes = sub.subplots(1, 3, gridspec_kw={"width_ratios": [1.0, 1.35, 1.0]})
+        if group == "paper":
+            sub.suptitle(
+                f"The paper's six objects, pooled ({', '.join(objs)})",
+                fontsize=11,
+                fontweight="bold",
+            )
+            _calibration_row(axes, ok, objs, CALIBRATION_BINS_DEG, ["#1b4f8a"], ["s"], False)
+        else:
+            sub.suptitle(
+                "Extra objects (not in the paper), each on its own", fontsize=11, fontweight="bold"
+            )
+            _calibration_row(
+                axes,
+                ok,
+                objs,
+                CALIBRATION_BINS_DEG,
+                ["#7b3294", "#008837", "#a6611a"],
+                ["D", "^", "P"],
+                True,
+            )
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return Path(path)
+
+
+def calibration_section(rows: Sequence[dict], out: Path, objects=None) -> str:
+    """The report's calibration text: the figure (written to ``out/calibration.png``) and
+    the table, or "not recorded" when the rows carry no ``pos_std_m``."""
+    ok = _ok(rows)
+    objects = _group(ok, objects)
+    if not recorded(ok, "pos_std_m"):
+        return (
+            f"`pos_std_m` (the stated standard deviation of each estimate) is {NOT_RECORDED} "
+            "in this run: no calibration."
+        )
+    calibration_figure(rows, Path(out) / "calibration.png")
+    return "![calibration](calibration.png)\n\n" + calibration_table(rows, objects)
+
+
+# --- experiment 2: pick and place ------------------------------------------------------------
