@@ -27,7 +27,7 @@ def _view(theta, offset, y0=0.0, slope=0.0, centre_along=0.05):
     T[:3, :3] = np.column_stack([x, [0.0, 1.0, 0.0], np.cross(x, [0.0, 1.0, 0.0])])
     T[:3, 3] = foot + centre_along * x
     return SideView(T, theta, 0.3, -centre_along, None, None, None, None, 0.01, 0.02, 1e-4,
-                    1e-3, None, 0, y0, slope, 1e-5, 1e-4)  # fmt: skip
+                    1e-3, y0, slope, 1e-5, 1e-4)  # fmt: skip
 
 
 def test_rod_motion_carries_the_rod_where_the_second_view_saw_it():

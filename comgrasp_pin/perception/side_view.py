@@ -28,9 +28,6 @@ TABLE_MARGIN = 0.003  # points less than this above the table are the table (m)
 MIN_PIXELS = 60
 MAX_AXIS_FROM_TCP = 0.035  # a held rod's axis passes this close to the TCP (m)
 MIN_EXTENT = 0.05  # a held rod is at least this long in view (m)
-HEAD_RHO = 1.5  # points farther than this many handle radii (plus HEAD_MARGIN) from the axis
-HEAD_MARGIN = 0.003  # ... belong to a head or weight (m)
-MIN_HEAD_POINTS = 30
 OFF_AXIS_PERCENTILE = 99.0  # SideView.off_axis: nearly the farthest point, robust to a stray
 MAX_CYLINDER_MISFIT = 5e-4  # a round handle's points lie this close to the fitted cylinder (m)
 # The gripper's own volume in the ee frame (from the URDF): fingers and pads (with margin),
@@ -64,10 +61,6 @@ class SideView:
             (m): the spread of their distances from the fitted cylinder over sqrt(count).
         tilt_std: standard error of ``theta`` (rad) from the scatter of the rod's slice
             centres about its axis.
-        head_ee: (3,) mean offset from the axis (ee frame, m) of the visible points standing
-            off the handle (a head, a weight), or None when fewer than MIN_HEAD_POINTS do;
-            head_points: their count. Two views' ``head_ee`` turn with the rod about its
-            own axis.
         surface_y: ee-y (m) of the handle's visible surface where the axis passes nearest
             the TCP, and surface_slope its change per metre along the rod (a line fitted to
             the handle's points); between two views they give the rod's shift along the jaw
@@ -89,8 +82,6 @@ class SideView:
     off_axis: float
     axis_std: float
     tilt_std: float
-    head_ee: np.ndarray | None
-    head_points: int
     surface_y: float
     surface_slope: float
     surface_y_std: float
@@ -211,11 +202,6 @@ def observe_held_rod(
     contours, _ = cv2.findContours(mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     rect = cv2.minAreaRect(np.vstack(contours))
     off_axis = float(np.percentile(rho, OFF_AXIS_PERCENTILE))
-    # Where the parts standing off the handle (a head, a weight) lie around the axis: their
-    # turn between two views is the rod's roll about its own axis, which the axis cannot show.
-    standing = rho > HEAD_RHO * radius + HEAD_MARGIN
-    radial = points - offset - np.outer(along, x_axis)
-    head_ee = radial[standing].mean(axis=0) if standing.sum() >= MIN_HEAD_POINTS else None
     # Where the handle's visible surface lies along the jaw axis (the camera's depth), as a
     # line along the rod: its change between two views is the rod shifting along the jaws
     # and turning out of their plane (the grasp's compliance), which the axis cannot show.
@@ -224,8 +210,7 @@ def observe_held_rod(
     axis_std = float(np.std(rho[handle] - radius) / np.sqrt(n_handle)) if handle.any() else radius
     return SideView(T_ee_obj, theta, float(hi - lo), grasp_offset, mask, rect,
                     camera.project(ends_cam), camera.project(tcp_cam[None])[0],
-                    float(radius), off_axis, axis_std, tilt_std, head_ee,
-                    int(standing.sum()), *depth_line)  # fmt: skip
+                    float(radius), off_axis, axis_std, tilt_std, *depth_line)  # fmt: skip
 
 
 def _depth_line(along: np.ndarray, y: np.ndarray) -> tuple[float, float, float, float]:
