@@ -7,8 +7,9 @@ turn far, and the paper's 0-30 deg range stays nearly empty. The design instead
 
 1. measures, once per object and side of its centre the CoM lies on, the TRUE settled
    tilt against the lever ratio r = e / (the nominal holding lever) in trial grasps
-   (``measure_tilt_curve``; ``calibrate`` writes the curves of the median tilt, pooled
-   over neighbouring levers and made monotone, to ``sim/tilt_calibration.json``). The side
+   (``tilt_calibration.measure_tilt_curve``; ``tilt_calibration.calibrate`` writes the
+   curves of the median tilt, pooled over neighbouring levers and made monotone, to
+   ``sim/tilt_calibration.json``). The side
    matters: the same lever turns a rod 3-6 deg further one way than the other (measured;
    a CoM below or above the axis and a bias of the perceived centre would both do it), and
    so does the scene (a few deg), so every calibration grasp has its own scene,
@@ -281,3 +282,11 @@ def curve_entry(levers: Sequence[float], tilt: Sequence, dropped: Sequence) -> d
         "abs_tilt_deg": [[round(v, 3) for v in row] for row in tilt],
         "dropped": [[bool(v) for v in dropped[i]] for i in order],
     }
+
+
+if __name__ == "__main__":  # python -m comgrasp_pin.experiments.design: the calibration
+    import sys
+
+    from comgrasp_pin.experiments.tilt_calibration import main
+
+    sys.exit(main())

@@ -35,7 +35,7 @@ ACCURACY_GRASP_OFFSET = 0.25  # grasp offsets from the rectangle's centre, |offs
 # span the tilt calibration covers (sim/tilt_calibration.json) and the grasps keep to. Each
 # grasp gets a target tilt (``design.target_tilt``: each 5 deg bin of 0-30 deg and 30-90 deg
 # in turn) and the lever at which the calibration saw its object settle there.
-ACCURACY_LEVER_RANGE = (0.3, 1.2)
+ACCURACY_LEVER_RANGE = (0.35, 1.0)
 
 
 def trial_seed(run_seed: int, obj: str, trial: int) -> int:
