@@ -5,15 +5,13 @@ from comgrasp_pin.estimation.estimate import ComEstimate
 from comgrasp_pin.estimation.estimator import estimate_com
 from comgrasp_pin.estimation.pose_planning import plan_wrist_poses
 from comgrasp_pin.estimation.prior import AxisPrior
-from comgrasp_pin.estimation.rod_axis import RodFrameEstimate, com_along_axis, com_in_rod_frame
+from comgrasp_pin.estimation.rod_axis import com_along_axis
 
 __all__ = [
     "AxisPrior",
     "ComEstimate",
     "ComEstimateBatch",
-    "RodFrameEstimate",
     "com_along_axis",
-    "com_in_rod_frame",
     "estimate_com",
     "estimate_com_batch",
     "plan_wrist_poses",
