@@ -198,6 +198,9 @@ class TrialConfig:
             the jaws); that motion is then taken as uniform within the bounds.
         roll_slip_deg: a tilt change above this between the two poses means the rod moved
             in the jaws (deg).
+        still_turn_deg, still_attempts: a torque window during which the rod turned by
+            more than this (deg; its creep is 0.1-0.5) is measured again, at most this
+            many windows in all (the torques of a turning rod are not static).
         careful_lift: a careful trial grasp first lifts the rod this much (m) ...
         careful_lift_time: ... this briskly (s): its peak acceleration (10/sqrt(3) 0.04 /
             0.6^2 = 0.64 m/s^2) exceeds the lift's, so a grasp that passes holds through it;
@@ -219,6 +222,8 @@ class TrialConfig:
     hold_before_measuring: float = 0.5
     roll_time: float = 1.0
     roll_slip_deg: float = 0.5
+    still_turn_deg: float = 1.0
+    still_attempts: int = 3
     max_depth_shift: float = 0.002
     max_depth_turn_deg: float = 2.0
     careful_lift: float = 0.04

@@ -149,6 +149,24 @@ def test_side_view_tilt_axis_and_grasp_position(side_errors):
     assert worst_grasp < 3e-3, sorted(side_errors, key=lambda e: -e[5])[:3]
 
 
+@pytest.mark.parametrize("name", ["obj5", "obj6"])
+def test_side_view_tilt_when_the_fingers_read_the_handle_thinner(ur5, name):
+    """Under the grip the pads give, so the fingers read a thick handle's radius up to a
+    millimetre small; the axis fitted with that radius misfits and the slice line alone is
+    biased by 1-5 deg on these handles (measured). The tilt must hold all the same."""
+    obj = OBJECTS[name]
+    sim, rig, place = _held_rod_scene(ur5, name)
+    errors = []
+    for tilt in (10.0, 17.0, -25.0):
+        for give in (0.0005, 0.001):
+            T_ee_obj = place(tilt, 0.03)
+            view = look_from_side(rig, sim.data, ur5, sim.q, rod_length=obj.length,
+                                  finger_q=sim.finger_q[0] + give)  # fmt: skip
+            errors.append(np.degrees(_side_view_errors(view, T_ee_obj, 0.03)[0]))
+    rig.close()
+    assert max(errors) < 0.3, errors
+
+
 def test_side_view_neither_end_seen_uses_the_centre_hint(ur5):
     """An axe hanging at -34 deg: its head leaves the image and its handle's end reaches
     behind the arm. The grasp position then comes from where the rod's centre was when it

@@ -11,6 +11,11 @@ import numpy as np
 from comgrasp_pin.perception._points import fit_line
 
 MAX_FIT_POINTS = 3000
+MAX_MISFIT = 5e-4  # a round handle's points lie this close to the fitted cylinder (m) ...
+MAX_MISFIT_PER_RADIUS = 0.03  # ... or this fraction of its radius (a flat bar: 0.15-0.2)
+MAX_REFINE_TURN_DEG = 8.0  # a cylinder this far from the slice line locked on a wrong side
+MAX_REFINE_SHIFT = 0.01  # the same, for its offset (m)
+RADIUS_GIVE = np.arange(0.25, 2.01, 0.25) * 1e-3  # the handle's radius above the fingers' (m)
 
 
 def centre_line(
@@ -114,3 +119,31 @@ def fit_cylinder(
         u = -u
     n = np.array([-np.sin(params[0]), np.cos(params[0])])
     return u, params[1] * n, float(np.median(res_all))
+
+
+def refine_axis(
+    points: np.ndarray, direction: np.ndarray, point: np.ndarray, radius: float | None
+) -> tuple[np.ndarray, np.ndarray]:
+    """The slice line refined by a cylinder fitted to the handle, where it is round.
+
+    ``direction`` and ``point`` are the slice line in the x-z plane, ``points`` (N, 3) the
+    handle's; returned unchanged where no cylinder fits.
+
+    The fingers' reading ``radius`` (m) is the handle's radius less the pads' give (up to
+    about a millimetre under the grip); when the cylinder of that radius fits poorly, the
+    radii up to ``RADIUS_GIVE`` larger are tried (a free radius is ill-posed from the points
+    of one side) and the best fit is kept. The fit is trusted only near the slice line (it
+    can lock on a wrong side) and where the points lie on it (a flat bar is no cylinder).
+    """
+    fits = [fit_cylinder(points, direction, point, radius)]
+    if radius and fits[0][2] >= MAX_MISFIT:
+        fits += [fit_cylinder(points, direction, point, radius + dr) for dr in RADIUS_GIVE]
+    x_fit, offset_fit, misfit = min(fits, key=lambda fit: fit[2])
+    limit = max(MAX_MISFIT, MAX_MISFIT_PER_RADIUS * radius) if radius else MAX_MISFIT
+    near = (
+        x_fit @ direction > np.cos(np.radians(MAX_REFINE_TURN_DEG))
+        and np.linalg.norm(offset_fit - point) < MAX_REFINE_SHIFT
+    )
+    if near and misfit < limit:
+        return x_fit, offset_fit
+    return direction, point

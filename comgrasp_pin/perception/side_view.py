@@ -19,7 +19,7 @@ import numpy as np
 from comgrasp_pin.camera import PinholeCamera
 from comgrasp_pin.errors import ObjectNotFoundError
 from comgrasp_pin.perception._points import blobs, check_images, points_in
-from comgrasp_pin.perception.rod_axis import centre_line, fit_cylinder
+from comgrasp_pin.perception.rod_axis import centre_line, refine_axis
 from comgrasp_pin.perception.rod_ends import centre_along, end_profile
 
 SLAB_HALF_WIDTH = 0.08  # |y_ee| of the region the held object may occupy (m)
@@ -29,7 +29,6 @@ MIN_PIXELS = 60
 MAX_AXIS_FROM_TCP = 0.035  # a held rod's axis passes this close to the TCP (m)
 MIN_EXTENT = 0.05  # a held rod is at least this long in view (m)
 OFF_AXIS_PERCENTILE = 99.0  # SideView.off_axis: nearly the farthest point, robust to a stray
-MAX_CYLINDER_MISFIT = 5e-4  # a round handle's points lie this close to the fitted cylinder (m)
 # The gripper's own volume in the ee frame (from the URDF): fingers and pads (with margin),
 # palm, and the wrist above it.
 _FINGERS = (0.016, 0.06, -0.085, 0.018)  # |x| <, |y| <, z from, z to
@@ -160,15 +159,7 @@ def observe_held_rod(
     # Tilt lives in the ee x-z plane; the jaws fix the axis at y = 0.
     x_axis, offset_xz, handle, tilt_std = centre_line(points[:, [0, 2]])
     if handle.sum() >= MIN_PIXELS:
-        x_fit, offset_fit, misfit = fit_cylinder(points[handle], x_axis, offset_xz, handle_radius)
-        # Trust the refinement only near the slice estimate (it can lock on a wrong side)
-        # and where the handle is round (a flat bar is no cylinder).
-        if (
-            x_fit @ x_axis > np.cos(np.radians(5.0))
-            and np.linalg.norm(offset_fit - offset_xz) < 0.01
-            and misfit < MAX_CYLINDER_MISFIT
-        ):
-            x_axis, offset_xz = x_fit, offset_fit
+        x_axis, offset_xz = refine_axis(points[handle], x_axis, offset_xz, handle_radius)
     x_axis = np.array([x_axis[0], 0.0, x_axis[1]])
     along = points @ x_axis
     lo, hi = np.percentile(along, [0.1, 99.9])

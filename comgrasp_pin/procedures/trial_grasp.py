@@ -129,15 +129,31 @@ def grasp_and_lift(
 
 
 def _measure_window(cell: Cell, plan: _Plan, config: EpisodeConfig):
-    """Settle, look, average the torques: the measurement and the view at its start (None
-    if the camera saw nothing usable), so that the rod's creep during it is known."""
-    trial = config.trial
-    cell.hold(trial.settle)
-    try:
-        start = cell.look_from_side(cell.q_des, plan.detection.length, plan.centre_hint)
-    except PerceptionError:
-        start = None
-    return cell.measure_torques(0.0, trial.window), start
+    """Settle, look, average the torques, look again: the measurement, the rod where it
+    was on average meanwhile (``mid_window_view``, its creep kept) and None, or the
+    measurement, None and the end view's PerceptionError. A window must be static: while
+    the rod turned in the jaws by more than ``still_turn_deg`` during it, measure again
+    (at most ``still_attempts`` windows)."""
+    trial, length, hint = config.trial, plan.detection.length, plan.centre_hint
+    for _ in range(trial.still_attempts):
+        cell.hold(trial.settle)
+        try:
+            start = cell.look_from_side(cell.q_des, length, hint)
+        except PerceptionError:
+            start = None
+        torques = cell.measure_torques(0.0, trial.window)
+        try:
+            view = mid_window_view(start, cell.look_from_side(torques.q, length, hint))
+        except PerceptionError as exc:
+            return torques, None, exc
+        if view.creep is None or _turn(view.creep) <= np.radians(trial.still_turn_deg):
+            break
+    return torques, view, None
+
+
+def _turn(M: np.ndarray) -> float:
+    """Rotation angle of the rigid motion ``M`` (4, 4) (rad)."""
+    return float(np.arccos(np.clip(0.5 * (np.trace(M[:3, :3]) - 1.0), -1.0, 1.0)))
 
 
 def measure_held(
@@ -145,32 +161,28 @@ def measure_held(
 ) -> HeldReadings:
     """Back at the first measurement pose: watch, measure the torques and look; then the
     same at the rolled pose (unwatched: the roll is slow), and back."""
-    trial, hint = config.trial, plan.centre_hint
-    length = plan.detection.length
+    trial = config.trial
     with cell.watching(watch):
         cell.move_to(plan.poses[0], duration=trial.return_time)
         cell.hold(trial.hold_before_measuring)
         watch.sample_now()
-    first, start = _measure_window(cell, plan, config)
+    first, side, failure = _measure_window(cell, plan, config)
+    if isinstance(failure, ObjectNotFoundError):
+        raise RodDroppedError(str(failure), _heavy_side(watch, plan, config)) from failure
+    if failure is not None:
+        raise failure
     after: list[TorqueMeasurement] = [first]
-    try:
-        side = mid_window_view(start, cell.look_from_side(after[0].q, length, hint))
-    except ObjectNotFoundError as exc:
-        raise RodDroppedError(str(exc), _heavy_side(watch, plan, config)) from exc
     cell.announce(MEASURED)
     slip_seen = watch.slipping_or_tilted()
     moved, side_rolled, dropped = False, None, False
     if len(plan.poses) > 1:
         cell.move_to(plan.poses[1], duration=trial.roll_time)
-        rolled, start = _measure_window(cell, plan, config)
+        rolled, side_rolled, failure = _measure_window(cell, plan, config)
         after.append(rolled)
-        try:
-            side_rolled = mid_window_view(start, cell.look_from_side(after[1].q, length, hint))
-            moved = abs(side_rolled.theta - side.theta) > np.radians(trial.roll_slip_deg)
-        except ObjectNotFoundError:
-            moved = dropped = True
-        except PerceptionError:
-            moved = True
+        dropped = isinstance(failure, ObjectNotFoundError)
+        moved = failure is not None or (
+            abs(side_rolled.theta - side.theta) > np.radians(trial.roll_slip_deg)
+        )
         cell.move_to(plan.poses[0], duration=trial.roll_time)
     views = [side] if len(plan.poses) == 1 else [side, side_rolled]
     return HeldReadings(after, list(tau_before), views, moved, dropped, slip_seen)
