@@ -1,0 +1,85 @@
+"""Synthetic robot logs for the robot_io tests: a before/after session at k poses.
+
+The efforts are static torques from an independent model (``torques(Q, loaded)`` callable:
+Pinocchio RNEA with an appended payload body, or MuJoCo's qfrc_bias), plus white noise per
+sample; the positions get encoder-size noise.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from comgrasp_pin.robot_io import JointLog
+
+MOVE_S, HOLD_S = 0.6, 1.3
+
+
+def session(
+    Q: np.ndarray,
+    torques,
+    names,
+    rate_hz: float = 200.0,
+    noise: float = 0.05,
+    seed: int = 0,
+    q_shift_after: np.ndarray | None = None,
+    hold_s: float = HOLD_S,
+):
+    """A log visiting the k poses of ``Q`` empty, a grasp, then the k poses loaded.
+
+    Returns (log, before, after, grasp_time): windows of 1 s in the middle of each hold.
+    ``torques(Qs, loaded)`` maps (m, n) configurations to (m, n) static torques.
+    ``q_shift_after`` (n,): the after poses differ from the before ones by it (servo sag).
+    """
+    rng = np.random.default_rng(seed)
+    dt = 1.0 / rate_hz
+    k, n = Q.shape
+    shift = np.zeros(n) if q_shift_after is None else q_shift_after
+    segments_q, segments_loaded, before, after = [], [], [], []
+    t, q_prev = 0.0, Q[0].copy()
+    grasp_time = None
+    for loaded in (False, True):
+        for i in range(k):
+            target = Q[i] + (shift if loaded else 0.0)
+            m = int(round(MOVE_S * rate_hz))
+            s = (1 - np.cos(np.linspace(0, np.pi, m, endpoint=False))) / 2
+            segments_q.append(q_prev + s[:, None] * (target - q_prev))
+            segments_loaded.append(np.full(m, loaded))
+            t += m * dt
+            h = int(round(hold_s * rate_hz))
+            segments_q.append(np.tile(target, (h, 1)))
+            segments_loaded.append(np.full(h, loaded))
+            mid = t + hold_s / 2
+            (after if loaded else before).append((mid - 0.5, mid + 0.5))
+            t += h * dt
+            q_prev = target
+        if not loaded:
+            grasp_time = t + 0.25
+            h = int(round(0.5 * rate_hz))  # the grasp: static, gripper closes
+            segments_q.append(np.tile(q_prev, (h, 1)))
+            segments_loaded.append(np.arange(h) >= h // 2)
+            t += h * dt
+    q = np.concatenate(segments_q)
+    loaded = np.concatenate(segments_loaded)
+    tau = np.empty_like(q)
+    tau[~loaded] = torques(q[~loaded], False)
+    tau[loaded] = torques(q[loaded], True)
+    time = np.arange(len(q)) * dt
+    log = JointLog(
+        time,
+        tuple(names),
+        q + 1e-5 * rng.standard_normal(q.shape),
+        tau + noise * rng.standard_normal(q.shape),
+        "synthetic",
+    )
+    return log, before, after, grasp_time
+
+
+def rnea_torques(robot, mass, com_ee):
+    """``torques(Qs, loaded)`` from Pinocchio RNEA with a payload body (tests/_payload)."""
+    from _payload import payload_torques
+
+    def torques(Qs, loaded):
+        tb, ta = payload_torques(robot, Qs, mass, com_ee)
+        return ta if loaded else tb
+
+    return torques
