@@ -83,3 +83,38 @@ def rnea_torques(robot, mass, com_ee):
         return ta if loaded else tb
 
     return torques
+
+
+def mujoco_torques(mass, com_ee, ee_body="eelink"):
+    """``torques(Qs, loaded)`` for the project's UR5 from MuJoCo (independent of Pinocchio):
+    qfrc_bias at zero velocity of the URDF compiled by MuJoCo, with a payload body of ``mass``
+    at ``com_ee`` (ee frame) added to ``ee_body`` for ``loaded``."""
+    import mujoco
+
+    from comgrasp_pin.simulation.world import ARM_JOINTS, robot_spec
+
+    models = []
+    for loaded in (False, True):
+        spec = robot_spec()
+        if loaded:
+            body = spec.body(ee_body).add_body(name="payload")
+            body.mass = mass
+            body.ipos = np.asarray(com_ee, float)
+            body.inertia = [2e-3, 3e-3, 4e-3]
+            body.explicitinertial = True
+        models.append(spec.compile())
+
+    def torques(Qs, loaded):
+        m = models[int(loaded)]
+        d = mujoco.MjData(m)
+        qadr = [m.joint(j).qposadr[0] for j in ARM_JOINTS]
+        vadr = [m.joint(j).dofadr[0] for j in ARM_JOINTS]
+        out = np.empty((len(Qs), len(ARM_JOINTS)))
+        for i, q in enumerate(Qs):
+            d.qpos[qadr] = q
+            d.qvel[:] = 0.0
+            mujoco.mj_forward(m, d)
+            out[i] = d.qfrc_bias[vadr]
+        return out
+
+    return torques
