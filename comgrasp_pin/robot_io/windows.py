@@ -72,14 +72,15 @@ def parse_windows(text: str, option: str = "--before") -> list[tuple[float, floa
 def joint_speed(time: np.ndarray, position: np.ndarray, span: float = SPEED_SPAN) -> np.ndarray:
     """(N,) largest joint speed at each sample: |q(t + span) - q(t)| / span, by joint.
 
-    Near the end of the data the span shrinks to what is left; a single sample has speed 0.
+    Within ``span`` of the end, the span looks backwards; a single sample has speed 0.
     """
     n = len(time)
     idx = np.arange(n)
-    fwd = np.minimum(np.searchsorted(time, time + span), n - 1)
-    bwd = np.searchsorted(time, time - span)  # where the forward span runs out, look back
-    lo = np.where(fwd > idx, idx, bwd)
-    hi = np.where(fwd > idx, fwd, idx)
+    fwd = np.searchsorted(time, time + span)  # first sample a full span ahead
+    ok = fwd < n
+    bwd = np.searchsorted(time, time - span)  # where the span ahead runs out, look back
+    lo = np.where(ok, idx, bwd)
+    hi = np.where(ok, np.minimum(fwd, n - 1), idx)
     dt = time[hi] - time[lo]
     with np.errstate(divide="ignore", invalid="ignore"):
         v = np.abs(position[hi] - position[lo]).max(axis=1) / dt
