@@ -178,7 +178,7 @@ def add_subcommands(sub: argparse._SubParsersAction) -> None:
     plan.add_argument("--srdf", default=None,
                       help="SRDF whose disabled collisions are removed (default: the one "
                       "beside an example-robot-data URDF, else adjacent links)")  # fmt: skip
-    plan.add_argument("--candidates", type=int, default=1500, help="random candidates searched")
+    plan.add_argument("--candidates", type=int, default=3000, help="random candidates searched")
     plan.add_argument("--seed", type=int, default=0, help="random seed")
     plan.add_argument("--out", default="poses.json", help="the poses JSON")
     plan.add_argument("--urscript", default=None, help="also write a URScript movej program")

@@ -83,7 +83,7 @@ def plan_measurement_poses(
     torque_std: float = 0.005,
     mass: float = 1.0,
     srdf: str | None = None,
-    n_candidates: int = 1500,
+    n_candidates: int = 3000,
     seed: int = 0,
     min_height: float = 0.05,
 ) -> PosePlan:
