@@ -62,6 +62,8 @@ def write_bag(
     extra_eff = np.zeros(len(extra))
     plugin = StoragePlugin.MCAP if storage == "mcap" else StoragePlugin.SQLITE3
     path = Path(path)
+    if path.exists():
+        raise OutputError(f"the bag {path} exists already; choose a new folder or remove it")
     try:
         with Writer(path, version=9, storage_plugin=plugin) as writer:
             conn = writer.add_connection(topic, JOINT_STATE, typestore=store)
@@ -75,6 +77,6 @@ def write_bag(
                     effort=np.concatenate([tau, extra_eff]),
                 )
                 writer.write(conn, ns, store.serialize_cdr(msg, JOINT_STATE))
-    except FileExistsError:
-        raise OutputError(f"the bag {path} exists already; choose a new folder") from None
+    except OSError as exc:
+        raise OutputError(f"cannot write the bag {path}: {exc}") from None
     return path
