@@ -5,6 +5,7 @@
     result = estimate_from_log(robot, log, before=[(1, 2)], after=[(8, 9)])
     payload = payload_in_flange(robot, result.estimate, "tool0", inertia="point")
     write_urscript(payload, "payload.script")
+    plan = plan_measurement_poses(robot, k=3)  # limits, no self-collision, D-optimal
 
 No MuJoCo here: this runs on a real robot's logs.
 """
@@ -21,6 +22,7 @@ from comgrasp_pin.robot_io.exports import (
 from comgrasp_pin.robot_io.logs import JointLog, read_bag, read_csv, read_log
 from comgrasp_pin.robot_io.mount import load_robot
 from comgrasp_pin.robot_io.payload import Payload, T_flange_ee, payload_in_flange
+from comgrasp_pin.robot_io.planning import PosePlan, plan_measurement_poses
 from comgrasp_pin.robot_io.record import write_bag, write_csv
 from comgrasp_pin.robot_io.windows import (
     StaticReading,
@@ -34,6 +36,7 @@ __all__ = [
     "JointLog",
     "LogEstimate",
     "Payload",
+    "PosePlan",
     "StaticReading",
     "T_flange_ee",
     "estimate_from_log",
@@ -43,6 +46,7 @@ __all__ = [
     "pair_by_configuration",
     "parse_windows",
     "payload_in_flange",
+    "plan_measurement_poses",
     "read_bag",
     "read_csv",
     "read_log",

@@ -43,9 +43,8 @@ def load_robot(
     if not np.allclose(R_world_base, np.eye(3)):
         _turn_root(full, pin.SE3(R_world_base, np.zeros(3)))
     robot = RobotModel(full, ee_frame, path)
-    robot.package_dirs = [str(p) for p in (package_dirs or [])]
+    robot.package_dirs = [str(p) for p in package_dirs or []]  # as from_urdf
     robot.model.gravity = pin.Motion(np.array([0.0, 0.0, -np.linalg.norm(g), 0.0, 0.0, 0.0]))
-    robot.R_world_base = R_world_base
     return robot
 
 
