@@ -118,3 +118,51 @@ def mujoco_torques(mass, com_ee, ee_body="eelink"):
         return out
 
     return torques
+
+
+def simulated_session(Q, mass, com_ee, noise=0.05, seed=0, hold_s=2.0, move_s=0.8):
+    """The project's UR5 in the MuJoCo world (servo, torque sensor at 500 Hz): the k poses of
+    Q visited empty, then again with a payload body of ``mass`` at ``com_ee`` (eelink frame)
+    welded to the eelink. Returns (log, before, after, grasp_time); windows of 1 s in the
+    middle of each hold. Arm and sensor are the simulator's: the servo's settling, the
+    fingers, the drives' torques as read by the noisy sensor."""
+    from comgrasp_pin.config import TorqueSensorConfig
+    from comgrasp_pin.simulation.sim import Simulation
+    from comgrasp_pin.simulation.world import ARM_JOINTS, build_model
+
+    def payload(spec):
+        body = spec.body("eelink").add_body(name="payload")
+        body.mass, body.ipos = mass, np.asarray(com_ee, float)
+        body.inertia, body.explicitinertial = [2e-3, 3e-3, 4e-3], True
+
+    sensor = TorqueSensorConfig(noise_std=noise)
+    sims = [Simulation(build_model(), sensor=sensor, seed=seed),
+            Simulation(build_model(extras=[payload]), sensor=sensor, seed=seed + 1)]  # fmt: skip
+    times, qs, taus, before, after = [], [], [], [], []
+    t = 0.0
+    for loaded, sim in enumerate(sims):
+        dt = sim.model.opt.timestep
+        sim.reset_arm(Q[0])
+        sim.grip_force = -5.0  # open, fingers at their limit (the model's neutral)
+        q_prev = Q[0]
+        for q in Q:
+            n_move, n_hold = int(round(move_s / dt)), int(round(hold_s / dt))
+            s = (1 - np.cos(np.linspace(0, np.pi, n_move))) / 2
+            for i in range(n_move + n_hold):
+                sim.q_des = q_prev + s[i] * (q - q_prev) if i < n_move else q
+                sim.step()
+                t += dt
+                times.append(t)
+                qs.append(sim.q)
+                taus.append(sim.tau_measured.copy())
+            mid = t - hold_s / 2
+            (after if loaded else before).append((mid - 0.5, mid + 0.5))
+            q_prev = q
+        if not loaded:
+            grasp_time = t + 0.5 * dt
+    time = np.array(times) - times[0]
+    shift = times[0]
+    before = [(a - shift, b - shift) for a, b in before]
+    after = [(a - shift, b - shift) for a, b in after]
+    log = JointLog(time, tuple(ARM_JOINTS), np.array(qs), np.array(taus), "mujoco")
+    return log, before, after, grasp_time - shift
