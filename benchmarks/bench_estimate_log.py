@@ -6,8 +6,10 @@ The bag (sqlite3 and mcap, written by rosbags) holds the Panda's 7 arm joints an
 joints: 3 poses held empty, then the same 3 held with a 0.8 kg payload, efforts from
 Pinocchio RNEA with the payload body plus 0.05 N m noise per sample; 1 s windows mid-hold.
 Timed: the whole command in-process (``comgrasp_pin.cli.main``, parsing, reading, windows,
-estimate, RESULT.json and exports), the bag reading alone (``read_bag``), and the command as
-a subprocess (with Python start-up and imports). Target: the command under 10 s.
+estimate, RESULT.json and exports; with windows given only the messages near them are
+decoded), the full bag reading alone (``read_bag``, every message decoded), the command as a
+subprocess (with Python start-up and imports), and ``--auto`` (which reads every message to
+find the static windows). Target: the command under 10 s.
 """
 
 from __future__ import annotations
@@ -47,10 +49,10 @@ def _static_torques(robot, q, loaded):
 
 
 def make_log(robot, minutes: float, seed: int = 0):
-    """A JointLog of ``minutes`` at RATE and its (before, after) windows."""
+    """A JointLog of ``minutes`` at RATE, its (before, after) windows and the grasp time."""
     rng = np.random.default_rng(seed)
     hold = minutes * 60.0 / 6 - MOVE_S
-    qs, taus, before, after, t = [], [], [], [], 0.0
+    qs, taus, before, after, t, grasp = [], [], [], [], 0.0, 0.0
     prev_q, prev_tau = Q[0], _static_torques(robot, Q[0], False)
     for loaded in (False, True):
         for q in Q:
@@ -62,11 +64,12 @@ def make_log(robot, minutes: float, seed: int = 0):
             (after if loaded else before).append((mid - 0.5, mid + 0.5))
             t += MOVE_S + hold
             prev_q, prev_tau = q, tau
+        grasp = grasp or t + 0.5  # inside the first loaded move
     q, tau = np.concatenate(qs), np.concatenate(taus)
     time_s = np.arange(len(q)) / RATE
     log = JointLog(time_s, tuple(robot.joint_names), q + 1e-5 * rng.standard_normal(q.shape),
                    tau + NOISE * rng.standard_normal(q.shape), "bench")  # fmt: skip
-    return log, before, after
+    return log, before, after, grasp
 
 
 def _windows(ws):
@@ -75,7 +78,7 @@ def _windows(ws):
 
 def run(minutes: float) -> dict:
     robot = load_robot(URDF, EE)
-    log, before, after = make_log(robot, minutes)
+    log, before, after, grasp = make_log(robot, minutes)
     out: dict = {"messages": len(log.time), "minutes": minutes, "rate_hz": RATE,
                  "python": platform.python_version(), "machine": platform.machine()}  # fmt: skip
     with tempfile.TemporaryDirectory() as tmp:
@@ -94,6 +97,10 @@ def run(minutes: float) -> dict:
             t0 = time.perf_counter()
             assert main(args) == 0
             estimate_s = time.perf_counter() - t0
+            auto = [*args[:7], "--auto", "--grasp-time", f"{grasp}", *args[11:13]]
+            t0 = time.perf_counter()
+            assert main(auto) == 0
+            auto_s = time.perf_counter() - t0
             t0 = time.perf_counter()
             subprocess.run([sys.executable, "-m", "comgrasp_pin.cli", *args], check=True,
                            capture_output=True)  # fmt: skip
@@ -104,6 +111,7 @@ def run(minutes: float) -> dict:
                 "read_bag_s": round(read_s, 3),
                 "estimate_command_s": round(estimate_s, 3),
                 "estimate_subprocess_s": round(subprocess_s, 3),
+                "estimate_auto_command_s": round(auto_s, 3),
                 "command_over_read": round(estimate_s / read_s, 3),
                 "read_us_per_message": round(1e6 * read_s / len(log.time), 2),
                 "mass_kg": result["mass_kg"],

@@ -47,20 +47,21 @@ def _cmd_estimate(args: argparse.Namespace) -> int:
     if (args.bag is None) == (args.csv is None):
         raise InvalidInputError("give exactly one log: --bag PATH or --csv PATH")
     robot = _robot(args)
-    log = (
-        rio.read_bag(args.bag, robot.joint_names, args.topic)
-        if args.bag is not None
-        else rio.read_csv(args.csv, robot.joint_names)
-    )
     if args.auto:
         if args.grasp_time is None:
             raise InvalidInputError("--auto needs --grasp-time T (s from the log's start)")
-        before, after = rio.pair_by_configuration(log, args.grasp_time, args.max_speed)
+    elif args.before is None or args.after is None:
+        raise InvalidInputError("give --before and --after windows, or --auto --grasp-time T")
     else:
-        if args.before is None or args.after is None:
-            raise InvalidInputError("give --before and --after windows, or --auto --grasp-time T")
         before = rio.parse_windows(args.before, "--before")
         after = rio.parse_windows(args.after, "--after")
+    if args.bag is not None:  # with windows, only the messages near them are decoded
+        wanted = None if args.auto else before + after
+        log = rio.read_bag(args.bag, robot.joint_names, args.topic, wanted)
+    else:
+        log = rio.read_csv(args.csv, robot.joint_names)
+    if args.auto:
+        before, after = rio.pair_by_configuration(log, args.grasp_time, args.max_speed)
     result = rio.estimate_from_log(
         robot, log, before, after, args.torque_std, args.method, args.max_speed
     )

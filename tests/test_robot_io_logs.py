@@ -154,3 +154,19 @@ def test_auto_windows_pair_the_same_poses(synthetic):
     for (wb, wa), tb, ta in zip(zip(b, a), before, after):
         assert wb[0] <= tb[0] + 0.2 and wb[1] >= tb[1] - 0.2  # covers the hold
         assert wa[0] <= ta[0] + 0.2 and wa[1] >= ta[1] - 0.2
+
+
+@pytest.mark.parametrize("storage", ["sqlite3", "mcap"])
+def test_reading_only_near_the_windows_gives_the_same_windows(robot, synthetic, tmp_path, storage):
+    log, before, after, _ = synthetic
+    path = write_bag(log, tmp_path / "bag", storage)
+    full = read_bag(path, robot.joint_names)
+    part = read_bag(path, robot.joint_names, windows=before[:1] + after[:1])
+    assert len(part.time) < len(full.time) / 2
+    assert part.duration == pytest.approx(full.duration)  # the last message is kept
+    for w in (before[0], after[0]):
+        a, b = read_window(full, *w), read_window(part, *w)
+        np.testing.assert_array_equal(a.tau, b.tau)
+        assert a.n_samples == b.n_samples
+    with pytest.raises(LogError, match="outside the log"):
+        read_window(part, full.duration + 1, full.duration + 2)
