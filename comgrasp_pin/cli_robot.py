@@ -41,18 +41,18 @@ def _write_json(path: str, data: dict) -> None:
         raise OutputError(f"cannot write {path}: {exc}") from None
 
 
-def _cmd_estimate(args: argparse.Namespace) -> int:
+def _log_and_windows(args: argparse.Namespace, robot):
+    """The log and its paired windows, as the options ask."""
     from comgrasp_pin import robot_io as rio
 
     if (args.bag is None) == (args.csv is None):
         raise InvalidInputError("give exactly one log: --bag PATH or --csv PATH")
-    robot = _robot(args)
-    if args.auto:
-        if args.grasp_time is None:
-            raise InvalidInputError("--auto needs --grasp-time T (s from the log's start)")
-    elif args.before is None or args.after is None:
+    if args.auto and args.grasp_time is None:
+        raise InvalidInputError("--auto needs --grasp-time T (s from the log's start)")
+    if not args.auto and (args.before is None or args.after is None):
         raise InvalidInputError("give --before and --after windows, or --auto --grasp-time T")
-    else:
+    before = after = []
+    if not args.auto:
         before = rio.parse_windows(args.before, "--before")
         after = rio.parse_windows(args.after, "--after")
     if args.bag is not None:  # with windows, only the messages near them are decoded
@@ -62,15 +62,25 @@ def _cmd_estimate(args: argparse.Namespace) -> int:
         log = rio.read_csv(args.csv, robot.joint_names)
     if args.auto:
         before, after = rio.pair_by_configuration(log, args.grasp_time, args.max_speed)
+    return log, before, after
+
+
+def _cmd_estimate(args: argparse.Namespace) -> int:
+    from comgrasp_pin import robot_io as rio
+
+    robot = _robot(args)
+    log, before, after = _log_and_windows(args, robot)
     result = rio.estimate_from_log(
         robot, log, before, after, args.torque_std, args.method, args.max_speed
     )
-    _write_json(args.out, rio.result_dict(result, robot.ee_frame))
-    print(rio.summary(result, robot.ee_frame))
     exports = ((args.export_ur, rio.write_urscript), (args.export_franka, rio.write_franka),
                (args.export_ros2, rio.write_ros2))  # fmt: skip
-    if any(path for path, _ in exports):
+    payload = None
+    if any(path for path, _ in exports):  # checked before anything is written
         payload = rio.payload_in_flange(robot, result.estimate, args.flange_frame, args.inertia)
+    _write_json(args.out, rio.result_dict(result, robot.ee_frame))
+    print(rio.summary(result, robot.ee_frame))
+    if payload is not None:
         c = 1e3 * payload.com_flange
         print(f"  CoM in {payload.flange_frame}: ({c[0]:.2f}, {c[1]:.2f}, {c[2]:.2f}) mm, "
               f"inertia: {payload.inertia_model} (an approximation)")  # fmt: skip

@@ -172,3 +172,14 @@ def test_help_shows_defaults(capsys):
     assert exc.value.code == 0
     text = capsys.readouterr().out
     assert "/joint_states" in text and "AVERAGED" in text and "default: 0.01" in text
+
+
+def test_bad_flange_or_inertia_exits_2_before_writing(bag, ur5_session, tmp_path, capsys):
+    _, before, after, _ = ur5_session
+    out = tmp_path / "R.json"
+    args = _estimate_args(["--bag", str(bag)], before, after, out)
+    _bad([*args, "--export-ur", str(tmp_path / "p.script"), "--flange-frame", "nope"], capsys,
+         "nope", "tool0")  # fmt: skip
+    _bad([*args, "--export-ur", str(tmp_path / "p.script"), "--inertia", "ball"], capsys,
+         "cylinder:L,R,AXIS")  # fmt: skip
+    assert not out.exists() and not (tmp_path / "p.script").exists()
