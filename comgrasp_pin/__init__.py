@@ -1,5 +1,6 @@
 """comgrasp_pin: centre-of-mass-based grasp adaptation from joint torques and RGBD cameras."""
 
+from comgrasp_pin import robot_io
 from comgrasp_pin.errors import (
     ComGraspError,
     EmptyGripperError,
@@ -17,6 +18,17 @@ from comgrasp_pin.estimation import (
     plan_wrist_poses,
 )
 from comgrasp_pin.robot import RobotModel
+from comgrasp_pin.robot_io import (
+    JointLog,
+    LogEstimate,
+    Payload,
+    PosePlan,
+    estimate_from_log,
+    load_robot,
+    payload_in_flange,
+    plan_measurement_poses,
+    read_log,
+)
 
 __all__ = [
     "AxisPrior",
@@ -25,12 +37,22 @@ __all__ = [
     "ComGraspError",
     "EmptyGripperError",
     "InvalidInputError",
+    "JointLog",
+    "LogEstimate",
+    "Payload",
+    "PosePlan",
     "RobotModel",
     "SolverError",
     "UnobservableError",
     "com_along_axis",
     "estimate_com",
     "estimate_com_batch",
+    "estimate_from_log",
+    "load_robot",
+    "payload_in_flange",
+    "plan_measurement_poses",
     "plan_wrist_poses",
+    "read_log",
+    "robot_io",
 ]
 __version__ = "0.1.0"

@@ -171,6 +171,10 @@ def build_parser() -> argparse.ArgumentParser:
     scene.add_argument("--seed", type=int, default=0, help="scene seed: where the rod lies")
     scene.add_argument("--out", default="results/scene", help="output folder (%(default)s)")
     scene.set_defaults(func=_cmd_scene)
+
+    from comgrasp_pin.cli_robot import add_subcommands
+
+    add_subcommands(sub)  # estimate, plan-poses: the real-arm path
     return parser
 
 

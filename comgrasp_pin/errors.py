@@ -79,3 +79,16 @@ class MissingAssetError(ComGraspError):
 
 class OutputError(ComGraspError):
     """A result file (video, figure, CSV) cannot be written where it was asked for."""
+
+
+class LogError(ComGraspError):
+    """A robot log (ROS 2 bag or CSV) cannot give what is asked: the file is unreadable, a
+    topic, joint or effort is missing, or a time window is outside the log."""
+
+
+class NotStaticError(LogError):
+    """A time window of a log is not static: the arm moved faster than the threshold."""
+
+
+class CollisionError(ComGraspError):
+    """The robot's collision model cannot be built, or no collision-free pose is found."""

@@ -33,6 +33,7 @@ class RobotModel:
         is_revolute: (n,) bool, True for revolute joints, False for prismatic ones.
         q_lower, q_upper: (n,) joint limits (rad or m).
         urdf_path: the URDF the model was built from.
+        package_dirs: folders where the URDF's ``package://`` mesh URIs resolve.
     """
 
     def __init__(self, full_model: pin.Model, ee_frame: str, urdf_path: Path | None = None):
@@ -42,6 +43,7 @@ class RobotModel:
         self.full_model = full_model
         self.ee_frame = ee_frame
         self.urdf_path = urdf_path
+        self.package_dirs: list[str] = []  # where package:// mesh URIs resolve
 
         chain = _chain_to_frame(full_model, full_model.getFrameId(ee_frame))
         for jid in chain:

@@ -2,7 +2,8 @@
 
 - ``ruff check`` over the whole repository, including the docstring rules (D, Google
   convention) on the package's public API (configured in pyproject.toml);
-- ``mypy`` on comgrasp_pin/estimation and comgrasp_pin/perception ([tool.mypy]).
+- ``mypy`` on comgrasp_pin/estimation, comgrasp_pin/perception and comgrasp_pin/robot_io
+  ([tool.mypy]).
 
 Both tools come with the ``test`` extra; a test is skipped only if its tool is missing.
 """
@@ -16,7 +17,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-TYPED = ["comgrasp_pin/estimation", "comgrasp_pin/perception"]
+TYPED = ["comgrasp_pin/estimation", "comgrasp_pin/perception", "comgrasp_pin/robot_io"]
 TIMEOUT_S = 600
 
 
@@ -44,6 +45,6 @@ def test_ruff_check_passes():
     assert result.returncode == 0, _report(result)
 
 
-def test_mypy_passes_on_estimation_and_perception():
+def test_mypy_passes_on_the_typed_packages():
     result = _run("mypy", *TYPED)
     assert result.returncode == 0, _report(result)

@@ -62,11 +62,26 @@ def plan_wrist_poses(
             f"{k - 1} are needed (increase max_offset or n_grid)"
         )
     Y0 = pose_regressor(robot, q)[0]
-    info = Y0.T @ Y0
-    infos = np.array([Y.T @ Y for Y in (pose_regressor(robot, c)[0] for c in candidates)])
-    chosen = []
-    available = np.ones(len(candidates), dtype=bool)
-    for _ in range(k - 1):
+    chosen = greedy_d_optimal(Y0.T @ Y0, information(robot, candidates), k - 1)
+    return np.vstack([q, candidates[chosen]])
+
+
+def information(robot: RobotModel, Q: np.ndarray) -> np.ndarray:
+    """(c, 4, 4) information Y^T Y of theta = (m, m c_ee) per configuration of Q (c, n).
+
+    For unit noise on each torque difference.
+    """
+    return np.array([Y.T @ Y for Y in (pose_regressor(robot, q)[0] for q in Q)]).reshape(-1, 4, 4)
+
+
+def greedy_d_optimal(info: np.ndarray, infos: np.ndarray, m: int) -> list[int]:
+    """Indices of ``m`` candidates of ``infos`` (c, 4, 4) added one by one to ``info`` (4, 4).
+
+    Each maximises log det of the sum; before full rank, the trace.
+    """
+    chosen: list[int] = []
+    available = np.ones(len(infos), dtype=bool)
+    for _ in range(m):
         sign, logdet = np.linalg.slogdet(info + infos)
         score = np.where((sign > 0) & available, logdet, -np.inf)
         # before full rank every det is 0: fall back to the trace (total information)
@@ -76,7 +91,53 @@ def plan_wrist_poses(
         chosen.append(best)
         available[best] = False
         info = info + infos[best]
-    return np.vstack([q, candidates[chosen]])
+    return chosen
+
+
+def exchange_d_optimal(infos: np.ndarray, chosen: list[int], fixed: int = 0) -> list[int]:
+    """Fedorov exchange: swap chosen candidates for others while log det grows.
+
+    The first ``fixed`` entries of ``chosen`` stay. Returns the improved index list.
+    """
+    chosen = list(chosen)
+    for _ in range(10):
+        improved = False
+        for slot in range(fixed, len(chosen)):
+            rest = sum(infos[c] for j, c in enumerate(chosen) if j != slot)
+            sign, logdet = np.linalg.slogdet(rest + infos)
+            score = np.where(sign > 0, logdet, -np.inf)
+            score[[c for j, c in enumerate(chosen) if j != slot]] = -np.inf
+            best = int(np.argmax(score))
+            if score[best] > score[chosen[slot]] + 1e-9:
+                chosen[slot], improved = best, True
+        if not improved:
+            break
+    return chosen
+
+
+def predicted_std(
+    robot: RobotModel,
+    Q: np.ndarray,
+    torque_std: float,
+    mass: float,
+    com_ee: np.ndarray | None = None,
+) -> np.ndarray:
+    """(4,) std of (mass, com_ee) (kg, m) that k poses Q (k, n) promise.
+
+    For a payload of ``mass`` (kg) at ``com_ee`` (m, default the ee origin) and white noise
+    of std ``torque_std`` (N m) on each averaged reading (a difference has 2 torque_std^2):
+    the Cramer-Rao bound 2 torque_std^2 (Y^T Y)^-1 for theta, by the delta method for
+    (m, c). Infinite where the poses leave a direction unobserved.
+    """
+    from comgrasp_pin.estimation.estimate import delta_method
+
+    info = information(robot, np.atleast_2d(Q)).sum(axis=0)
+    c = np.zeros(3) if com_ee is None else np.asarray(com_ee, float)
+    s = np.linalg.svd(info, compute_uv=False)
+    if not s[-1] > 1e-12 * s[0]:
+        return np.full(4, np.inf)
+    cov = delta_method(np.r_[mass, mass * c], 2 * torque_std**2 * np.linalg.inv(info))
+    return np.sqrt(np.diag(cov))
 
 
 def best_next_pose(robot: RobotModel, existing_q: np.ndarray, candidates: np.ndarray) -> int:

@@ -1,0 +1,196 @@
+"""The real-arm subcommands of `comgrasp`: `estimate` (logs in, payload out) and `plan-poses`.
+
+Registered by ``comgrasp_pin.cli`` through ``add_subcommands``; errors are ComGraspError
+(exit status 2 with the message, no traceback), argparse's own errors exit 2 as well.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+
+from comgrasp_pin.errors import InvalidInputError, OutputError
+
+_DEFAULTS = argparse.ArgumentDefaultsHelpFormatter
+
+
+def _vector(text: str, option: str, n: int | None = None) -> np.ndarray:
+    try:
+        v = np.array([float(x) for x in text.split(",")])
+    except ValueError:
+        raise InvalidInputError(f"{option} {text!r}: comma-separated numbers expected") from None
+    if n is not None and len(v) != n:
+        raise InvalidInputError(f"{option} {text!r}: {n} numbers expected, got {len(v)}")
+    return v
+
+
+def _robot(args: argparse.Namespace):
+    from comgrasp_pin.robot_io import load_robot
+
+    gravity = _vector(args.gravity, "--gravity", 3)
+    return load_robot(args.urdf, args.ee_frame, args.package_dir, gravity)
+
+
+def _write_json(path: str, data: dict) -> None:
+    try:
+        Path(path).write_text(json.dumps(data, indent=2) + "\n")
+    except OSError as exc:
+        raise OutputError(f"cannot write {path}: {exc}") from None
+
+
+def _log_and_windows(args: argparse.Namespace, robot):
+    """The log and its paired windows, as the options ask."""
+    from comgrasp_pin import robot_io as rio
+
+    if (args.bag is None) == (args.csv is None):
+        raise InvalidInputError("give exactly one log: --bag PATH or --csv PATH")
+    if args.auto and args.grasp_time is None:
+        raise InvalidInputError("--auto needs --grasp-time T (s from the log's start)")
+    if not args.auto and (args.before is None or args.after is None):
+        raise InvalidInputError("give --before and --after windows, or --auto --grasp-time T")
+    before = after = []
+    if not args.auto:
+        before = rio.parse_windows(args.before, "--before")
+        after = rio.parse_windows(args.after, "--after")
+    if args.bag is not None:  # with windows, only the messages near them are decoded
+        wanted = None if args.auto else before + after
+        log = rio.read_bag(args.bag, robot.joint_names, args.topic, wanted)
+    else:
+        log = rio.read_csv(args.csv, robot.joint_names)
+    if args.auto:
+        before, after = rio.pair_by_configuration(log, args.grasp_time, args.max_speed)
+    return log, before, after
+
+
+def _cmd_estimate(args: argparse.Namespace) -> int:
+    from comgrasp_pin import robot_io as rio
+
+    robot = _robot(args)
+    log, before, after = _log_and_windows(args, robot)
+    result = rio.estimate_from_log(
+        robot, log, before, after, args.torque_std, args.method, args.max_speed
+    )
+    exports = ((args.export_ur, rio.write_urscript), (args.export_franka, rio.write_franka),
+               (args.export_ros2, rio.write_ros2))  # fmt: skip
+    payload = None
+    if any(path for path, _ in exports):  # checked before anything is written
+        payload = rio.payload_in_flange(robot, result.estimate, args.flange_frame, args.inertia)
+    _write_json(args.out, rio.result_dict(result, robot.ee_frame))
+    print(rio.summary(result, robot.ee_frame))
+    if payload is not None:
+        c = 1e3 * payload.com_flange
+        print(f"  CoM in {payload.flange_frame}: ({c[0]:.2f}, {c[1]:.2f}, {c[2]:.2f}) mm, "
+              f"inertia: {payload.inertia_model} (an approximation)")  # fmt: skip
+        for path, write in exports:
+            if path:
+                print(f"wrote {write(payload, path)}")
+    print(f"wrote {args.out}")
+    return 0
+
+
+def _cmd_plan(args: argparse.Namespace) -> int:
+    from comgrasp_pin.robot_io import planning
+
+    robot = _robot(args)
+    start = None if args.start is None else _vector(args.start, "--start", robot.nq)
+    plan = planning.plan_measurement_poses(
+        robot,
+        args.k,
+        start=start,
+        torque_std=args.torque_std,
+        mass=args.mass,
+        srdf=args.srdf,
+        n_candidates=args.candidates,
+        seed=args.seed,
+    )
+    _write_json(args.out, planning.plan_dict(plan))
+    s = plan.predicted_std
+    print(f"{args.k} poses for {robot.ee_frame}, collision-free and within the joint limits")
+    print(f"  predicted std for a {args.mass:g} kg payload at {args.torque_std:g} N m per "
+          f"averaged reading: mass {s[0]:.4g} kg, CoM {np.array2string(1e3 * s[1:], precision=2)}"
+          " mm")  # fmt: skip
+    if args.urscript:
+        path = Path(args.urscript)
+        try:
+            path.write_text(planning.urscript_program(plan))
+        except OSError as exc:
+            raise OutputError(f"cannot write {path}: {exc}") from None
+        print(f"wrote {path}")
+    print(f"wrote {args.out}")
+    return 0
+
+
+def _add_robot_args(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--urdf", required=True, help="the robot's URDF file")
+    p.add_argument("--ee-frame", required=True, help="the frame the CoM is estimated in")
+    p.add_argument("--package-dir", action="append", default=None,
+                   help="folder where package:// mesh URIs resolve (repeatable)")  # fmt: skip
+    p.add_argument("--gravity", default="0,0,-9.81",
+                   help="gravity GX,GY,GZ in the robot's base frame, m/s^2 (a wall, ceiling or "
+                   "tilted mount)")  # fmt: skip
+
+
+def add_subcommands(sub: argparse._SubParsersAction) -> None:
+    """Add `estimate` and `plan-poses` to the `comgrasp` subparsers ``sub``."""
+    from comgrasp_pin.robot_io.logs import DEFAULT_TOPIC
+    from comgrasp_pin.robot_io.payload import INERTIA_HELP
+    from comgrasp_pin.robot_io.windows import MAX_SPEED
+
+    est = sub.add_parser(
+        "estimate",
+        help="payload mass and CoM from a robot log (ROS 2 bag or CSV) before/after a grasp",
+        formatter_class=_DEFAULTS,
+    )
+    _add_robot_args(est)
+    est.add_argument("--bag", default=None, help="ROS 2 bag (folder, .db3 or .mcap)")
+    est.add_argument("--topic", default=DEFAULT_TOPIC, help="sensor_msgs/msg/JointState topic")
+    est.add_argument("--csv", default=None, help="CSV with time, J.position, J.effort columns")
+    est.add_argument("--before", default=None, help="empty-arm windows T0:T1[,T0:T1...] (s)")
+    est.add_argument("--after", default=None, help="holding windows, paired with --before")
+    est.add_argument("--auto", action="store_true",
+                     help="find static windows and pair them by configuration")  # fmt: skip
+    est.add_argument("--grasp-time", type=float, default=None,
+                     help="with --auto: the grasp time (s) that splits the windows")  # fmt: skip
+    est.add_argument("--max-speed", type=float, default=MAX_SPEED,
+                     help="static threshold on every joint's speed (rad/s)")  # fmt: skip
+    est.add_argument("--torque-std", type=float, default=None,
+                     help="std of one AVERAGED torque reading, N m (per-sample std / sqrt(n "
+                     "samples)); default: from the samples' spread")  # fmt: skip
+    est.add_argument("--method", default="lstsq", choices=("lstsq", "ipopt"),
+                     help="closed-form least squares or CasADi + IPOPT")  # fmt: skip
+    est.add_argument("--out", default="RESULT.json", help="the result JSON")
+    est.add_argument("--flange-frame", default=None,
+                     help="frame of the exported CoM (UR tool0, Franka panda_link8); "
+                     "default: the ee frame")  # fmt: skip
+    est.add_argument("--inertia", default="point", help=f"inertia approximation: {INERTIA_HELP}")
+    est.add_argument("--export-ur", default=None, help="URScript set_target_payload file")
+    est.add_argument("--export-franka", default=None, help="JSON for libfranka setLoad")
+    est.add_argument("--export-ros2", default=None,
+                     help="YAML: ur_msgs/SetPayload and franka_msgs/SetLoad requests")  # fmt: skip
+    est.set_defaults(func=_cmd_estimate)
+
+    plan = sub.add_parser(
+        "plan-poses",
+        help="K static poses (limits, no self-collision) that best determine mass and 3-D CoM",
+        formatter_class=_DEFAULTS,
+    )
+    _add_robot_args(plan)
+    plan.add_argument("--k", type=int, default=3, help="number of poses")
+    plan.add_argument("--start", default=None,
+                      help="Q1,...,Qn: first pose; others are searched near it (rad)")  # fmt: skip
+    plan.add_argument("--torque-std", type=float, default=0.005,
+                      help="std of one averaged torque reading, predicted (N m)")  # fmt: skip
+    plan.add_argument(
+        "--mass", type=float, default=1.0, help="payload mass for the prediction (kg)"
+    )
+    plan.add_argument("--srdf", default=None,
+                      help="SRDF whose disabled collisions are removed (default: the one "
+                      "beside an example-robot-data URDF, else adjacent links)")  # fmt: skip
+    plan.add_argument("--candidates", type=int, default=3000, help="random candidates searched")
+    plan.add_argument("--seed", type=int, default=0, help="random seed")
+    plan.add_argument("--out", default="poses.json", help="the poses JSON")
+    plan.add_argument("--urscript", default=None, help="also write a URScript movej program")
+    plan.set_defaults(func=_cmd_plan)

@@ -1,0 +1,63 @@
+"""On a real arm: joint logs in (ROS 2 bags, CSV), payloads out (UR, Franka, ROS 2).
+
+    robot = load_robot(urdf, ee_frame, gravity_base=(0, 0, -9.81))
+    log = read_log("run.mcap" or "run.csv", robot.joint_names)
+    result = estimate_from_log(robot, log, before=[(1, 2)], after=[(8, 9)])
+    payload = payload_in_flange(robot, result.estimate, "tool0", inertia="point")
+    write_urscript(payload, "payload.script")
+    plan = plan_measurement_poses(robot, k=3)  # limits, no self-collision, D-optimal
+
+No MuJoCo here: this runs on a real robot's logs.
+"""
+
+from comgrasp_pin.robot_io.estimate import LogEstimate, estimate_from_log, result_dict, summary
+from comgrasp_pin.robot_io.exports import (
+    franka_load,
+    ros2_yaml,
+    urscript,
+    write_franka,
+    write_ros2,
+    write_urscript,
+)
+from comgrasp_pin.robot_io.logs import JointLog, read_bag, read_csv, read_log
+from comgrasp_pin.robot_io.mount import load_robot
+from comgrasp_pin.robot_io.payload import Payload, T_flange_ee, payload_in_flange
+from comgrasp_pin.robot_io.planning import PosePlan, plan_measurement_poses
+from comgrasp_pin.robot_io.record import write_bag, write_csv
+from comgrasp_pin.robot_io.windows import (
+    StaticReading,
+    find_static_windows,
+    pair_by_configuration,
+    parse_windows,
+    read_window,
+)
+
+__all__ = [
+    "JointLog",
+    "LogEstimate",
+    "Payload",
+    "PosePlan",
+    "StaticReading",
+    "T_flange_ee",
+    "estimate_from_log",
+    "find_static_windows",
+    "franka_load",
+    "load_robot",
+    "pair_by_configuration",
+    "parse_windows",
+    "payload_in_flange",
+    "plan_measurement_poses",
+    "read_bag",
+    "read_csv",
+    "read_log",
+    "read_window",
+    "result_dict",
+    "ros2_yaml",
+    "summary",
+    "urscript",
+    "write_bag",
+    "write_csv",
+    "write_franka",
+    "write_ros2",
+    "write_urscript",
+]

@@ -1,0 +1,166 @@
+"""From a log to a payload estimate: paired static windows -> estimate_com (ee frame).
+
+Per pose i: tau_before is averaged over ``before[i]``, tau_after over ``after[i]``. Where the
+two configurations differ, the empty-arm model carries tau_before over to the after
+configuration: tau_before_at_after = tau_before + g(q_after) - g(q_before), g the URDF
+model's gravity torques. The pose is q_after.
+
+Noise: ``torque_std`` is the std of one AVERAGED reading (N m), i.e. the per-sample std over
+sqrt(number of samples in the window). Without it, it is estimated from the samples' spread
+in the windows: per joint, the RMS over poses of sqrt((s_b^2 / n_b + s_a^2 / n_a) / 2), so
+that the difference of a pose has the variance 2 torque_std^2 that estimate_com assumes.
+That is right for white noise; slow drift or a servo's sag between the two windows is not in
+it (``residual_rms`` against that std tells).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from comgrasp_pin.errors import InvalidInputError, LogError
+from comgrasp_pin.estimation import ComEstimate, estimate_com
+from comgrasp_pin.estimation.regressor import G0
+from comgrasp_pin.robot import RobotModel
+from comgrasp_pin.robot_io.logs import JointLog
+from comgrasp_pin.robot_io.mount import gravity_magnitude
+from comgrasp_pin.robot_io.windows import MAX_SPEED, StaticReading, read_window
+
+NOISE_FLOOR = 1e-6
+"""Smallest torque std (N m) taken from the samples (a noise-free log has spread 0)."""
+
+
+@dataclass(frozen=True)
+class LogEstimate:
+    """A payload estimate from a log, with what went into it.
+
+    Attributes:
+        estimate: the ComEstimate (CoM in the ee frame ``estimate`` was made for).
+        q: (k, n) the poses (the after windows' mean configurations, rad).
+        tau_before: (k, n) empty-arm torques carried to ``q`` (N m).
+        tau_after: (k, n) torques holding the payload (N m).
+        torque_std: (n,) std of one averaged reading used (N m).
+        noise_from: "given" (torque_std passed) or "samples" (the windows' spread).
+        before, after: the k static readings of each window.
+    """
+
+    estimate: ComEstimate
+    q: np.ndarray
+    tau_before: np.ndarray
+    tau_after: np.ndarray
+    torque_std: np.ndarray
+    noise_from: str
+    before: tuple[StaticReading, ...]
+    after: tuple[StaticReading, ...]
+
+
+def estimate_from_log(
+    robot: RobotModel,
+    log: JointLog,
+    before: list[tuple[float, float]],
+    after: list[tuple[float, float]],
+    torque_std: float | None = None,
+    method: str = "lstsq",
+    max_speed: float = MAX_SPEED,
+) -> LogEstimate:
+    """Estimate the payload from paired static windows of ``log``.
+
+    Args:
+        robot: the arm (its model's gravity is the one the torques were measured under;
+            see ``mount.load_robot``).
+        log: readings of the arm's joints, in ``robot.joint_names`` order.
+        before: empty-arm windows (t0, t1) in s, one per pose.
+        after: holding windows (t0, t1) in s; after[i] pairs with before[i].
+        torque_std: std of one averaged torque reading (N m), or None to take it from the
+            samples' spread.
+        method: "lstsq" or "ipopt" (estimate_com).
+        max_speed: static threshold (rad/s).
+
+    Raises:
+        LogError, NotStaticError: a window is outside the log, has no partner or moves;
+        the errors of estimate_com.
+    """
+    if tuple(log.joint_names) != tuple(robot.joint_names):
+        raise LogError(f"the log's joints {log.joint_names} are not the arm's {robot.joint_names}")
+    if len(before) != len(after):
+        raise LogError(
+            f"{len(before)} --before window(s) but {len(after)} --after window(s): each "
+            "before window pairs with the after window of the same pose (same count needed)"
+        )
+    if not before:
+        raise LogError("no windows given: at least one before/after pair is needed")
+    rb = tuple(read_window(log, *w, max_speed, f"before window {i}") for i, w in enumerate(before))
+    ra = tuple(read_window(log, *w, max_speed, f"after window {i}") for i, w in enumerate(after))
+    Q = np.array([r.q for r in ra])
+    tau_a = np.array([r.tau for r in ra])
+    tau_b = np.array(
+        [b.tau + robot.gravity_torques(a.q) - robot.gravity_torques(b.q) for b, a in zip(rb, ra)]
+    )
+    if torque_std is None:
+        var = np.array([(b.tau_mean_std**2 + a.tau_mean_std**2) / 2 for b, a in zip(rb, ra)])
+        sigma = np.maximum(np.sqrt(var.mean(axis=0)), NOISE_FLOOR)
+        noise_from = "samples"
+    else:
+        if not (np.isfinite(torque_std) and torque_std > 0):
+            raise InvalidInputError(f"torque_std must be finite and > 0 (N m), got {torque_std}")
+        sigma = np.full(robot.nq, float(torque_std))
+        noise_from = "given"
+    # the regression is written for |g| = G0: scale torques measured under another |g|
+    scale = G0 / gravity_magnitude(robot)
+    est = estimate_com(robot, Q, scale * tau_b, scale * tau_a, method, torque_std=scale * sigma)
+    return LogEstimate(est, Q, tau_b, tau_a, sigma, noise_from, rb, ra)
+
+
+def result_dict(result: LogEstimate, frame: str) -> dict:
+    """The RESULT.json contents (DESIGN.md section 4b): SI units, CoM in the ee frame."""
+    est = result.estimate
+    std = est.std
+    u = est.unobservable_ee
+    return {
+        "mass_kg": est.mass,
+        "com_m": [float(v) for v in est.com_ee],
+        "frame": frame,
+        "cov": None if est.cov is None else np.asarray(est.cov).tolist(),
+        "unobservable": None if u is None else [float(v) for v in u],
+        "n_poses": est.n_poses,
+        "residual_rms_Nm": est.residual_rms,
+        "std": None if std is None else {"mass_kg": float(std[0]), "com_m": std[1:].tolist()},
+        "torque_std_Nm": result.torque_std.tolist(),
+        "torque_std_from": result.noise_from,
+        "method": est.method,
+        "solver_status": est.solver_status,
+        "condition_number": est.condition_number,
+        "q_rad": result.q.tolist(),
+        "windows": {
+            "before": [[r.t0, r.t1, r.n_samples] for r in result.before],
+            "after": [[r.t0, r.t1, r.n_samples] for r in result.after],
+        },
+    }
+
+
+def summary(result: LogEstimate, frame: str) -> str:
+    """A few lines for a person: mass and CoM with their std, what was not observed and why."""
+    est = result.estimate
+    std = est.std
+    s = np.full(4, np.nan) if std is None else std
+    c = est.com_ee
+    lines = [
+        f"payload from {est.n_poses} static pose(s), {est.method} "
+        f"(torque std {result.noise_from}: {np.mean(result.torque_std):.3g} N m per averaged "
+        "reading)",
+        f"  mass  {est.mass:.4f} +- {s[0]:.4f} kg",
+        f"  CoM in {frame}:  x {1e3 * c[0]:8.2f} +- {1e3 * s[1]:.2f} mm",
+        f"                 y {1e3 * c[1]:8.2f} +- {1e3 * s[2]:.2f} mm",
+        f"                 z {1e3 * c[2]:8.2f} +- {1e3 * s[3]:.2f} mm",
+        f"  residual RMS {est.residual_rms:.3g} N m",
+    ]
+    if est.unobservable_ee is not None:
+        u = np.array2string(np.asarray(est.unobservable_ee), precision=3)
+        lines.append(
+            f"  unobservable: the CoM along {u} ({frame}) is set to 0. That is gravity's "
+            "direction at the pose(s): a weight along its own line of action exerts no moment, "
+            "so static torques fix only the vertical line through the CoM. Add poses that turn "
+            "the wrist against gravity (comgrasp plan-poses)."
+        )
+    return "\n".join(lines)

@@ -1,0 +1,209 @@
+"""Robot logs in: joint positions and efforts from a ROS 2 bag or a wide CSV, as a JointLog.
+
+- ROS 2 bag (sqlite3 or mcap storage, read by ``rosbags``): ``sensor_msgs/msg/JointState``
+  messages on one topic (default ``/joint_states``). Joints are matched by name; messages
+  that lack one of the wanted joints (a gripper publishing its own JointState on the same
+  topic) are skipped, other joints (fingers) ignored. A message's time is its header stamp,
+  or the bag's receive time where the stamps are zero.
+- CSV: a header row with ``time`` (s) and, per joint J, ``J.position`` (rad or m) and
+  ``J.effort`` (N m or N); extra columns ignored.
+
+Times are seconds from the log's first message.
+"""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from comgrasp_pin.errors import LogError
+
+JOINT_STATE = "sensor_msgs/msg/JointState"
+DEFAULT_TOPIC = "/joint_states"
+
+
+@dataclass(frozen=True)
+class JointLog:
+    """Joint readings over time for the arm's joints, in the robot model's joint order.
+
+    Attributes:
+        time: (N,) seconds from the log's first message, non-decreasing.
+        joint_names: the n joint names, in the order of the columns.
+        position: (N, n) joint positions (rad for revolute, m for prismatic joints).
+        effort: (N, n) joint efforts (N m for revolute, N for prismatic joints).
+        source: the file the log was read from.
+    """
+
+    time: np.ndarray
+    joint_names: tuple[str, ...]
+    position: np.ndarray
+    effort: np.ndarray
+    source: str = ""
+
+    @property
+    def duration(self) -> float:
+        """Seconds from the first to the last sample."""
+        return float(self.time[-1] - self.time[0]) if len(self.time) else 0.0
+
+
+def read_log(
+    path: str | Path,
+    joint_names: list[str] | tuple[str, ...],
+    topic: str = DEFAULT_TOPIC,
+    windows: list[tuple[float, float]] | None = None,
+) -> JointLog:
+    """A bag (a folder, or a ``.db3`` / ``.mcap`` file) or a ``.csv`` file, by its name."""
+    path = Path(path)
+    if path.suffix.lower() == ".csv":
+        return read_csv(path, joint_names)
+    return read_bag(path, joint_names, topic, windows)
+
+
+def read_bag(
+    path: str | Path,
+    joint_names: list[str] | tuple[str, ...],
+    topic: str = DEFAULT_TOPIC,
+    windows: list[tuple[float, float]] | None = None,
+) -> JointLog:
+    """Read the ``joint_names`` columns of a ROS 2 bag's JointState topic.
+
+    ``windows`` ((t0, t1), s from the first message): read only the messages within a second
+    of them (and the last, so the log's length stays known); deserializing every message of
+    a long bag costs about 20 us each. None reads every message.
+
+    Raises:
+        LogError: the bag cannot be opened, has no such topic or type, no message holds all
+            the joints (the missing ones are named), or the messages carry no efforts.
+    """
+    from rosbags.highlevel import AnyReader
+
+    path = Path(path)
+    bag = path.parent if path.is_file() and path.suffix in (".db3", ".mcap") else path
+    if not bag.exists():
+        raise LogError(f"bag not found: {path}")
+    names = tuple(joint_names)
+    try:
+        with AnyReader([bag]) as reader:
+            conns = [c for c in reader.connections if c.topic == topic]
+            if not conns:
+                topics = sorted({f"{c.topic} ({c.msgtype})" for c in reader.connections})
+                raise LogError(f"bag {bag} has no topic {topic!r}; its topics are {topics}")
+            if any(c.msgtype != JOINT_STATE for c in conns):
+                raise LogError(f"topic {topic!r} is {conns[0].msgtype}, not {JOINT_STATE}")
+            rows = _joint_rows(reader, conns, names, windows)
+    except LogError:
+        raise
+    except Exception as exc:  # rosbags raises its own error types for broken bags
+        raise LogError(f"cannot read the bag {bag}: {type(exc).__name__}: {exc}") from None
+    return _assemble(rows, names, str(bag))
+
+
+def _joint_rows(
+    reader, conns, names: tuple[str, ...], windows=None, margin: float = 1.0
+) -> list[tuple[float, list, list]]:
+    """(t (s), position, effort) per message holding all ``names``, in the names' order.
+
+    With ``windows`` ((t0, t1) in s from the first usable message, by receive time), only
+    the messages within ``margin`` s of a window and the last one are deserialized.
+    """
+    rows: list = []
+    seen: set[str] = set()
+    cache: dict[tuple[str, ...], np.ndarray | None] = {}
+    t_first, skipped = None, None
+    for conn, t_bag, raw in reader.messages(connections=conns):
+        if t_first is not None and windows is not None:
+            rel = t_bag * 1e-9 - t_first
+            if not any(a - margin <= rel <= b + margin for a, b in windows):
+                skipped = (conn, t_bag, raw)
+                continue
+        skipped = None
+        row = _row(reader, conn, t_bag, raw, names, cache, seen)
+        if row is not None:
+            rows.append(row)
+            t_first = row[1] if t_first is None else t_first
+    if skipped is not None:  # the log's end: the last message
+        row = _row(reader, *skipped, names, cache, seen)
+        rows += [] if row is None else [row]
+    if not rows:
+        missing = sorted(set(names) - seen)
+        raise LogError(
+            f"no JointState message holds all the arm's joints: {missing} never appear "
+            f"(joints in the log: {sorted(seen)}; the URDF's arm joints: {list(names)})"
+        )
+    stamps = np.array([r[0] for r in rows])
+    times = stamps if np.all(stamps > 0) else np.array([r[1] for r in rows])
+    return [(t, r[2], r[3]) for t, r in zip(times, rows)]
+
+
+def _row(reader, conn, t_bag, raw, names, cache, seen):
+    """(stamp (s), receive time (s), position, effort) of one message, or None.
+
+    None when the message lacks an arm joint; ``cache`` maps a message's name list to the
+    arm joints' indices.
+    """
+    msg = reader.deserialize(raw, conn.msgtype)
+    key = tuple(msg.name)
+    if key not in cache:
+        seen.update(key)
+        pos = {n: i for i, n in enumerate(key)}
+        cache[key] = np.array([pos[n] for n in names]) if all(n in pos for n in names) else None
+    idx = cache[key]
+    if idx is None:
+        return None
+    if len(msg.effort) != len(key):
+        raise LogError(
+            f"the JointState messages carry {len(msg.effort)} efforts for {len(key)} "
+            "joints: the log has no joint efforts (torques); record them (e.g. the "
+            "driver's effort field) to estimate a payload"
+        )
+    stamp = msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
+    return stamp, t_bag * 1e-9, msg.position[idx], msg.effort[idx]
+
+
+def read_csv(path: str | Path, joint_names: list[str] | tuple[str, ...]) -> JointLog:
+    """Read a wide CSV: ``time`` and ``J.position``, ``J.effort`` per joint J.
+
+    Raises:
+        LogError: the file is missing, a column is missing (named), or a value is not a number.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise LogError(f"CSV log not found: {path}")
+    with path.open(newline="") as f:
+        header = next(csv.reader(f), [])
+    header = [h.strip() for h in header]
+    names = tuple(joint_names)
+    wanted = ["time"] + [f"{n}.{field}" for field in ("position", "effort") for n in names]
+    missing = [w for w in wanted if w not in header]
+    if missing:
+        raise LogError(
+            f"CSV {path} lacks the columns {missing}; it needs 'time' and, per arm joint J of "
+            f"the URDF ({list(names)}), 'J.position' and 'J.effort'"
+        )
+    cols = [header.index(w) for w in wanted]
+    try:
+        data = np.loadtxt(path, delimiter=",", skiprows=1, usecols=cols, ndmin=2)
+    except ValueError as exc:
+        raise LogError(f"CSV {path} has a value that is not a number: {exc}") from None
+    n = len(names)
+    rows = [(r[0], r[1 : 1 + n], r[1 + n :]) for r in data]
+    return _assemble(rows, names, str(path))
+
+
+def _assemble(rows, names: tuple[str, ...], source: str) -> JointLog:
+    """The JointLog of (t, position, effort) rows, time from the first sample, sorted."""
+    if len(rows) < 2:
+        raise LogError(f"{source} has {len(rows)} usable sample(s); a log needs at least two")
+    t = np.array([r[0] for r in rows], dtype=float)
+    position = np.array([r[1] for r in rows], dtype=float)
+    effort = np.array([r[2] for r in rows], dtype=float)
+    order = np.argsort(t, kind="stable")
+    t, position, effort = t[order], position[order], effort[order]
+    if not (np.all(np.isfinite(position)) and np.all(np.isfinite(effort))):
+        raise LogError(f"{source} has NaN or inf joint positions or efforts")
+    for a in (t, position, effort):
+        a.flags.writeable = False
+    return JointLog(t - t[0], names, position, effort, source)

@@ -1,0 +1,115 @@
+"""robot_io.estimate: the Panda target (3 planned poses, 0.05 N m per sample at 200 Hz, 1 s
+windows), the reported sigma against a Monte Carlo spread, carried-over tau_before, a
+tilted mount. Truth from Pinocchio RNEA with an appended payload body (tests/_payload)."""
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from _logs import rnea_torques, session
+from _payload import panda, payload_torques
+
+from comgrasp_pin.errors import LogError
+from comgrasp_pin.robot_io import estimate_from_log, load_robot
+from comgrasp_pin.robot_io.planning import plan_measurement_poses
+
+MASS, COM = 0.85, np.array([0.025, -0.012, 0.06])
+START = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])
+NOISE, RATE = 0.05, 200.0
+
+
+@pytest.fixture(scope="module")
+def robot():
+    return panda()
+
+
+@pytest.fixture(scope="module")
+def planned(robot):
+    return plan_measurement_poses(robot, 3, start=START, torque_std=NOISE / np.sqrt(RATE)).q
+
+
+def test_panda_target_truth_within_three_sigma(robot, planned):
+    log, before, after, _ = session(planned, rnea_torques(robot, MASS, COM), robot.joint_names,
+                                    RATE, NOISE, seed=3)  # fmt: skip
+    r = estimate_from_log(robot, log, before, after)
+    est = r.estimate
+    assert est.unobservable_ee is None and est.n_poses == 3
+    std = est.std
+    assert abs(est.mass - MASS) < 3 * std[0]
+    assert np.all(np.abs(est.com_ee - COM) < 3 * std[1:])
+    # the noise of one averaged reading: 0.05 / sqrt(201 samples), from the samples' spread
+    np.testing.assert_allclose(r.torque_std, NOISE / np.sqrt(201), rtol=0.15)
+    assert r.noise_from == "samples"
+
+
+def test_reported_sigma_matches_monte_carlo_spread(robot, planned):
+    """200 synthetic logs (noise redrawn, no bags): the mean reported std is within 30 % of
+    the spread of the estimates."""
+    log, before, after, _ = session(planned, rnea_torques(robot, MASS, COM), robot.joint_names,
+                                    RATE, 0.0)  # fmt: skip
+    rng = np.random.default_rng(7)
+    estimates, stds = [], []
+    for _ in range(200):
+        noisy = type(log)(log.time, log.joint_names, log.position,
+                          log.effort + NOISE * rng.standard_normal(log.effort.shape))  # fmt: skip
+        est = estimate_from_log(robot, noisy, before, after).estimate
+        estimates.append(np.r_[est.mass, est.com_ee])
+        stds.append(est.std)
+    spread = np.std(estimates, axis=0, ddof=1)
+    ratio = np.mean(stds, axis=0) / spread
+    print("sigma / MC spread (mass, cx, cy, cz):", ratio)
+    assert np.all(np.abs(ratio - 1) < 0.3), ratio
+    bias = np.abs(np.mean(estimates, axis=0) - np.r_[MASS, COM])
+    assert np.all(bias < 4 * spread / np.sqrt(200))
+
+
+def test_given_torque_std_is_the_std_of_an_averaged_reading(robot, planned):
+    log, before, after, _ = session(planned, rnea_torques(robot, MASS, COM), robot.joint_names,
+                                    RATE, NOISE, seed=4)  # fmt: skip
+    from_samples = estimate_from_log(robot, log, before, after)
+    given = estimate_from_log(robot, log, before, after, torque_std=NOISE / np.sqrt(201))
+    np.testing.assert_allclose(given.estimate.std, from_samples.estimate.std, rtol=0.15)
+    assert given.noise_from == "given"
+
+
+def test_tau_before_is_carried_to_the_after_configuration(robot, planned):
+    """The after poses sag by up to 0.02 rad: without the carry-over the mass would be off by
+    far more than its std; with it, the truth is within 3 sigma."""
+    shift = np.array([0.0, 0.02, -0.01, 0.015, 0.0, -0.02, 0.01])
+    log, before, after, _ = session(planned, rnea_torques(robot, MASS, COM), robot.joint_names,
+                                    RATE, NOISE, seed=5, q_shift_after=shift)  # fmt: skip
+    est = estimate_from_log(robot, log, before, after).estimate
+    assert abs(est.mass - MASS) < 3 * est.std[0]
+    assert np.all(np.abs(est.com_ee - COM) < 3 * est.std[1:])
+
+
+def test_tilted_mount(robot, planned):
+    """An arm on a 30 deg slope: torques from Pinocchio with model.gravity tilted in the base
+    frame; load_robot with that gravity recovers the payload."""
+    g = 9.81 * np.array([np.sin(np.radians(30)), 0.0, -np.cos(np.radians(30))])
+    tilted = panda()
+    tilted.model.gravity = pin.Motion(np.r_[g, 0.0, 0.0, 0.0])
+
+    def torques(Qs, loaded):
+        tb, ta = payload_torques(tilted, Qs, MASS, COM)
+        return ta if loaded else tb
+
+    log, before, after, _ = session(planned, torques, robot.joint_names, RATE, NOISE, seed=6)
+    mounted = load_robot(robot.urdf_path, robot.ee_frame, gravity_base=g)
+    est = estimate_from_log(mounted, log, before, after).estimate
+    assert abs(est.mass - MASS) < 3 * est.std[0]
+    assert np.all(np.abs(est.com_ee - COM) < 3 * est.std[1:])
+    wrong = estimate_from_log(robot, log, before, after).estimate  # floor gravity assumed
+    assert np.max(np.abs(wrong.com_ee - COM) / wrong.std[1:]) > 10
+
+
+def test_unpaired_windows_are_refused(robot, planned):
+    log, before, after, _ = session(planned, rnea_torques(robot, MASS, COM), robot.joint_names)
+    with pytest.raises(LogError, match="same count"):
+        estimate_from_log(robot, log, before, after[:2])
+
+
+def test_one_pose_reports_the_unobservable_direction(robot, planned):
+    log, before, after, _ = session(planned, rnea_torques(robot, MASS, COM), robot.joint_names)
+    est = estimate_from_log(robot, log, before[:1], after[:1]).estimate
+    down_ee = robot.ee_pose(planned[0])[:3, :3].T @ np.array([0, 0, -1.0])
+    np.testing.assert_allclose(est.unobservable_ee, down_ee, atol=1e-4)  # q has encoder noise
