@@ -95,6 +95,11 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     from comgrasp_pin.robot_io import planning
 
     robot = _robot(args)
+    if args.urscript and robot.nq != planning.UR_JOINTS:
+        raise InvalidInputError(
+            f"--urscript writes a movej program for a {planning.UR_JOINTS}-joint UR arm; "
+            f"this one has {robot.nq} joints (leave --urscript out, or use the JSON)"
+        )
     start = None if args.start is None else _vector(args.start, "--start", robot.nq)
     plan = planning.plan_measurement_poses(
         robot,
