@@ -157,8 +157,10 @@ def summary(result: LogEstimate, frame: str) -> str:
     ]
     if est.unobservable_ee is not None:
         u = np.array2string(np.asarray(est.unobservable_ee), precision=3)
+        lines.insert(2, f"  CoM: a line in {frame}; below, its point nearest the origin")
         lines.append(
-            f"  unobservable: the CoM along {u} ({frame}) is set to 0. That is gravity's "
+            f"  unobservable: the CoM along {u} ({frame}) is set to 0, and the +- above hold "
+            "across that line only: the CoM can be anywhere along it. That is gravity's "
             "direction at the pose(s): a weight along its own line of action exerts no moment, "
             "so static torques fix only the vertical line through the CoM. Add poses that turn "
             "the wrist against gravity (comgrasp plan-poses)."
