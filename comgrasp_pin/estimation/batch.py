@@ -17,7 +17,7 @@ import pinocchio as pin
 from comgrasp_pin.errors import EmptyGripperError, InvalidInputError, UnobservableError
 from comgrasp_pin.estimation.estimate import MASS_SIGMAS, MIN_MASS_KG
 from comgrasp_pin.estimation.estimator import RCOND
-from comgrasp_pin.estimation.inputs import validate_inputs
+from comgrasp_pin.estimation.inputs import check_rcond, validate_inputs
 from comgrasp_pin.estimation.regressor import G0, one_pose_basis
 from comgrasp_pin.robot import RobotModel
 
@@ -72,6 +72,7 @@ def estimate_com_batch(
     Raises:
         ComGraspError subclasses (ValueError) naming the offending grasps.
     """
+    rcond = check_rcond(rcond)
     if np.ndim(q) != 2:
         raise InvalidInputError(f"q must be (N, {robot.nq}) for a batch, got {np.shape(q)}")
     Q, dtau, sigma = validate_inputs(robot, q, tau_before, tau_after, torque_std)

@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
+from comgrasp_pin import validate
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.robot import RobotModel
 
@@ -26,10 +25,7 @@ def check_options(
 
     if method not in METHODS:
         raise InvalidInputError(f"unknown method {method!r}; valid methods are {METHODS}")
-    if not isinstance(rcond, (int, float)) or isinstance(rcond, bool):
-        raise InvalidInputError(f"rcond must be a number in (0, 1), got {rcond!r}")
-    if not 0.0 < rcond < 1.0:
-        raise InvalidInputError(f"rcond must be in (0, 1), got {rcond}")
+    check_rcond(rcond)
     if loss not in LOSSES:
         raise InvalidInputError(f"unknown loss {loss!r}; valid losses are {LOSSES}")
     if loss == "huber" and torque_std is None:
@@ -37,9 +33,7 @@ def check_options(
             "loss='huber' needs torque_std: its threshold huber_delta is counted in standard "
             "deviations of a torque difference"
         )
-    if not (isinstance(huber_delta, (int, float)) and math.isfinite(huber_delta)
-            and huber_delta > 0):  # fmt: skip
-        raise InvalidInputError(f"huber_delta must be finite and > 0, got {huber_delta!r}")
+    validate.number(huber_delta, "huber_delta", low=0.0, low_open=True)
     if com_prior is not None and not isinstance(com_prior, AxisPrior):
         raise InvalidInputError(f"com_prior must be an AxisPrior or None, got {com_prior!r}")
     if method == "lstsq" and (loss != "l2" or com_prior is not None):
@@ -47,6 +41,11 @@ def check_options(
             "a robust loss or a com_prior needs method='ipopt' (lstsq is the closed form of "
             "the plain least squares)"
         )
+
+
+def check_rcond(rcond: object) -> float:
+    """``rcond`` as a float in (0, 1); InvalidInputError otherwise."""
+    return validate.number(rcond, "rcond", low=0.0, high=1.0, low_open=True, high_open=True)
 
 
 def validate_inputs(
@@ -57,6 +56,8 @@ def validate_inputs(
     torque_std: float | np.ndarray | None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """(Q (k, n), dtau (k, n), sigma (n,) or None) from the raw inputs, or a clear error."""
+    if not isinstance(robot, RobotModel):
+        raise InvalidInputError(f"robot must be a RobotModel, got {type(robot).__name__}")
     n = robot.nq
     arrays = {}
     for name, value in (("q", q), ("tau_before", tau_before), ("tau_after", tau_after)):
