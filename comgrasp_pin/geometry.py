@@ -38,6 +38,8 @@ def check_transform(T: np.ndarray, name: str = "T", atol: float = 1e-6) -> np.nd
     if not np.all(np.isfinite(T)):
         raise InvalidInputError(f"{name} contains NaN or inf")
     R = T[:3, :3]
+    if np.abs(R).max() > 1.0 + atol:  # no entry of a rotation exceeds 1 (and R^T R overflows)
+        raise InvalidInputError(f"{name}[:3, :3] is not a rotation matrix")
     if not np.allclose(R.T @ R, np.eye(3), atol=atol) or np.linalg.det(R) < 0:
         raise InvalidInputError(f"{name}[:3, :3] is not a rotation matrix")
     if not np.allclose(T[3], [0.0, 0.0, 0.0, 1.0], atol=atol):

@@ -15,7 +15,12 @@ import numpy as np
 import pinocchio as pin
 
 from comgrasp_pin.errors import EmptyGripperError, InvalidInputError, UnobservableError
-from comgrasp_pin.estimation.estimate import MASS_SIGMAS, MIN_MASS_KG
+from comgrasp_pin.estimation.estimate import (
+    MASS_SIGMAS,
+    MIN_MASS_KG,
+    check_finite_result,
+    singular_is_unobservable,
+)
 from comgrasp_pin.estimation.estimator import RCOND
 from comgrasp_pin.estimation.inputs import check_rcond, validate_inputs
 from comgrasp_pin.estimation.regressor import G0, one_pose_basis
@@ -50,6 +55,7 @@ class ComEstimateBatch:
         return len(self.mass)
 
 
+@singular_is_unobservable()
 def estimate_com_batch(
     robot: RobotModel,
     q: np.ndarray,
@@ -120,12 +126,14 @@ def estimate_com_batch(
         G[:, 1:, 1:] = np.eye(3) / mass[:, None, None]
         cov = G @ cov_theta @ G.transpose(0, 2, 1)
     residuals = dtau - G0 * np.einsum("ki,kin->kn", w, A)
+    rms = np.sqrt(np.mean(residuals**2, axis=1))
+    check_finite_result(mass=mass, com_ee=com_ee, cov=cov, residual_rms=rms)
     return ComEstimateBatch(
         com_ee=com_ee,
         mass=mass,
         weight=mass * G0,
         unobservable_ee=-R[:, 2],
         cov=cov,
-        residual_rms=np.sqrt(np.mean(residuals**2, axis=1)),
+        residual_rms=rms,
         condition_number=np.sqrt(lam[:, 2] / lam[:, 0]),
     )

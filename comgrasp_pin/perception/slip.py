@@ -12,6 +12,7 @@ from comgrasp_pin.errors import InvalidInputError
 SLIP_RATE_DEG_S = 2.0  # |dθ/dt| above this over the recent window: slipping
 SLIP_CHANGE_DEG = 1.0  # total change of θ since the first sample above this: slip was seen
 WINDOW_S = 0.3  # length of the recent window for the rate (s)
+MAX_TIME_S = 1e6  # sample times within +-MAX_TIME_S (s): a run is shorter than 11 days
 
 
 @dataclass(frozen=True)
@@ -47,11 +48,11 @@ class SlipMonitor:
         """Record the tilt ``theta`` (rad) at time ``t`` (s), later than every earlier sample.
 
         Raises:
-            InvalidInputError: for a time or tilt that is not a finite number, or a sample
-                out of time order.
+            InvalidInputError: for a time or tilt that is not a finite number, a time beyond
+                +-MAX_TIME_S, a tilt beyond one turn (+-2 pi), or a sample out of time order.
         """
-        t = validate.number(t, "time t (s)")
-        theta = validate.number(theta, "tilt theta (rad)")
+        t = validate.number(t, "time t (s)", low=-MAX_TIME_S, high=MAX_TIME_S)
+        theta = validate.number(theta, "tilt theta (rad)", low=-2 * np.pi, high=2 * np.pi)
         if self.times and t <= self.times[-1]:
             raise InvalidInputError(f"samples must come in time order: {t} after {self.times[-1]}")
         self.times.append(float(t))
