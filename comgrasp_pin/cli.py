@@ -12,6 +12,7 @@ import numpy as np
 
 from comgrasp_pin import cli_args
 from comgrasp_pin.errors import ComGraspError, InvalidInputError
+from comgrasp_pin.experiments.trials import MAX_TRIALS
 
 OBJECTS = tuple(__import__("comgrasp_pin.simulation.objects", fromlist=["OBJECTS"]).OBJECTS)
 SEED = cli_args.int_at_least(0)
@@ -111,9 +112,9 @@ def _add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
                    help="comma-separated, each once (%(default)s)")  # fmt: skip
     p.add_argument(
         "--trials",
-        type=cli_args.int_at_least(1),
+        type=cli_args.int_at_least(1, MAX_TRIALS),
         default=None,
-        help="per object and method, >= 1 (default 50, the paper's; 3 with --quick)",
+        help=f"per object and method, 1 to {MAX_TRIALS} (default 50, the paper's; 3 with --quick)",
     )
     p.add_argument("--seed", type=SEED, default=0,
                    help="run seed, >= 0 (%(default)s)")  # fmt: skip

@@ -28,12 +28,12 @@ def _argument_type(parse: Callable[[str], object], label: str) -> Callable[[str]
     return convert
 
 
-def _parse_int(text: str, low: int) -> int:
+def _parse_int(text: str, low: int, high: int | None) -> int:
     try:
         value = int(text)
     except ValueError:
         raise InvalidInputError(f"must be an integer, got {text!r}") from None
-    return validate.integer(value, "", low=low)
+    return validate.integer(value, "", low=low, high=high)
 
 
 def _parse_float(text: str, low: float) -> float:
@@ -44,9 +44,9 @@ def _parse_float(text: str, low: float) -> float:
     return validate.number(value, "", low=low)
 
 
-def int_at_least(low: int) -> Callable[[str], object]:
-    """An integer option >= ``low``."""
-    return _argument_type(lambda text: _parse_int(text, low), "integer")
+def int_at_least(low: int, high: int | None = None) -> Callable[[str], object]:
+    """An integer option >= ``low`` (and <= ``high`` if given)."""
+    return _argument_type(lambda text: _parse_int(text, low, high), "integer")
 
 
 def float_at_least(low: float) -> Callable[[str], object]:

@@ -9,9 +9,10 @@ import pytest
 from comgrasp_pin.cli import main
 
 BAD = [
-    (["--trials", "0"], "--trials: must be an integer >= 1, got 0"),
-    (["--trials", "-3"], "--trials: must be an integer >= 1, got -3"),
+    (["--trials", "0"], "--trials: must be an integer >= 1 and <= 1000, got 0"),
+    (["--trials", "-3"], "--trials: must be an integer >= 1 and <= 1000, got -3"),
     (["--trials", "2.5"], "--trials: must be an integer, got '2.5'"),
+    (["--trials", "1001"], "--trials: must be an integer >= 1 and <= 1000, got 1001"),
     (["--objects", ""], "--objects: needs comma-separated names"),
     (["--objects", "obj1,,obj2"], "--objects: needs comma-separated names"),
     (["--objects", "obj1,obj1"], "['obj1'] are listed more than once"),

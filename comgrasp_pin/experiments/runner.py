@@ -13,6 +13,7 @@ stops the run with ``OutputError``; the rows before it stay intact.
 
 from __future__ import annotations
 
+import csv
 import multiprocessing
 import traceback
 from collections import deque
@@ -41,8 +42,6 @@ def task_key(row: dict) -> tuple[str, ...]:
 
 def read_rows(csv_path: Path) -> list[dict]:
     """All rows of a results CSV (empty when the file does not exist), its own header."""
-    import csv
-
     if not csv_path.exists():
         return []
     with csv_path.open(newline="") as f:
