@@ -89,8 +89,13 @@ class RobotModel:
             full_model = pin.buildModelFromUrdf(str(urdf_path))
         except (RuntimeError, ValueError, OSError) as exc:
             raise InvalidInputError(f"cannot read {urdf_path} as a URDF: {exc}") from None
+        dirs = list(package_dirs or [])
+        if isinstance(package_dirs, (str, Path)) or not all(
+            isinstance(d, (str, Path)) for d in dirs
+        ):
+            raise InvalidInputError(f"package_dirs must be a list of folders, got {package_dirs!r}")
         robot = cls(full_model, ee_frame, urdf_path)
-        robot.package_dirs = [str(p) for p in (package_dirs or [])]
+        robot.package_dirs = [str(p) for p in dirs]
         return robot
 
     @classmethod

@@ -107,6 +107,8 @@ def test_from_urdf_on_a_folder_or_a_non_urdf_file(tmp_path):
         cg.RobotModel.from_urdf(tmp_path / "missing.urdf", "eelink")
     with pytest.raises(InvalidInputError, match="urdf_path must be a path"):
         cg.RobotModel.from_urdf(None, "eelink")
+    with pytest.raises(InvalidInputError, match="package_dirs must be a list of folders"):
+        cg.RobotModel.from_urdf(urdf_path("ur5_gripper.urdf"), "eelink", package_dirs="/x")
 
 
 @pytest.mark.parametrize("frame", [None, 3, "", "no_such_frame"])
@@ -215,7 +217,9 @@ def test_geometry_helpers_check_their_inputs():
      ({"pos_real": 1.0}, "pos_real must be >= -0.2 and <= 0.2"),
      ({"seed": -1}, "seed must be an integer >= 0"),
      ({"seed": 1.5}, "seed must be an integer"),
-     ({"obj": "obj9"}, "unknown object")],
+     ({"obj": "obj9"}, "unknown object"),
+     ({"config": {"noise": 0.1}}, "config must be an EpisodeConfig"),
+     ({"method": "magic"}, "method must be one of")],
 )  # fmt: skip
 def test_run_episode_refuses_bad_arguments_before_simulating(kwargs, message):
     from comgrasp_pin.simulation.episode import run_episode

@@ -61,6 +61,8 @@ def test_out_pointing_at_a_file_is_refused(tmp_path, capsys):
         assert code == 2 and f"{target} exists and is not a folder" in err
         assert "Traceback" not in err
     assert target.read_text() == "keep me"
+    code, err = _run(["accuracy", "--out", ""], capsys)
+    assert code == 2 and "--out: must name a folder, got an empty path" in err
 
 
 @pytest.mark.parametrize("command", ["demo", "views", "scene"])
