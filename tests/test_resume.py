@@ -198,7 +198,10 @@ def test_retry_failed_reruns_the_failed_rows_and_replaces_them(tmp_path):
     assert len(rows) == len(on_disk) == 4
     assert all(r["error"] == "" for r in on_disk)
     assert sorted(int(r["value"]) for r in on_disk) == [0, 10, 20, 30]
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.csv", "out.settings.json"]
+    assert sorted(p.name for p in tmp_path.iterdir() if not p.name.endswith(".lock")) == [
+        "out.csv",
+        "out.settings.json",
+    ]  # no temporary file left
 
 
 def test_rows_are_whole_on_disk_while_the_run_goes_on(tmp_path):
@@ -229,3 +232,21 @@ def test_rows_keep_commas_quotes_and_newlines_on_one_line(tmp_path):
     assert len(_lines(path)) == 3
     rows = list(csv.DictReader(path.open(newline="")))
     assert rows[0]["error"] == 'ValueError: bad, "quoted" second line'
+
+
+def test_a_second_run_on_the_same_csv_is_refused(tmp_path):
+    path = tmp_path / "out.csv"
+    outcome = []
+
+    def nested(task):
+        if task["trial"] == 1:  # another run starts on the same CSV while this one writes
+            try:
+                _run(path, resume=True)
+            except ResumeError as exc:
+                outcome.append(str(exc))
+        return _value(task)
+
+    _run(path, fn=nested)
+    assert len(outcome) == 1 and "another run is writing" in outcome[0]
+    assert [int(r["value"]) for r in read_rows(path)] == [0, 10, 20, 30]
+    _run(path, resume=True)  # the lock went with the run

@@ -11,6 +11,8 @@
   before the last, is refused (``ResumeError``).
 - Rewrites (a new file, a repaired one, failed rows removed) go through a temporary file and
   ``os.replace``: a reader sees the old file or the new one, never half of one.
+- A run holds ``DIR/.NAME.csv.lock`` (``fcntl.flock``) while it writes: a second run on the
+  same CSV is refused instead of interleaving its rows.
 """
 
 from __future__ import annotations
@@ -21,7 +23,8 @@ import io
 import json
 import os
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 
 from comgrasp_pin.errors import OutputError, ResumeError
@@ -172,6 +175,35 @@ def read_results(csv_path: Path, columns: Sequence[str]) -> tuple[list[dict], bo
                 "the file is damaged; use another --out or --overwrite"
             )
     return [dict(zip(header, record)) for record in body], repaired
+
+
+@contextmanager
+def run_lock(csv_path: Path) -> Iterator[None]:
+    """Held while a run reads and writes ``csv_path`` (its folder is created).
+
+    Raises:
+        OutputError: the folder cannot be created. ResumeError: another run holds the lock.
+    """
+    try:
+        import fcntl
+    except ImportError:  # not POSIX: no lock
+        yield
+        return
+    try:
+        csv_path.parent.mkdir(parents=True, exist_ok=True)
+        f = open(csv_path.with_name(f".{csv_path.name}.lock"), "a")  # noqa: SIM115
+    except OSError as exc:
+        raise OutputError(f"cannot write in {csv_path.parent}: {exc.strerror or exc}") from None
+    try:
+        try:
+            fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise ResumeError(
+                f"another run is writing {csv_path} now: wait for it to end, or use another --out"
+            ) from None
+        yield
+    finally:
+        f.close()  # releases the lock
 
 
 class RowAppender:

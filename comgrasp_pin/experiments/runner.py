@@ -16,7 +16,7 @@ from __future__ import annotations
 import csv
 import multiprocessing
 import traceback
-from collections import deque
+from collections import Counter, deque
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -24,7 +24,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from comgrasp_pin.errors import InvalidInputError, OutputError, ResumeError, WorkerDiedError
+from comgrasp_pin.errors import InvalidInputError, ResumeError, WorkerDiedError
 from comgrasp_pin.experiments import run_files
 from comgrasp_pin.experiments.run_files import RowAppender
 
@@ -63,10 +63,6 @@ def _safe_call(fn: Callable[[dict], dict], task: dict) -> dict:
 def _kept_rows(csv_path: Path, columns: list[str], resume: bool, overwrite: bool,
                retry_failed: bool, settings: dict | None) -> list[dict]:  # fmt: skip
     """The rows of an earlier run to keep; the CSV and its settings made ready to append."""
-    try:
-        csv_path.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise OutputError(f"cannot create {csv_path.parent}: {exc.strerror or exc}") from None
     fresh = overwrite or not csv_path.exists() or csv_path.stat().st_size == 0
     if fresh:
         rows, rewrite = [], True
@@ -122,15 +118,21 @@ def run_trials(
         OutputError: a row cannot be written; the run stopped, earlier rows intact.
     """
     columns = [*columns, "error"] if "error" not in columns else list(columns)
-    keys = [task_key(task) for task in tasks]
-    if len(set(keys)) != len(keys):
-        repeated = sorted({k for k in keys if keys.count(k) > 1})
+    repeated = sorted(k for k, n in Counter(task_key(t) for t in tasks).items() if n > 1)
+    if repeated:
         raise InvalidInputError(f"tasks {repeated[:5]} are listed more than once")
-    rows = _kept_rows(Path(csv_path), columns, resume, overwrite, retry_failed, settings)
+    with run_files.run_lock(Path(csv_path)):
+        rows = _kept_rows(Path(csv_path), columns, resume, overwrite, retry_failed, settings)
+        return _run_missing(fn, tasks, rows, Path(csv_path), columns, workers, desc)
+
+
+def _run_missing(fn, tasks, rows: list[dict], csv_path: Path, columns: list[str],
+                 workers: int, desc: str) -> list[dict]:  # fmt: skip
+    """Run the tasks that have no row in ``rows`` yet, appending theirs; all rows."""
     done = {task_key(row) for row in rows}
     todo = [task for task in tasks if task_key(task) not in done]
     bar = tqdm(total=len(tasks), initial=len(tasks) - len(todo), desc=desc, unit="trial")
-    with RowAppender(Path(csv_path), columns) as out:
+    with RowAppender(csv_path, columns) as out:
 
         def record(row: dict) -> None:
             out.write(row)
