@@ -210,3 +210,12 @@ def test_closest_point_on_line_is_finite_or_a_comgrasp_error(p1, d1, p2, d2, uni
         d1, d2 = d1 / np.linalg.norm(d1), d2 / np.linalg.norm(d2)
     t = _estimate_or_error(lambda: closest_point_on_line(p1, d1, p2, d2))
     assert t is None or np.isfinite(t)
+
+
+@SETTINGS
+@given(q=arrays(float, (N,), elements=angles | any_float) | arrays(float, (N - 1,)))
+def test_robot_kinematics_are_finite_or_a_comgrasp_error(q):
+    for method in (ROBOT.joint_axes, ROBOT.joint_origins, ROBOT.lever_arms, ROBOT.ee_pose,
+                   ROBOT.gravity_torques):  # fmt: skip
+        out = _estimate_or_error(lambda: method(q))  # noqa: B023
+        assert out is None or _finite(out)
