@@ -84,6 +84,10 @@ def test_resume_without_recorded_settings_is_refused(tmp_path):
     settings_path(path).unlink()
     with pytest.raises(ResumeError, match="no out.settings.json beside it"):
         _run(path, resume=True)
+    for damaged, message in (("{not json", "cannot read"), ("[1, 2]", "does not hold")):
+        settings_path(path).write_text(damaged)
+        with pytest.raises(ResumeError, match=message):
+            _run(path, resume=True)
 
 
 def test_cli_resume_with_another_seed_or_noise_exits_2(tmp_path, capsys):

@@ -80,6 +80,8 @@ def check_settings(csv_path: Path, wanted: dict) -> dict:
         ) from None
     except (OSError, json.JSONDecodeError) as exc:
         raise ResumeError(f"cannot read {path}: {exc}; start again with --overwrite") from None
+    if not isinstance(recorded, dict):
+        raise ResumeError(f"{path} does not hold a run's settings; start again with --overwrite")
     differences = settings_differences(recorded, wanted)
     if differences:
         raise ResumeError(
