@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from comgrasp_pin.errors import InvalidInputError
+from comgrasp_pin.geometry import check_transform
 
 
 @dataclass(frozen=True)
@@ -84,6 +85,13 @@ class PinholeCamera:
 
 
 def transform_points(T_a_b: np.ndarray, p_b: np.ndarray) -> np.ndarray:
-    """(N, 3) points p_a = T_a_b @ p_b for (N, 3) points ``p_b``."""
-    p_b = np.atleast_2d(p_b)
+    """(N, 3) points p_a = T_a_b @ p_b for (N, 3) points ``p_b``.
+
+    Raises:
+        InvalidInputError: T_a_b not a (4, 4) rigid transform, p_b not (N, 3) or (3,).
+    """
+    T_a_b = check_transform(T_a_b, "T_a_b")
+    p_b = np.atleast_2d(np.asarray(p_b, dtype=float))
+    if p_b.ndim != 2 or p_b.shape[1] != 3:
+        raise InvalidInputError(f"points must have shape (N, 3), got {p_b.shape}")
     return p_b @ T_a_b[:3, :3].T + T_a_b[:3, 3]

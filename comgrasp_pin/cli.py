@@ -10,9 +10,12 @@ from pathlib import Path
 
 import numpy as np
 
+from comgrasp_pin import cli_args
 from comgrasp_pin.errors import ComGraspError, InvalidInputError
+from comgrasp_pin.experiments.trials import MAX_TRIALS
 
 OBJECTS = tuple(__import__("comgrasp_pin.simulation.objects", fromlist=["OBJECTS"]).OBJECTS)
+SEED = cli_args.int_at_least(0)
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
@@ -33,15 +36,15 @@ def _cmd_check(args: argparse.Namespace) -> int:
 def _options(args: argparse.Namespace):
     from comgrasp_pin.experiments.reproduce import PAPER_TRIALS, QUICK_TRIALS, RunOptions
 
-    objects = tuple(o.strip() for o in args.objects.split(",") if o.strip())
-    unknown = sorted(set(objects) - set(OBJECTS))
-    if unknown:
-        raise InvalidInputError(f"unknown object(s) {unknown}; objects are {', '.join(OBJECTS)}")
+    if args.overwrite and args.retry_failed:
+        raise InvalidInputError("--retry-failed continues a run, --overwrite starts it again: "
+                                "pass one of them")  # fmt: skip
     trials = args.trials
     if trials is None:
         trials = QUICK_TRIALS if getattr(args, "quick", False) else PAPER_TRIALS
-    return RunOptions(Path(args.out), objects, trials, args.seed, args.workers, args.resume,
-                      args.overwrite, args.noise, args.estimator)  # fmt: skip
+    return RunOptions(args.out, args.objects, trials, args.seed, args.workers,
+                      args.resume or args.retry_failed, args.overwrite, args.noise,
+                      args.estimator, args.retry_failed)  # fmt: skip
 
 
 def _cmd_experiment(args: argparse.Namespace) -> int:
@@ -103,25 +106,37 @@ def _cmd_views(args: argparse.Namespace) -> int:
 
 
 def _add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
-    p.add_argument("--out", default=default_out, help="output folder (%(default)s)")
-    p.add_argument("--objects", default=",".join(OBJECTS), help="comma-separated (%(default)s)")
+    p.add_argument("--out", type=cli_args.out_dir, default=default_out,
+                   help="output folder (%(default)s)")  # fmt: skip
+    p.add_argument("--objects", type=cli_args.object_list(OBJECTS), default=",".join(OBJECTS),
+                   help="comma-separated, each once (%(default)s)")  # fmt: skip
     p.add_argument(
         "--trials",
-        type=int,
+        type=cli_args.int_at_least(1, MAX_TRIALS),
         default=None,
-        help="per object and method (default 50, the paper's; 3 with --quick)",
+        help=f"per object and method, 1 to {MAX_TRIALS} (default 50, the paper's; 3 with --quick)",
     )
-    p.add_argument("--seed", type=int, default=0, help="run seed (%(default)s)")
-    p.add_argument("--workers", type=int, default=os.cpu_count() or 1,
+    p.add_argument("--seed", type=SEED, default=0,
+                   help="run seed, >= 0 (%(default)s)")  # fmt: skip
+    p.add_argument("--workers", type=cli_args.int_at_least(1),
+                   default=os.cpu_count() or 1,
                    help="parallel processes (default: one per core, %(default)s here)")  # fmt: skip
-    p.add_argument("--noise", type=float, default=0.05,
-                   help="torque sensor noise per sample, N m (%(default)s)")  # fmt: skip
+    p.add_argument("--noise", type=cli_args.float_at_least(0.0), default=0.05,
+                   help="torque sensor noise per sample, N m, >= 0 (%(default)s)")  # fmt: skip
     p.add_argument("--estimator", default="ipopt", choices=("ipopt", "lstsq"),
                    help="the trial grasp's estimator: IPOPT with the side view's prior on the "
                    "CoM's distance from the rod's axis, or the closed-form least squares "
                    "(%(default)s)")  # fmt: skip
-    p.add_argument("--resume", action="store_true", help="continue the CSV in --out")
-    p.add_argument("--overwrite", action="store_true", help="start the CSV in --out again")
+    again = p.add_mutually_exclusive_group()
+    again.add_argument("--resume", action="store_true",
+                       help="continue the CSV in --out (same settings; trials and objects may "
+                       "grow)")  # fmt: skip
+    again.add_argument("--overwrite", action="store_true", help="start the CSV in --out again")
+    p.add_argument(
+        "--retry-failed",
+        action="store_true",
+        help="with --resume (implied): run again the trials that ended in an error",
+    )
     p.add_argument("--quick", action="store_true", help="a few-minute run (3 trials)")
     p.set_defaults(func=_cmd_experiment)
 
@@ -135,7 +150,9 @@ def build_parser() -> argparse.ArgumentParser:
     check = sub.add_parser(
         "check", help="render the scene from every camera and check Pinocchio against MuJoCo"
     )
-    check.add_argument("--out", default="results/check", help="output folder (%(default)s)")
+    check.add_argument(
+        "--out", type=cli_args.out_dir, default="results/check", help="output folder (%(default)s)"
+    )
     check.set_defaults(func=_cmd_check)
 
     for name, help_text in (
@@ -147,16 +164,20 @@ def build_parser() -> argparse.ArgumentParser:
 
     demo = sub.add_parser("demo", help="one episode with a video and the estimate vs the truth")
     demo.add_argument("--object", default="obj1", choices=OBJECTS)
-    demo.add_argument("--seed", type=int, default=0)
+    demo.add_argument("--seed", type=SEED, default=0)
     demo.add_argument("--method", default="regrasp", choices=("baseline", "regrasp"))
-    demo.add_argument("--out", default="results/demo", help="output folder (%(default)s)")
+    demo.add_argument(
+        "--out", type=cli_args.out_dir, default="results/demo", help="output folder (%(default)s)"
+    )
     demo.add_argument("--viewer", action="store_true", help="also show MuJoCo's viewer (display)")
     demo.set_defaults(func=_cmd_demo)
 
     views = sub.add_parser("views", help="both camera views with mask, rectangle, axis, grasp")
     views.add_argument("--object", default="obj2", choices=OBJECTS)
-    views.add_argument("--seed", type=int, default=0)
-    views.add_argument("--out", default="results/views", help="output folder (%(default)s)")
+    views.add_argument("--seed", type=SEED, default=0)
+    views.add_argument(
+        "--out", type=cli_args.out_dir, default="results/views", help="output folder (%(default)s)"
+    )
     views.set_defaults(func=_cmd_views)
 
     scene = sub.add_parser(
@@ -168,8 +189,10 @@ def build_parser() -> argparse.ArgumentParser:
         "arm's named poses.",
     )
     scene.add_argument("--object", default="obj2", choices=OBJECTS, help="the rod (%(default)s)")
-    scene.add_argument("--seed", type=int, default=0, help="scene seed: where the rod lies")
-    scene.add_argument("--out", default="results/scene", help="output folder (%(default)s)")
+    scene.add_argument("--seed", type=SEED, default=0, help="scene seed: where the rod lies")
+    scene.add_argument(
+        "--out", type=cli_args.out_dir, default="results/scene", help="output folder (%(default)s)"
+    )
     scene.set_defaults(func=_cmd_scene)
 
     from comgrasp_pin.cli_robot import add_subcommands
@@ -183,6 +206,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.func(args)
     except ComGraspError as exc:
+        print(f"comgrasp {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # a file that cannot be written (full disk, no permission)
         print(f"comgrasp {args.command}: error: {exc}", file=sys.stderr)
         return 2
 

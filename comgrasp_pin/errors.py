@@ -92,3 +92,17 @@ class NotStaticError(LogError):
 
 class CollisionError(ComGraspError):
     """The robot's collision model cannot be built, or no collision-free pose is found."""
+
+
+class ResumeError(OutputError):
+    """A run's results folder cannot be continued: other settings, another header, damaged
+    rows. The message names what differs and what to do."""
+
+
+class UnstablePhysicsError(ComGraspError):
+    """The simulation went unstable (NaN or inf state, MuJoCo's bad-acceleration warning):
+    the trial's physics, not the robot's method, failed."""
+
+
+class WorkerDiedError(ComGraspError):
+    """A worker process running a trial died (killed, crashed, out of memory)."""

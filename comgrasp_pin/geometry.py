@@ -9,7 +9,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from comgrasp_pin.errors import InvalidInputError
+from comgrasp_pin import validate
+from comgrasp_pin.errors import InvalidInputError, UnobservableError
 
 
 @dataclass(frozen=True)
@@ -37,6 +38,8 @@ def check_transform(T: np.ndarray, name: str = "T", atol: float = 1e-6) -> np.nd
     if not np.all(np.isfinite(T)):
         raise InvalidInputError(f"{name} contains NaN or inf")
     R = T[:3, :3]
+    if np.abs(R).max() > 1.0 + atol:  # no entry of a rotation exceeds 1 (and R^T R overflows)
+        raise InvalidInputError(f"{name}[:3, :3] is not a rotation matrix")
     if not np.allclose(R.T @ R, np.eye(3), atol=atol) or np.linalg.det(R) < 0:
         raise InvalidInputError(f"{name}[:3, :3] is not a rotation matrix")
     if not np.allclose(T[3], [0.0, 0.0, 0.0, 1.0], atol=atol):
@@ -45,7 +48,8 @@ def check_transform(T: np.ndarray, name: str = "T", atol: float = 1e-6) -> np.nd
 
 
 def invert_transform(T_a_b: np.ndarray) -> np.ndarray:
-    """T_b_a (4, 4) from T_a_b (4, 4)."""
+    """T_b_a (4, 4) from T_a_b (4, 4); InvalidInputError unless T_a_b is a rigid transform."""
+    T_a_b = check_transform(T_a_b, "T_a_b")
     R, p = T_a_b[:3, :3], T_a_b[:3, 3]
     T_b_a = np.eye(4)
     T_b_a[:3, :3] = R.T
@@ -58,8 +62,28 @@ def closest_point_on_line(
 ) -> float:
     """Parameter t of the point p_line + t d_line closest to the line p_other + s d_other.
 
-    Directions are unit (3,) vectors and must not be parallel (the caller checks).
+    Points and directions are (3,) vectors, the directions of unit length.
+
+    Raises:
+        InvalidInputError: a vector of the wrong shape, not finite, or a direction that is
+            not of unit length. UnobservableError: the lines are parallel (no single point).
     """
+    p_line, p_other = (validate.finite_array(v, n, (3,)) for v, n in
+                       ((p_line, "p_line"), (p_other, "p_other")))  # fmt: skip
+    d_line, d_other = (_unit(v, n) for v, n in ((d_line, "d_line"), (d_other, "d_other")))
     w = p_line - p_other
     b = d_line @ d_other
+    if not 1.0 - b * b > PARALLEL_TOL:
+        raise UnobservableError("the two lines are parallel: no single closest point")
     return float((b * (d_other @ w) - d_line @ w) / (1.0 - b * b))
+
+
+PARALLEL_TOL = 1e-12
+"""Lines whose directions have 1 - cos^2 below this count as parallel."""
+
+
+def _unit(value: object, name: str) -> np.ndarray:
+    v = validate.finite_array(value, name, (3,))
+    if abs(float(np.linalg.norm(v)) - 1.0) > 1e-6:
+        raise InvalidInputError(f"{name} must be a unit vector, got {v} (norm {np.linalg.norm(v)})")
+    return v

@@ -37,15 +37,18 @@ class RobotModel:
     """
 
     def __init__(self, full_model: pin.Model, ee_frame: str, urdf_path: Path | None = None):
-        if not full_model.existFrame(ee_frame):
-            names = sorted({f.name for f in full_model.frames})
-            raise InvalidInputError(f"frame {ee_frame!r} is not in the model; frames are: {names}")
+        _check_frame(full_model, ee_frame, "ee_frame")
         self.full_model = full_model
         self.ee_frame = ee_frame
         self.urdf_path = urdf_path
         self.package_dirs: list[str] = []  # where package:// mesh URIs resolve
 
         chain = _chain_to_frame(full_model, full_model.getFrameId(ee_frame))
+        if not chain:
+            raise InvalidInputError(
+                f"no joint moves the frame {ee_frame!r} (it is fixed to the root): the ee "
+                "frame must sit at the end of a chain of 1-DoF joints, e.g. a tool frame"
+            )
         for jid in chain:
             joint = full_model.joints[jid]
             if joint.nq != 1 or joint.nv != 1:
@@ -72,12 +75,29 @@ class RobotModel:
         package_dirs: list[str | Path] | None = None,
     ) -> RobotModel:
         """Build from a URDF file. ``package_dirs`` is where ``package://`` mesh URIs resolve
-        (only collision geometry needs them; kinematics and inertia do not)."""
+        (only collision geometry needs them; kinematics and inertia do not).
+
+        Raises:
+            InvalidInputError: no such file, a folder, a file Pinocchio cannot read as a
+                URDF, an ee frame that is not in it or that no joint moves.
+        """
+        if not isinstance(urdf_path, (str, Path)):
+            raise InvalidInputError(f"urdf_path must be a path, got {urdf_path!r}")
         urdf_path = Path(urdf_path)
-        if not urdf_path.exists():
-            raise InvalidInputError(f"URDF file not found: {urdf_path}")
-        robot = cls(pin.buildModelFromUrdf(str(urdf_path)), ee_frame, urdf_path)
-        robot.package_dirs = [str(p) for p in (package_dirs or [])]
+        if not urdf_path.is_file():
+            what = "is a folder, not a file" if urdf_path.is_dir() else "not found"
+            raise InvalidInputError(f"URDF file {what}: {urdf_path}")
+        try:
+            full_model = pin.buildModelFromUrdf(str(urdf_path))
+        except (RuntimeError, ValueError, OSError) as exc:
+            raise InvalidInputError(f"cannot read {urdf_path} as a URDF: {exc}") from None
+        dirs = list(package_dirs or [])
+        if isinstance(package_dirs, (str, Path)) or not all(
+            isinstance(d, (str, Path)) for d in dirs
+        ):
+            raise InvalidInputError(f"package_dirs must be a list of folders, got {package_dirs!r}")
+        robot = cls(full_model, ee_frame, urdf_path)
+        robot.package_dirs = [str(p) for p in dirs]
         return robot
 
     @classmethod
@@ -94,7 +114,10 @@ class RobotModel:
 
     def check_q(self, q: np.ndarray) -> np.ndarray:
         """``q`` as a float (n,) array; ValueError for a wrong shape or non-finite values."""
-        q = np.asarray(q, dtype=float)
+        try:
+            q = np.asarray(q, dtype=float)
+        except (TypeError, ValueError):
+            raise InvalidInputError(f"q must be {self.nq} numbers, got {q!r}") from None
         if q.shape != (self.nq,):
             raise InvalidInputError(f"q must have shape ({self.nq},), got {q.shape}")
         if not np.all(np.isfinite(q)):
@@ -141,9 +164,7 @@ class RobotModel:
 
     def frame_pose(self, q: np.ndarray, frame: str) -> np.ndarray:
         """(4, 4) T_world_frame of any frame of the model, e.g. ``"side_camera"``."""
-        if not self.model.existFrame(frame):
-            names = sorted({f.name for f in self.model.frames})
-            raise InvalidInputError(f"frame {frame!r} is not in the model; frames are: {names}")
+        _check_frame(self.model, frame, "frame")
         q = self.check_q(q)
         fid = self.model.getFrameId(frame)
         pin.forwardKinematics(self.model, self.data, q)
@@ -154,6 +175,15 @@ class RobotModel:
         lo = np.maximum(self.q_lower, -np.pi)
         hi = np.minimum(self.q_upper, np.pi)
         return rng.uniform(lo, hi)
+
+
+def _check_frame(model: pin.Model, frame: object, name: str) -> None:
+    """InvalidInputError unless ``frame`` names a frame of ``model`` (the valid names listed)."""
+    if not isinstance(frame, str) or not model.existFrame(frame):
+        names = sorted({f.name for f in model.frames})
+        raise InvalidInputError(
+            f"{name} {frame!r} is not a frame of the model; frames are: {names}"
+        )
 
 
 def _chain_to_frame(model: pin.Model, frame_id: int) -> list[int]:

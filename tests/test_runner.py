@@ -2,6 +2,7 @@
 
 import pytest
 
+from comgrasp_pin.errors import ResumeError
 from comgrasp_pin.experiments.runner import read_rows, run_trials
 
 
@@ -31,7 +32,7 @@ def test_failures_are_recorded_and_the_run_goes_on(tmp_path):
 def test_resume_runs_only_missing_trials(tmp_path):
     path = tmp_path / "out.csv"
     run_trials(_square, _tasks(3), path, COLUMNS)
-    with pytest.raises(FileExistsError):
+    with pytest.raises(ResumeError, match="already holds"):
         run_trials(_square, _tasks(5), path, COLUMNS)
     calls = []
 

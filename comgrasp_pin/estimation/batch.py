@@ -15,9 +15,14 @@ import numpy as np
 import pinocchio as pin
 
 from comgrasp_pin.errors import EmptyGripperError, InvalidInputError, UnobservableError
-from comgrasp_pin.estimation.estimate import MASS_SIGMAS, MIN_MASS_KG
+from comgrasp_pin.estimation.estimate import (
+    MASS_SIGMAS,
+    MIN_MASS_KG,
+    check_finite_result,
+    singular_is_unobservable,
+)
 from comgrasp_pin.estimation.estimator import RCOND
-from comgrasp_pin.estimation.inputs import validate_inputs
+from comgrasp_pin.estimation.inputs import check_rcond, validate_inputs
 from comgrasp_pin.estimation.regressor import G0, one_pose_basis
 from comgrasp_pin.robot import RobotModel
 
@@ -50,6 +55,7 @@ class ComEstimateBatch:
         return len(self.mass)
 
 
+@singular_is_unobservable()
 def estimate_com_batch(
     robot: RobotModel,
     q: np.ndarray,
@@ -72,6 +78,7 @@ def estimate_com_batch(
     Raises:
         ComGraspError subclasses (ValueError) naming the offending grasps.
     """
+    rcond = check_rcond(rcond)
     if np.ndim(q) != 2:
         raise InvalidInputError(f"q must be (N, {robot.nq}) for a batch, got {np.shape(q)}")
     Q, dtau, sigma = validate_inputs(robot, q, tau_before, tau_after, torque_std)
@@ -119,12 +126,14 @@ def estimate_com_batch(
         G[:, 1:, 1:] = np.eye(3) / mass[:, None, None]
         cov = G @ cov_theta @ G.transpose(0, 2, 1)
     residuals = dtau - G0 * np.einsum("ki,kin->kn", w, A)
+    rms = np.sqrt(np.mean(residuals**2, axis=1))
+    check_finite_result(mass=mass, com_ee=com_ee, cov=cov, residual_rms=rms)
     return ComEstimateBatch(
         com_ee=com_ee,
         mass=mass,
         weight=mass * G0,
         unobservable_ee=-R[:, 2],
         cov=cov,
-        residual_rms=np.sqrt(np.mean(residuals**2, axis=1)),
+        residual_rms=rms,
         condition_number=np.sqrt(lam[:, 2] / lam[:, 0]),
     )

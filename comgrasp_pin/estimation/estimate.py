@@ -7,12 +7,14 @@ theta = (m, m c_ee) (kg, kg m) is what the linear least squares delivers; the re
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import overload
 
 import numpy as np
 
-from comgrasp_pin.errors import EmptyGripperError, UnobservableError
+from comgrasp_pin.errors import EmptyGripperError, InvalidInputError, UnobservableError
 from comgrasp_pin.estimation.regressor import G0
 
 MIN_MASS_KG = 1e-3
@@ -105,11 +107,37 @@ def delta_method(theta: np.ndarray, cov_theta: np.ndarray) -> np.ndarray:
     m = theta[0]
     G = np.zeros((4, 4))
     G[0, 0] = 1.0
-    with np.errstate(divide="ignore", invalid="ignore"):  # m = 0: refused later
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # m ~ 0: refused later
         com = theta[1:] / m
         G[1:, 0] = -com / m
         G[1:, 1:] = np.eye(3) / m
-    return G @ cov_theta @ G.T
+        return G @ cov_theta @ G.T
+
+
+@contextmanager
+def singular_is_unobservable() -> Iterator[None]:
+    """Turn NumPy's LinAlgError (a singular matrix) into UnobservableError; a decorator too."""
+    try:
+        yield
+    except np.linalg.LinAlgError as exc:
+        raise UnobservableError(
+            f"the regression is numerically singular ({exc}): the poses do not determine the "
+            "estimate (a larger rcond refuses such pose sets up front)"
+        ) from None
+
+
+def check_finite_result(**values: float | np.ndarray | None) -> None:
+    """InvalidInputError naming the results that are NaN or inf (None is fine).
+
+    An estimate never carries a NaN or an infinity: the readings behind one are out of any
+    arm's range, or the problem is degenerate beyond what the solver can report.
+    """
+    bad = [k for k, v in values.items() if v is not None and not np.all(np.isfinite(v))]
+    if bad:
+        raise InvalidInputError(
+            f"the estimate's {', '.join(bad)} would not be finite: the torque readings are "
+            "out of range for this arm, or the poses are degenerate"
+        )
 
 
 def assemble_estimate(
@@ -168,6 +196,7 @@ def assemble_estimate(
             "tau_after swapped?"
         )
     rms = math.sqrt(float(residuals.ravel() @ residuals.ravel()) / residuals.size)
+    check_finite_result(mass=m, com_ee=com_ee, cov=cov, residual_rms=rms)
     return ComEstimate(
         com_ee=_readonly(np.array(com_ee, dtype=float)),
         mass=m,

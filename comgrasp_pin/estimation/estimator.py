@@ -32,7 +32,12 @@ import numpy as np
 
 from comgrasp_pin.errors import InvalidInputError, UnobservableError
 from comgrasp_pin.estimation import ipopt
-from comgrasp_pin.estimation.estimate import ComEstimate, assemble_estimate, delta_method
+from comgrasp_pin.estimation.estimate import (
+    ComEstimate,
+    assemble_estimate,
+    delta_method,
+    singular_is_unobservable,
+)
 from comgrasp_pin.estimation.inputs import check_options, validate_inputs
 from comgrasp_pin.estimation.prior import AxisPrior
 from comgrasp_pin.estimation.regressor import (
@@ -69,6 +74,7 @@ class _Reduced:
     cond: float
 
 
+@singular_is_unobservable()
 def estimate_com(
     robot: RobotModel,
     q: np.ndarray,
@@ -159,7 +165,7 @@ def _with_prior(red, b, rows_w, w_ls, loss, delta, prior: AxisPrior, k, n, noise
     nearest the prior's axis.
     """
     theta0 = red.B @ w_ls
-    m0, c0 = theta0[0], theta0[1:] / theta0[0]
+    m0, c0 = _split(theta0)  # m0 = 0: refused after the solve
     if red.u is not None:
         cos_angle = abs(float(prior.direction_ee @ red.u))
         if cos_angle > math.cos(MIN_AXIS_GRAVITY_ANGLE):

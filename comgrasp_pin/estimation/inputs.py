@@ -2,14 +2,21 @@
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
+from comgrasp_pin import validate
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.robot import RobotModel
 
 METHODS = ("lstsq", "ipopt")
+MAX_ABS_Q = 1e3
+"""Largest joint value accepted (rad or m): beyond it a reading is not a configuration."""
+MAX_ABS_TORQUE = 1e6
+"""Largest torque reading accepted (N m): no arm joint bears a million N m, and beyond it
+the least squares would overflow."""
+TORQUE_STD_RANGE = (1e-9, 1e6)
+"""Accepted torque_std (N m): no sensor is better than a nano-N m, none worse than a
+million; outside, the weights would overflow."""
 LOSSES = ("l2", "huber")
 
 
@@ -26,10 +33,7 @@ def check_options(
 
     if method not in METHODS:
         raise InvalidInputError(f"unknown method {method!r}; valid methods are {METHODS}")
-    if not isinstance(rcond, (int, float)) or isinstance(rcond, bool):
-        raise InvalidInputError(f"rcond must be a number in (0, 1), got {rcond!r}")
-    if not 0.0 < rcond < 1.0:
-        raise InvalidInputError(f"rcond must be in (0, 1), got {rcond}")
+    check_rcond(rcond)
     if loss not in LOSSES:
         raise InvalidInputError(f"unknown loss {loss!r}; valid losses are {LOSSES}")
     if loss == "huber" and torque_std is None:
@@ -37,9 +41,7 @@ def check_options(
             "loss='huber' needs torque_std: its threshold huber_delta is counted in standard "
             "deviations of a torque difference"
         )
-    if not (isinstance(huber_delta, (int, float)) and math.isfinite(huber_delta)
-            and huber_delta > 0):  # fmt: skip
-        raise InvalidInputError(f"huber_delta must be finite and > 0, got {huber_delta!r}")
+    validate.number(huber_delta, "huber_delta", low=0.0, low_open=True)
     if com_prior is not None and not isinstance(com_prior, AxisPrior):
         raise InvalidInputError(f"com_prior must be an AxisPrior or None, got {com_prior!r}")
     if method == "lstsq" and (loss != "l2" or com_prior is not None):
@@ -47,6 +49,11 @@ def check_options(
             "a robust loss or a com_prior needs method='ipopt' (lstsq is the closed form of "
             "the plain least squares)"
         )
+
+
+def check_rcond(rcond: object) -> float:
+    """``rcond`` as a float in (0, 1); InvalidInputError otherwise."""
+    return validate.number(rcond, "rcond", low=0.0, high=1.0, low_open=True, high_open=True)
 
 
 def validate_inputs(
@@ -57,13 +64,10 @@ def validate_inputs(
     torque_std: float | np.ndarray | None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """(Q (k, n), dtau (k, n), sigma (n,) or None) from the raw inputs, or a clear error."""
+    if not isinstance(robot, RobotModel):
+        raise InvalidInputError(f"robot must be a RobotModel, got {type(robot).__name__}")
     n = robot.nq
-    arrays = {}
-    for name, value in (("q", q), ("tau_before", tau_before), ("tau_after", tau_after)):
-        try:
-            arrays[name] = np.asarray(value, dtype=float)
-        except (TypeError, ValueError) as exc:
-            raise InvalidInputError(f"{name} is not a numeric array: {exc}") from None
+    arrays = _numeric(q=q, tau_before=tau_before, tau_after=tau_after)
     shape = arrays["q"].shape
     if arrays["q"].ndim not in (1, 2) or shape[-1] != n or (len(shape) == 2 and shape[0] < 1):
         raise InvalidInputError(
@@ -73,22 +77,51 @@ def validate_inputs(
     for name, a in arrays.items():
         if a.shape != shape:
             raise InvalidInputError(f"{name} has shape {a.shape} but q has shape {shape}")
-        bad = ~np.isfinite(a)
-        if bad.any():
-            where = np.argwhere(bad.reshape(-1, n)).tolist()
-            raise InvalidInputError(f"{name} contains NaN or inf at (pose, joint) {where}")
-    sigma = None
-    if torque_std is not None:
-        try:
-            sigma = np.broadcast_to(np.asarray(torque_std, dtype=float), (n,)).copy()
-        except (TypeError, ValueError):
-            raise InvalidInputError(
-                f"torque_std must be a scalar or shape ({n},), got {np.shape(torque_std)}"
-            ) from None
-        if not np.all(np.isfinite(sigma) & (sigma > 0)):
-            raise InvalidInputError(f"torque_std must be finite and > 0, got {torque_std}")
+        _check_values(name, a.reshape(-1, n), MAX_ABS_Q if name == "q" else MAX_ABS_TORQUE)
     Q = arrays["q"].reshape(-1, n)
     dtau = (arrays["tau_after"] - arrays["tau_before"]).reshape(-1, n)
-    if not np.all(np.isfinite(dtau)):
-        raise InvalidInputError("tau_after - tau_before overflows (values too large)")
-    return Q, dtau, sigma
+    return Q, dtau, _torque_std(torque_std, n)
+
+
+def _numeric(**values: object) -> dict[str, np.ndarray]:
+    arrays = {}
+    for name, value in values.items():
+        try:
+            arrays[name] = np.asarray(value, dtype=float)
+        except (TypeError, ValueError) as exc:
+            raise InvalidInputError(f"{name} is not a numeric array: {exc}") from None
+    return arrays
+
+
+def _check_values(name: str, a: np.ndarray, limit: float) -> None:
+    """InvalidInputError naming the (pose, joint) entries of ``a`` (k, n) out of range.
+
+    Out of range: NaN, inf or beyond +-limit.
+    """
+    bad = ~np.isfinite(a)
+    if bad.any():
+        where = np.argwhere(bad).tolist()
+        raise InvalidInputError(f"{name} contains NaN or inf at (pose, joint) {where}")
+    big = np.abs(a) > limit
+    if big.any():
+        where = np.argwhere(big).tolist()
+        raise InvalidInputError(
+            f"{name} is beyond +-{limit:g} (no arm's reading) at (pose, joint) {where}"
+        )
+
+
+def _torque_std(torque_std: float | np.ndarray | None, n: int) -> np.ndarray | None:
+    if torque_std is None:
+        return None
+    try:
+        sigma = np.broadcast_to(np.asarray(torque_std, dtype=float), (n,)).copy()
+    except (TypeError, ValueError):
+        raise InvalidInputError(
+            f"torque_std must be a scalar or shape ({n},), got {np.shape(torque_std)}"
+        ) from None
+    low, high = TORQUE_STD_RANGE
+    if not np.all(np.isfinite(sigma) & (sigma >= low) & (sigma <= high)):
+        raise InvalidInputError(
+            f"torque_std must be finite and within [{low:g}, {high:g}] N m, got {torque_std}"
+        )
+    return sigma

@@ -14,12 +14,15 @@ import itertools
 
 import numpy as np
 
+from comgrasp_pin import validate
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.estimation.regressor import pose_regressor
 from comgrasp_pin.robot import RobotModel
 
 N_WRIST = 3
 """The wrist joints are the last N_WRIST joints of the arm."""
+MAX_GRID = 21
+"""Largest ``n_grid``: the candidates are n_grid ** 3 wrist poses (9261 at most)."""
 
 
 def plan_wrist_poses(
@@ -38,21 +41,27 @@ def plan_wrist_poses(
     Args:
         robot: the arm (n >= 3 joints).
         q: (n,) measurement configuration (rad / m), returned as row 0.
-        k: number of poses wanted (k >= 1).
-        max_offset: largest change of a wrist joint from q (rad).
-        n_grid: grid points per wrist joint in [-max_offset, max_offset].
-        margin: distance kept from the joint limits (rad).
+        k: number of poses wanted (an integer >= 1).
+        max_offset: largest change of a wrist joint from q (rad, finite, > 0).
+        n_grid: grid points per wrist joint in [-max_offset, max_offset] (2 ... MAX_GRID).
+        margin: distance kept from the joint limits (rad, finite, >= 0).
 
     Returns:
         (k, n) configurations; only the last three joints differ from ``q``.
+
+    Raises:
+        InvalidInputError: an argument of the wrong type, shape or range, or too few
+            distinct wrist poses within the limits.
     """
+    if not isinstance(robot, RobotModel):
+        raise InvalidInputError(f"robot must be a RobotModel, got {type(robot).__name__}")
     q = robot.check_q(q)
-    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
-        raise InvalidInputError(f"k must be an integer >= 1, got {k!r}")
+    k = validate.integer(k, "k", low=1)
     if robot.nq < N_WRIST:
         raise InvalidInputError(f"the robot has {robot.nq} joints; a wrist needs {N_WRIST}")
-    if not (max_offset > 0 and np.isfinite(max_offset)) or n_grid < 2:
-        raise InvalidInputError(f"need max_offset > 0 and n_grid >= 2, got {max_offset}, {n_grid}")
+    max_offset = validate.number(max_offset, "max_offset (rad)", low=0.0, low_open=True)
+    n_grid = validate.integer(n_grid, "n_grid", low=2, high=MAX_GRID)
+    margin = validate.number(margin, "margin (rad)", low=0.0)
     if k == 1:
         return q[None].copy()
     candidates = _wrist_candidates(robot, q, max_offset, n_grid, margin)

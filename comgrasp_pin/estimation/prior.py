@@ -17,6 +17,9 @@ import numpy as np
 
 from comgrasp_pin.errors import InvalidInputError
 
+MAX_DISTANCE_M = 1e3
+"""Largest accepted distance (m) of the prior's point from the ee, and largest std."""
+
 
 @dataclass(frozen=True)
 class AxisPrior:
@@ -27,7 +30,7 @@ class AxisPrior:
         direction_ee: (3,) the axis direction in the ee frame; any non-zero length (stored
             as a unit vector).
         std: standard deviation of the CoM's distance from the line in each of the two
-            directions across it (m), > 0.
+            directions across it (m), > 0 and <= MAX_DISTANCE_M.
 
     Raises:
         InvalidInputError: a point or direction of the wrong shape or not finite, a zero
@@ -41,7 +44,11 @@ class AxisPrior:
     def __post_init__(self) -> None:
         point = _vector3(self.point_ee, "point_ee")
         direction = _vector3(self.direction_ee, "direction_ee")
-        norm = float(np.linalg.norm(direction))
+        with np.errstate(over="ignore"):
+            norm = float(np.linalg.norm(direction))
+        if not np.isfinite(norm):  # entries near the float range: scale first
+            direction = direction / np.max(np.abs(direction))
+            norm = float(np.linalg.norm(direction))
         if not norm > 1e-12:
             raise InvalidInputError(
                 f"AxisPrior direction_ee must be a non-zero vector, got {direction}"
@@ -50,8 +57,10 @@ class AxisPrior:
             std = float(self.std)
         except (TypeError, ValueError):
             raise InvalidInputError(f"AxisPrior std must be a number, got {self.std!r}") from None
-        if not (np.isfinite(std) and std > 0.0):
-            raise InvalidInputError(f"AxisPrior std must be finite and > 0 (m), got {std}")
+        if not (np.isfinite(std) and 0.0 < std <= MAX_DISTANCE_M):
+            raise InvalidInputError(
+                f"AxisPrior std must be > 0 and <= {MAX_DISTANCE_M:g} (m), got {std}"
+            )
         point.flags.writeable = False
         unit = direction / norm
         unit.flags.writeable = False
@@ -86,4 +95,8 @@ def _vector3(value, name: str) -> np.ndarray:
         raise InvalidInputError(f"AxisPrior {name} must have shape (3,), got {v.shape}")
     if not np.all(np.isfinite(v)):
         raise InvalidInputError(f"AxisPrior {name} must be finite, got {v}")
+    if name == "point_ee" and np.abs(v).max() > MAX_DISTANCE_M:
+        raise InvalidInputError(
+            f"AxisPrior point_ee must lie within {MAX_DISTANCE_M:g} m of the ee, got {v}"
+        )
     return v

@@ -10,7 +10,8 @@ from typing import cast
 
 import numpy as np
 
-from comgrasp_pin.errors import UnobservableError
+from comgrasp_pin import validate
+from comgrasp_pin.errors import InvalidInputError, UnobservableError
 from comgrasp_pin.estimation.estimate import ComEstimate
 from comgrasp_pin.geometry import check_transform, closest_point_on_line
 
@@ -38,15 +39,20 @@ def com_along_axis(
         min_angle: smallest accepted angle (rad) between rod axis and gravity (one pose).
 
     Raises:
-        InvalidInputError for a bad transform; UnobservableError when the rod axis is
-        within ``min_angle`` of gravity (the vertical CoM line then does not fix a point).
+        InvalidInputError for a bad transform, an ``est`` that is not a ComEstimate or a
+        ``min_angle`` outside (0, pi/2]; UnobservableError when the rod axis is within
+        ``min_angle`` of gravity (the vertical CoM line then does not fix a point).
     """
+    if not (hasattr(est, "com_ee") and hasattr(est, "unobservable_ee")):
+        raise InvalidInputError(f"est must be a ComEstimate, got {type(est).__name__}")
+    com_ee = validate.finite_array(est.com_ee, "est.com_ee (m)", (3,))
+    min_angle = validate.number(min_angle, "min_angle (rad)", low=0.0, high=np.pi / 2,
+                                low_open=True)  # fmt: skip
     T_ee_obj = check_transform(T_ee_obj, "T_ee_obj")
     origin_ee, axis_ee = T_ee_obj[:3, 3], T_ee_obj[:3, 0]
-    com_ee = np.asarray(est.com_ee, dtype=float)
     if est.unobservable_ee is None:
         return float(axis_ee @ (com_ee - origin_ee))
-    down_ee = np.asarray(est.unobservable_ee, dtype=float)
+    down_ee = validate.finite_array(est.unobservable_ee, "est.unobservable_ee", (3,))
     sin_angle = cast(float, np.linalg.norm(np.cross(axis_ee, down_ee)))
     if sin_angle < np.sin(min_angle):
         angle = np.degrees(np.arcsin(min(sin_angle, 1.0)))

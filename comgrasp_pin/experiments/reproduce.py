@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
 
+from comgrasp_pin import __version__
 from comgrasp_pin.experiments import report
 from comgrasp_pin.experiments.runner import run_trials
 from comgrasp_pin.experiments.trials import (
@@ -34,7 +35,8 @@ class RunOptions:
         seed: the run's seed. workers: parallel processes. resume: continue the CSVs in
         ``out``. overwrite: start them again. noise: torque sensor noise (N m per sample).
         estimator: the trial grasp's estimator, "ipopt" (with the side view's axis prior)
-        or "lstsq" (closed form).
+        or "lstsq" (closed form). retry_failed: with ``resume``, run again the trials
+        that ended in an error.
     """
 
     out: Path
@@ -46,6 +48,20 @@ class RunOptions:
     overwrite: bool = False
     noise: float = 0.05
     estimator: str = "ipopt"
+    retry_failed: bool = False
+
+
+def run_settings(opts: RunOptions) -> dict:
+    """Every setting of a run, recorded beside its CSV (``NAME.settings.json``)."""
+    return {
+        "seed": opts.seed,
+        "noise": opts.noise,
+        "estimator": opts.estimator,
+        "config": settings_summary(opts.noise, opts.estimator),
+        "version": __version__,
+        "objects": list(opts.objects),
+        "trials": opts.trials,
+    }
 
 
 def _run(opts: RunOptions, fn, methods, name: str, columns) -> list[dict]:
@@ -53,8 +69,8 @@ def _run(opts: RunOptions, fn, methods, name: str, columns) -> list[dict]:
     for task in tasks:
         task["noise"] = opts.noise
         task["estimator"] = opts.estimator
-    return run_trials(fn, tasks, opts.out / f"{name}.csv", columns, opts.workers,
-                      opts.resume, opts.overwrite, desc=name)  # fmt: skip
+    return run_trials(fn, tasks, opts.out / f"{name}.csv", columns, opts.workers, opts.resume,
+                      opts.overwrite, name, opts.retry_failed, run_settings(opts))  # fmt: skip
 
 
 def run_accuracy(opts: RunOptions) -> list[dict]:

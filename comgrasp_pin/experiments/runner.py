@@ -1,9 +1,14 @@
-"""Running many independent trials that survive failures and interruptions.
+"""Running many independent trials that survive failures, interruptions and crashes.
 
-Every finished trial is appended to the CSV at once (and flushed), so an interrupted run
-loses nothing and ``resume=True`` continues where it stopped. A trial that raises is
-recorded with its error and does not stop the run. ``workers > 1`` runs trials in separate
-processes (spawned, so each has its own MuJoCo and OpenGL context).
+Every finished trial is appended to the CSV at once, whole (``run_files.RowAppender``), so an
+interrupted run loses nothing and ``resume=True`` continues where it stopped; the run's
+settings are kept beside the CSV and a resumed run must match them. A trial that raises is
+recorded with its error and does not stop the run; ``retry_failed=True`` runs those again.
+``workers > 1`` runs trials in separate processes (spawned, so each has its own MuJoCo and
+OpenGL context); a worker that dies (killed, crashed) breaks the pool: it is restarted, the
+trials that were in flight are run again one at a time, and the one that kills its worker
+again is recorded as failed (``WorkerDiedError``). A row that cannot be written (full disk)
+stops the run with ``OutputError``; the rows before it stay intact.
 """
 
 from __future__ import annotations
@@ -11,13 +16,23 @@ from __future__ import annotations
 import csv
 import multiprocessing
 import traceback
+from collections import Counter, deque
 from collections.abc import Callable, Sequence
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
 
 from tqdm import tqdm
 
+from comgrasp_pin.errors import InvalidInputError, ResumeError, WorkerDiedError
+from comgrasp_pin.experiments import run_files
+from comgrasp_pin.experiments.run_files import RowAppender
+
 KEY_COLUMNS = ("object", "trial", "method")
+WORKER_DIED = (
+    "the worker process running this trial died (killed, crashed or out of memory); the run "
+    "went on without it: run it again with --resume --retry-failed"
+)
 
 
 def task_key(row: dict) -> tuple[str, ...]:
@@ -26,19 +41,49 @@ def task_key(row: dict) -> tuple[str, ...]:
 
 
 def read_rows(csv_path: Path) -> list[dict]:
-    """All rows of a results CSV (empty when the file does not exist)."""
+    """All rows of a results CSV (empty when the file does not exist), its own header."""
     if not csv_path.exists():
         return []
     with csv_path.open(newline="") as f:
         return list(csv.DictReader(f))
 
 
+def _error_row(task: dict, exc: BaseException) -> dict:
+    last = traceback.format_exception_only(type(exc), exc)[-1].strip()
+    return {**task, "error": last}
+
+
 def _safe_call(fn: Callable[[dict], dict], task: dict) -> dict:
     try:
         return {**task, **fn(task), "error": ""}
     except Exception as exc:  # a failed trial is data, not the end of the run
-        last = traceback.format_exception_only(type(exc), exc)[-1].strip()
-        return {**task, "error": last}
+        return _error_row(task, exc)
+
+
+def _kept_rows(csv_path: Path, columns: list[str], resume: bool, overwrite: bool,
+               retry_failed: bool, settings: dict | None) -> list[dict]:  # fmt: skip
+    """The rows of an earlier run to keep; the CSV and its settings made ready to append."""
+    fresh = overwrite or not csv_path.exists() or csv_path.stat().st_size == 0
+    if fresh:
+        rows, rewrite = [], True
+        if settings is not None:
+            run_files.write_settings(csv_path, settings)
+    elif not resume:
+        raise ResumeError(
+            f"{csv_path} already holds results: pass resume (--resume) to continue it or "
+            "overwrite (--overwrite) to start again"
+        )
+    else:
+        rows, repaired = run_files.read_results(csv_path, columns)
+        if settings is not None:
+            run_files.write_settings(csv_path, run_files.check_settings(csv_path, settings))
+        failed = [row for row in rows if row.get("error")]
+        if retry_failed:
+            rows = [row for row in rows if not row.get("error")]
+        rewrite = repaired or bool(retry_failed and failed)
+    if rewrite:
+        run_files.rewrite(csv_path, columns, rows)
+    return rows
 
 
 def run_trials(
@@ -50,41 +95,47 @@ def run_trials(
     resume: bool = False,
     overwrite: bool = False,
     desc: str = "trials",
+    retry_failed: bool = False,
+    settings: dict | None = None,
 ) -> list[dict]:
     """Run ``fn(task)`` for every task not already in ``csv_path``; return all rows.
 
     Args:
         fn: a picklable top-level function returning a dict of result columns.
-        tasks: dicts with at least the KEY_COLUMNS; their items are copied into the row.
+        tasks: dicts with at least the KEY_COLUMNS, each key once; their items are copied
+            into the row.
         csv_path: results file; rows are appended as trials finish.
         columns: the CSV header (an ``error`` column is added).
+        workers: processes (1: in this process).
         resume: keep the rows already in ``csv_path`` and run only the missing tasks.
         overwrite: start a new file even if one exists.
+        retry_failed: with ``resume``, run again the tasks whose rows hold an error.
+        settings: every setting of the run, recorded beside the CSV; with ``resume`` the
+            recorded ones must match (``run_files.check_settings``).
+
+    Raises:
+        ResumeError: the CSV cannot be continued (see ``run_files``).
+        OutputError: a row cannot be written; the run stopped, earlier rows intact.
     """
     columns = [*columns, "error"] if "error" not in columns else list(columns)
-    existing = read_rows(csv_path)
-    if existing and not (resume or overwrite):
-        raise FileExistsError(
-            f"{csv_path} already holds {len(existing)} trials: pass resume to continue it "
-            "or overwrite to start again"
-        )
-    if overwrite or not resume:
-        existing = []
-    done = {task_key(row) for row in existing}
+    repeated = sorted(k for k, n in Counter(task_key(t) for t in tasks).items() if n > 1)
+    if repeated:
+        raise InvalidInputError(f"tasks {repeated[:5]} are listed more than once")
+    with run_files.run_lock(Path(csv_path)):
+        rows = _kept_rows(Path(csv_path), columns, resume, overwrite, retry_failed, settings)
+        return _run_missing(fn, tasks, rows, Path(csv_path), columns, workers, desc)
+
+
+def _run_missing(fn, tasks, rows: list[dict], csv_path: Path, columns: list[str],
+                 workers: int, desc: str) -> list[dict]:  # fmt: skip
+    """Run the tasks that have no row in ``rows`` yet, appending theirs; all rows."""
+    done = {task_key(row) for row in rows}
     todo = [task for task in tasks if task_key(task) not in done]
-    csv_path.parent.mkdir(parents=True, exist_ok=True)
-    new_file = not existing
-    with csv_path.open("w" if new_file else "a", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=columns, extrasaction="ignore")
-        if new_file:
-            writer.writeheader()
-            f.flush()
-        rows = list(existing)
-        bar = tqdm(total=len(tasks), initial=len(tasks) - len(todo), desc=desc, unit="trial")
+    bar = tqdm(total=len(tasks), initial=len(tasks) - len(todo), desc=desc, unit="trial")
+    with RowAppender(csv_path, columns) as out:
 
         def record(row: dict) -> None:
-            writer.writerow(row)
-            f.flush()
+            out.write(row)
             rows.append(row)
             bar.update(1)
             if row.get("error"):
@@ -101,16 +152,38 @@ def run_trials(
     return rows
 
 
-def _run_parallel(fn, todo, workers, record) -> None:
-    context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-        pending = {pool.submit(_safe_call, fn, task) for task in todo}
-        try:
-            while pending:
-                finished, pending = wait(pending, return_when=FIRST_COMPLETED)
-                for future in finished:
-                    record(future.result())
-        except BaseException:
-            for future in pending:
-                future.cancel()
-            raise
+def _run_parallel(fn, todo, workers: int, record) -> None:
+    """All of ``todo`` on ``workers`` processes, a pool restarted whenever a worker dies."""
+    queue = deque(todo)
+    while queue:
+        for task in _run_pool(fn, queue, workers, record):
+            _run_pool(fn, deque([task]), 1, record)  # alone: a second death is its own
+
+
+def _run_pool(fn, queue: deque, workers: int, record) -> list[dict]:
+    """Run tasks from ``queue`` (at most ``workers`` at a time) until it is empty or a
+    worker dies; return the tasks in flight when it died (none otherwise). A task that
+    kills the only worker of a one-worker pool is recorded as failed."""
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+    running: dict[Future, dict] = {}
+    try:
+        while queue or running:
+            while queue and len(running) < workers:
+                try:
+                    future = pool.submit(_safe_call, fn, queue[0])
+                except BrokenProcessPool:
+                    return list(running.values())
+                running[future] = queue.popleft()
+            finished, _ = wait(running, return_when=FIRST_COMPLETED)
+            died = [running[f] for f in finished if isinstance(f.exception(), BrokenProcessPool)]
+            for future in finished:
+                task, exc = running.pop(future), future.exception()
+                if not isinstance(exc, BrokenProcessPool):
+                    record(_error_row(task, exc) if exc is not None else future.result())
+            if died and workers == 1:
+                record(_error_row(died[0], WorkerDiedError(WORKER_DIED)))
+            elif died:
+                return died + list(running.values())
+        return []
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)

@@ -10,6 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from comgrasp_pin.errors import InvalidInputError
+
 THETA_BINS_DEG = (0.0, 2.5, 5.0, 7.5, 10.0, 12.5, 15.0, 20.0, 25.0, 30.0, 45.0, 60.0, 90.0)
 """|θ| bins of the accuracy table and figure (deg): fine in the paper's range (0-30)."""
 CALIBRATION_BINS_DEG = (0.0, 5.0, 10.0, 15.0, 20.0, 25.0, 30.0, 60.0, 90.0)
@@ -109,7 +111,7 @@ def t_quantile(p: float, df: float) -> float:
     """The ``p`` quantile of Student's t with ``df`` > 0 degrees of freedom (bisection on
     ``t_cdf``, to 1e-10)."""
     if not 0.0 < p < 1.0 or df <= 0:
-        raise ValueError(f"t_quantile needs 0 < p < 1 and df > 0, got p={p}, df={df}")
+        raise InvalidInputError(f"t_quantile needs 0 < p < 1 and df > 0, got p={p}, df={df}")
     if p < 0.5:
         return -t_quantile(1.0 - p, df)
     lo, hi = 0.0, 1.0

@@ -38,6 +38,11 @@ ACCURACY_GRASP_OFFSET = 0.25  # grasp offsets from the rectangle's centre, |offs
 ACCURACY_LEVER_RANGE = (0.35, 1.0)
 
 
+MAX_TRIALS = 1000
+"""Trials per object and method at most: ``trial_seed`` keeps 3 digits for the trial index
+(more would give two objects the same seeds)."""
+
+
 def trial_seed(run_seed: int, obj: str, trial: int) -> int:
     return int(run_seed) * 100_000 + int(obj.removeprefix("obj") or 0) * 1_000 + int(trial)
 

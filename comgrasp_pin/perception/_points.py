@@ -11,8 +11,13 @@ from comgrasp_pin.errors import InvalidDepthError, ObjectCutByBorderError, Objec
 
 def check_images(rgb: np.ndarray | None, depth: np.ndarray, camera: PinholeCamera) -> np.ndarray:
     """``depth`` as float (H, W) metric z-depth; InvalidDepthError if unusable."""
+    if not isinstance(camera, PinholeCamera):
+        raise InvalidDepthError(f"camera must be a PinholeCamera, got {type(camera).__name__}")
     shape = (camera.height, camera.width)
-    depth = np.asarray(depth, dtype=float)
+    try:
+        depth = np.asarray(depth, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidDepthError("the depth image is not a numeric array") from None
     if depth.shape != shape:
         raise InvalidDepthError(f"depth image has shape {depth.shape}, the camera is {shape}")
     if rgb is not None and np.asarray(rgb).shape[:2] != shape:

@@ -16,8 +16,10 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from comgrasp_pin import validate
 from comgrasp_pin.camera import PinholeCamera
 from comgrasp_pin.errors import ObjectNotFoundError
+from comgrasp_pin.geometry import check_transform
 from comgrasp_pin.perception._points import blobs, check_images, points_in
 from comgrasp_pin.perception.rod_axis import centre_line, refine_axis
 from comgrasp_pin.perception.rod_ends import centre_along, end_profile
@@ -132,8 +134,18 @@ def observe_held_rod(
             fingers' joint reading; fixes the radius of the fitted cylinder.
 
     Raises:
-        ObjectNotFoundError, ObjectCutByBorderError, InvalidDepthError.
+        ObjectNotFoundError, ObjectCutByBorderError, InvalidDepthError; InvalidInputError for
+        a transform that is not a (4, 4) rigid one, or a length, radius, hint or table
+        height that is not finite (or, for length and radius, not positive).
     """
+    T_ee_cam = check_transform(T_ee_cam, "T_ee_cam")
+    if T_world_ee is not None:
+        T_world_ee = check_transform(T_world_ee, "T_world_ee")
+    table_z = validate.optional_number(table_z, "table_z (m)")
+    rod_length = validate.optional_number(rod_length, "rod_length (m)", low=0.0, low_open=True)
+    centre_hint = validate.optional_number(centre_hint, "centre_hint (m)")
+    handle_radius = validate.optional_number(handle_radius, "handle_radius (m)", low=0.0,
+                                             low_open=True)  # fmt: skip
     depth = check_images(rgb, depth, camera)
     p = points_in(T_ee_cam, depth, camera)
     finite = np.isfinite(p[..., 0])

@@ -6,11 +6,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from comgrasp_pin import validate
 from comgrasp_pin.errors import InvalidInputError
 
 SLIP_RATE_DEG_S = 2.0  # |dθ/dt| above this over the recent window: slipping
 SLIP_CHANGE_DEG = 1.0  # total change of θ since the first sample above this: slip was seen
 WINDOW_S = 0.3  # length of the recent window for the rate (s)
+MAX_TIME_S = 1e6  # sample times within +-MAX_TIME_S (s): a run is shorter than 11 days
 
 
 @dataclass(frozen=True)
@@ -46,10 +48,11 @@ class SlipMonitor:
         """Record the tilt ``theta`` (rad) at time ``t`` (s), later than every earlier sample.
 
         Raises:
-            InvalidInputError: for a non-finite tilt or a sample out of time order.
+            InvalidInputError: for a time or tilt that is not a finite number, a time beyond
+                +-MAX_TIME_S, a tilt beyond one turn (+-2 pi), or a sample out of time order.
         """
-        if not np.isfinite(theta):
-            raise InvalidInputError(f"tilt must be finite, got {theta}")
+        t = validate.number(t, "time t (s)", low=-MAX_TIME_S, high=MAX_TIME_S)
+        theta = validate.number(theta, "tilt theta (rad)", low=-2 * np.pi, high=2 * np.pi)
         if self.times and t <= self.times[-1]:
             raise InvalidInputError(f"samples must come in time order: {t} after {self.times[-1]}")
         self.times.append(float(t))
@@ -68,7 +71,7 @@ class SlipMonitor:
         rate = 0.0
         if recent.sum() >= 2 and np.ptp(t[recent]) > 0:
             rate = abs(np.polyfit(t[recent], th[recent], 1)[0])
-        steady = _despike(th)  # one bad frame is not slip
+        steady = _smooth(th)  # one bad frame is not slip, a steady turn is
         change = float(np.max(np.abs(steady - steady[0])))
         return SlipVerdict(rate > self.rate_deg_s, change > self.change_deg, float(rate), change,
                            float(self.thetas[-1]))  # fmt: skip
@@ -85,6 +88,28 @@ class SlipMonitor:
         if not self.times:
             raise InvalidInputError("no tilt samples yet")
         return float(np.median(self.thetas[-3:]))
+
+
+def _smooth(x: np.ndarray) -> np.ndarray:
+    """Median of three, with Tukey's end-point rule at the ends.
+
+    Each sample is replaced by the median of itself and its two neighbours; each end by the
+    median of the end sample, its smoothed neighbour and the straight line through the two
+    smoothed neighbours, carried to the end.
+
+    A single outlier anywhere vanishes; a steady turn (a straight line) is kept whole, ends
+    included, so even three samples of one tell it (``_despike`` flattens it).
+    """
+    if len(x) < 3:
+        return x
+    y = np.median(np.stack([x[:-2], x[1:-1], x[2:]]), axis=0)
+    if len(y) == 1:  # three samples: the line runs through the middle one and the far end
+        first = np.median([x[0], y[0], 2 * y[0] - x[2]])
+        last = np.median([x[-1], y[0], 2 * y[0] - x[0]])
+    else:
+        first = np.median([x[0], y[0], 2 * y[0] - y[1]])
+        last = np.median([x[-1], y[-1], 2 * y[-1] - y[-2]])
+    return np.r_[first, y, last]
 
 
 def _despike(x: np.ndarray) -> np.ndarray:

@@ -99,6 +99,8 @@ def run_episode(
     viewer (needs a display), in real time."""
     if method not in METHODS:
         raise InvalidInputError(f"method must be one of {METHODS}, got {method!r}")
+    if config is not None and not isinstance(config, EpisodeConfig):
+        raise InvalidInputError(f"config must be an EpisodeConfig, got {type(config).__name__}")
     config = config or EpisodeConfig()
     scene = Scene.sample(obj, seed, pos_real)
     world = World(scene, config, seed)

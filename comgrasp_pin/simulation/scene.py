@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from comgrasp_pin import validate
 from comgrasp_pin.config import EpisodeConfig
 from comgrasp_pin.geometry import invert_transform
 from comgrasp_pin.robot import RobotModel
@@ -44,10 +45,18 @@ class Scene:
         cls, obj: str, seed: int, pos_real: float | None = None, com_range=(0.1, 0.3)
     ) -> Scene:
         """A random pose in the pick area and, unless given, a random true CoM whose
-        distance from the centre is com_range (fractions of the length), either side."""
-        rng = np.random.default_rng(seed)
+        distance from the centre is com_range (fractions of the length), either side.
+
+        Raises:
+            InvalidInputError: an unknown object, a seed that is not an integer >= 0, a
+                ``pos_real`` that is not finite or lies outside the rod.
+        """
         spec = get_object(obj)
-        if pos_real is None:
+        rng = np.random.default_rng(validate.integer(seed, "seed", low=0))
+        if pos_real is not None:
+            half = 0.5 * spec.length
+            pos_real = validate.number(pos_real, "pos_real", low=-half, high=half)
+        else:
             pos_real = rng.choice([-1.0, 1.0]) * rng.uniform(*com_range) * spec.length
         x, y, yaw = random_table_pose(rng, spec.length)
         return cls(obj, spec.length, float(pos_real), x, y, yaw)

@@ -9,10 +9,19 @@ import mujoco
 import numpy as np
 
 from comgrasp_pin.config import TorqueSensorConfig, WorldConfig
+from comgrasp_pin.errors import UnstablePhysicsError
 from comgrasp_pin.procedures.cell import TorqueMeasurement
 from comgrasp_pin.simulation.servo import ArmServo
 from comgrasp_pin.simulation.torque_sensor import JointTorqueSensor
 from comgrasp_pin.simulation.world import ARM_JOINTS, EE_SITE, FINGER_JOINTS, build_model
+
+_W = mujoco.mjtWarning
+UNSTABLE = slice(int(_W.mjWARN_BADQPOS), int(_W.mjWARN_BADCTRL) + 1)
+"""MuJoCo's warnings of a state gone bad (mjWARN_BADQPOS, BADQVEL, BADQACC, BADCTRL): MuJoCo
+then resets the state and goes on, so a trial would go on from nonsense; they are raised."""
+assert [_W(i).name for i in range(UNSTABLE.start, UNSTABLE.stop)] == [
+    "mjWARN_BADQPOS", "mjWARN_BADQVEL", "mjWARN_BADQACC", "mjWARN_BADCTRL"
+]  # fmt: skip
 
 
 class Simulation:
@@ -60,6 +69,7 @@ class Simulation:
         mujoco.mj_forward(m, self.data)
         self.tau_measured = self.joint_torques()
         self.observers: list[Callable[[Simulation], None]] = []
+        self._unstable_counts = self.data.warning.number[UNSTABLE]  # a live view
 
     @property
     def time(self) -> float:
@@ -102,7 +112,12 @@ class Simulation:
         mujoco.mj_forward(self.model, self.data)
 
     def step(self, n: int = 1) -> None:
-        """Advance ``n`` physics steps with the servo and gripper in the loop."""
+        """Advance ``n`` physics steps with the servo and gripper in the loop.
+
+        Raises:
+            UnstablePhysicsError: the state went bad (NaN, inf or huge positions,
+                velocities, accelerations or controls; MuJoCo's ``mjWARN_BAD*`` warnings).
+        """
         m, d = self.model, self.data
         dt = m.opt.timestep
         d.ctrl[self._finger_act] = self.grip_force
@@ -114,6 +129,16 @@ class Simulation:
             self.tau_measured = read(d.sensordata[tau_adr], dt)
             for observer in observers:
                 observer(self)
+        if self._unstable_counts.any():
+            self._raise_unstable()
+
+    def _raise_unstable(self) -> None:
+        counts = self._unstable_counts
+        names = [_W(UNSTABLE.start + i).name for i in np.flatnonzero(counts)]
+        raise UnstablePhysicsError(
+            f"the simulation went unstable by t = {self.time:.3f} s ({', '.join(names)}: "
+            "NaN, inf or huge state or control; MuJoCo reset it): the trial cannot go on"
+        )
 
     @contextmanager
     def observing(self, observer: Callable[[Simulation], None]) -> Iterator[None]:

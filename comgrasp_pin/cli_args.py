@@ -1,0 +1,92 @@
+"""The command line's argument types: each option parsed and checked before anything runs.
+
+A bad value ends the command with argparse's usage message and exit status 2 (no traceback,
+nothing written). The checks themselves live in ``validate``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+from collections.abc import Callable
+from pathlib import Path
+
+from comgrasp_pin import validate
+from comgrasp_pin.errors import InvalidInputError
+
+
+def _argument_type(parse: Callable[[str], object], label: str) -> Callable[[str], object]:
+    """An argparse ``type=``: ``parse`` with InvalidInputError turned into argparse's error."""
+
+    def convert(text: str) -> object:
+        try:
+            return parse(text)
+        except InvalidInputError as exc:
+            raise argparse.ArgumentTypeError(str(exc).strip()) from None
+
+    convert.__name__ = label  # argparse names the type in "invalid <name> value"
+    return convert
+
+
+def _parse_int(text: str, low: int, high: int | None) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise InvalidInputError(f"must be an integer, got {text!r}") from None
+    return validate.integer(value, "", low=low, high=high)
+
+
+def _parse_float(text: str, low: float) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise InvalidInputError(f"must be a number, got {text!r}") from None
+    return validate.number(value, "", low=low)
+
+
+def int_at_least(low: int, high: int | None = None) -> Callable[[str], object]:
+    """An integer option >= ``low`` (and <= ``high`` if given)."""
+    return _argument_type(lambda text: _parse_int(text, low, high), "integer")
+
+
+def float_at_least(low: float) -> Callable[[str], object]:
+    """A finite number option >= ``low``."""
+    return _argument_type(lambda text: _parse_float(text, low), "number")
+
+
+def _parse_names(text: str, valid: tuple[str, ...]) -> tuple[str, ...]:
+    names = tuple(part.strip() for part in text.split(","))
+    if not text.strip() or not all(names):
+        raise InvalidInputError(f"needs comma-separated names from {', '.join(valid)}"
+                                f", got {text!r}")  # fmt: skip
+    unknown = [n for n in names if n not in valid]
+    if unknown:
+        raise InvalidInputError(f"unknown object(s) {unknown}; objects are {', '.join(valid)}")
+    repeated = sorted({n for n in names if names.count(n) > 1})
+    if repeated:
+        raise InvalidInputError(f"object(s) {repeated} are listed more than once")
+    return names
+
+
+def object_list(valid: tuple[str, ...]) -> Callable[[str], object]:
+    """A comma-separated list of distinct names from ``valid``."""
+    return _argument_type(lambda text: _parse_names(text, valid), "object list")
+
+
+def _parse_out_dir(text: str) -> Path:
+    path = Path(text)
+    if not text.strip():
+        raise InvalidInputError("must name a folder, got an empty path")
+    for part in (path, *path.parents):
+        if part.exists() and not part.is_dir():
+            raise InvalidInputError(f"{part} exists and is not a folder")
+        if part.exists():
+            if not os.access(part, os.W_OK | os.X_OK):
+                raise InvalidInputError(f"{part} is not a writable folder")
+            break
+    return path
+
+
+out_dir = _argument_type(_parse_out_dir, "folder")
+"""An output folder: existing or creatable (no file in the way, its first existing
+ancestor writable)."""
