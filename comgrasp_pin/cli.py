@@ -44,7 +44,8 @@ def _options(args: argparse.Namespace):
         trials = QUICK_TRIALS if getattr(args, "quick", False) else PAPER_TRIALS
     return RunOptions(args.out, args.objects, trials, args.seed, args.workers,
                       args.resume or args.retry_failed, args.overwrite, args.noise,
-                      args.estimator, args.retry_failed)  # fmt: skip
+                      args.estimator, args.retry_failed,
+                      getattr(args, "second_seed", None))  # fmt: skip
 
 
 def _cmd_experiment(args: argparse.Namespace) -> int:
@@ -160,7 +161,16 @@ def build_parser() -> argparse.ArgumentParser:
         ("regrasp", "experiment 2: pick-and-place success, baseline vs regrasp (regrasp.csv)"),
         ("reproduce", "both experiments and report.md (paper's sizes; --quick for minutes)"),
     ):
-        _add_experiment_args(sub.add_parser(name, help=help_text), f"results/{name}")
+        p = sub.add_parser(name, help=help_text)
+        _add_experiment_args(p, f"results/{name}")
+        if name == "reproduce":
+            p.add_argument(
+                "--second-seed",
+                type=SEED,
+                default=None,
+                help="also run the accuracy experiment with this seed (in OUT/seed<S>) and "
+                "report its calibration beside the first's",
+            )
 
     demo = sub.add_parser("demo", help="one episode with a video and the estimate vs the truth")
     demo.add_argument("--object", default="obj1", choices=OBJECTS)

@@ -366,3 +366,25 @@ def test_reproduce_report_with_two_seeds_and_an_extra_object(tmp_path, monkeypat
     assert ("![calibration](calibration.png)" in text) == new_columns
     assert ("not recorded" in text.split("## Experiment 2")[0]) != new_columns
     assert (tmp_path / "calibration.png").exists() == new_columns
+
+
+def test_reproduce_with_a_second_seed_runs_accuracy_again_and_reports_it(tmp_path, monkeypatch):
+    from comgrasp_pin.experiments import reproduce as rep
+
+    calls = []
+
+    def fake_accuracy(opts):
+        calls.append(opts)
+        # the second seed's grasps: every estimate 1 mm off with a 1 mm std (z = 1)
+        return [_acc_row("obj1", 10.0 * k, 0.99, seed=opts.seed * 100_000 + 1000 + k, trial=k,
+                         method="trial", pos_std_m=0.001, pos_esti_m=0.011, pos_real_m=0.01,
+                         estimator="ipopt") for k in range(4)]  # fmt: skip
+
+    monkeypatch.setattr(rep, "run_accuracy", fake_accuracy)
+    monkeypatch.setattr(rep, "run_regrasp", lambda opts: [])
+    text = rep.reproduce(rep.RunOptions(out=tmp_path, trials=4, second_seed=7)).read_text()
+    assert [c.seed for c in calls] == [0, 7]
+    assert calls[1].out == tmp_path / "seed7" and calls[1].second_seed is None
+    section = text.split("## A second seed: the accuracy experiment with seed 7")[1]
+    assert "| θ bin (deg) | n | coverage ±1σ (68 %)" in section.split("## Experiment 2")[0]
+    assert "rms z" in section

@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import platform
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from importlib import metadata
 from pathlib import Path
 
@@ -36,7 +36,9 @@ class RunOptions:
         ``out``. overwrite: start them again. noise: torque sensor noise (N m per sample).
         estimator: the trial grasp's estimator, "ipopt" (with the side view's axis prior)
         or "lstsq" (closed form). retry_failed: with ``resume``, run again the trials
-        that ended in an error.
+        that ended in an error. second_seed: ``reproduce`` also runs the accuracy
+        experiment with this seed (in ``out/seed<S>``) and reports its calibration and
+        accuracy beside the first's, or None.
     """
 
     out: Path
@@ -49,6 +51,7 @@ class RunOptions:
     noise: float = 0.05
     estimator: str = "ipopt"
     retry_failed: bool = False
+    second_seed: int | None = None
 
 
 def run_settings(opts: RunOptions) -> dict:
@@ -100,6 +103,25 @@ def _versions() -> dict:
     return out
 
 
+def _second_seed_section(opts: RunOptions, out: Path) -> str:
+    """The accuracy experiment again with ``opts.second_seed`` (its files in
+    ``out/seed<S>``), as a report section: its accuracy table and calibration; "" without."""
+    if opts.second_seed is None:
+        return ""
+    seed = opts.second_seed
+    sub = replace(opts, seed=seed, out=out / f"seed{seed}", second_seed=None)
+    rows = run_accuracy(sub)
+    return f"""## A second seed: the accuracy experiment with seed {seed}
+
+The same design and objects, other scenes and grasps (files in `seed{seed}/`); the
+calibration first, then the accuracy per bin.
+
+{report.calibration_table(rows)}
+
+{report.accuracy_table(rows)}
+"""
+
+
 def reproduce(opts: RunOptions) -> Path:
     """Both experiments and ``report.md`` with figures, tables and the settings used."""
     out, objects, trials, seed, noise = opts.out, opts.objects, opts.trials, opts.seed, opts.noise
@@ -110,6 +132,7 @@ def reproduce(opts: RunOptions) -> Path:
     mid = time.perf_counter()
     reg = run_regrasp(opts)
     end = time.perf_counter()
+    second = _second_seed_section(opts, out)
     settings = settings_summary(noise, opts.estimator)
     meta = {
         "objects": list(objects), "trials_per_object": trials, "seed": seed, "workers": workers,
@@ -157,6 +180,7 @@ six objects pooled here; each extra object in its own section.
 
 {calibration}
 
+{second}
 ## Experiment 2: pick-and-place success, regrasp planner against the geometric-centre grasp
 
 Success = the rod ends inside the drop box; baseline and regrasp see the same scenes. In
