@@ -323,3 +323,22 @@ def test_graspable_points_keep_the_pads_off_wide_heads():
     assert nearest_graspable(mallet, 0.16) <= 0.12 - 0.022 + 1e-9
     with pytest.raises(ObjectNotFoundError):
         nearest_graspable(_detection_with_widths(lambda p: 0.1), 0.0)
+
+
+def test_depth_line_standard_error_matches_the_scatter_of_surfaces():
+    """Points of one slice are one piece of surface: a handle whose surface wanders by 1 mm
+    from slice to slice (point noise 0.05 mm). The stated standard error of the line's y at
+    the TCP must match the spread of that y over many such handles (Monte Carlo)."""
+    from comgrasp_pin.perception.side_view import _depth_line
+
+    rng = np.random.default_rng(4)
+    y0s, stds = [], []
+    for _ in range(300):
+        along = rng.uniform(-0.15, 0.15, 6000)
+        piece = rng.normal(0.0, 0.001, 30)[np.clip(((along + 0.15) / 0.01).astype(int), 0, 29)]
+        y = -0.02 + 0.01 * along + piece + rng.normal(0.0, 5e-5, along.size)
+        y0, _, y0_std, _ = _depth_line(along, y)
+        y0s.append(y0)
+        stds.append(y0_std)
+    spread = np.std(np.array(y0s) + 0.02)
+    assert 0.7 < np.median(stds) / spread < 1.4, (np.median(stds), spread)

@@ -36,14 +36,17 @@ def test_rod_motion_carries_the_rod_where_the_second_view_saw_it():
     second = _view(np.radians(10.0) + dtheta, 0.0035, y0=-0.004 + dy, slope=0.06 + dslope)
     M = rod_motion(first, second)
     # the rod's points in the first view, counted along the axis from its foot; the rod
-    # turns about the jaws and shifts along them, it does not slide along itself
+    # turns about where the jaws hold it (that foot), shifts along the jaws and across its
+    # axis onto the second view's line, and does not slide along itself: the foot lands on
+    # the second line's point nearest it
     foot1 = first.T_ee_obj[:3, 3] - 0.05 * first.T_ee_obj[:3, 0]
     a2 = second.T_ee_obj[:3, 0] + np.array([0.0, dslope, 0.0])
     a2 /= np.linalg.norm(a2)
     foot2 = second.T_ee_obj[:3, 3] - 0.05 * second.T_ee_obj[:3, 0] + np.array([0.0, dy, 0.0])
+    landed = foot2 + ((foot1 - foot2) @ a2) * a2
     for s in (0.0, 0.1, -0.07):
         p1 = np.r_[foot1 + s * first.T_ee_obj[:3, 0], 1.0]
-        np.testing.assert_allclose((M @ p1)[:3], foot2 + s * a2, atol=1e-12)
+        np.testing.assert_allclose((M @ p1)[:3], landed + s * a2, atol=1e-12)
     np.testing.assert_allclose(M[:3, :3] @ M[:3, :3].T, np.eye(3), atol=1e-12)
     # a view seen the other way round (x flipped) is the same rod
     flipped = _view(np.radians(10.0) + dtheta, 0.0035, y0=-0.004 + dy, slope=0.06)
@@ -102,3 +105,24 @@ def test_one_more_pose_when_the_com_is_known_worse_than_the_jaws_tolerate():
     assert needs_another_pose(float("nan"), 0.5, 15.0, config)
     # a heavier rod, a shorter lever: the same std is too much
     assert needs_another_pose(0.99 * tolerance, 1.5, 15.0, config)
+
+
+def test_a_rod_that_turns_far_about_the_jaws_does_not_slide_along_itself():
+    """A rod held 12 mm below the TCP turns 60 deg about where the pads hold it: the rigid
+    motion rod_motion builds from the two views takes that point to itself (the rotation's
+    centre), and every point of the rod along the turned line (written by hand)."""
+    theta1, theta2 = np.radians(15.0), np.radians(75.0)
+    first = _view(theta1, 0.012)
+    pivot = first.T_ee_obj[:3, 3] - 0.05 * first.T_ee_obj[:3, 0]  # the first view's foot
+    # the turned rod's line passes through the pivot: its distance from the TCP is the
+    # pivot's component along the line's normal (the normal _view uses)
+    normal2 = np.array([np.sin(theta2), 0.0, np.cos(theta2)])
+    second = _view(theta2, float(pivot @ normal2))
+    M = rod_motion(first, second)
+    np.testing.assert_allclose((M @ np.r_[pivot, 1.0])[:3], pivot, atol=1e-12)
+    turn = theta2 - theta1  # about ee-y, the jaw axis: x -> x cos - z sin (tilt sign)
+    a2 = np.array([np.cos(theta2), 0.0, -np.sin(theta2)])
+    for s in (0.1, -0.07):
+        p = pivot + s * first.T_ee_obj[:3, 0]
+        np.testing.assert_allclose((M @ np.r_[p, 1.0])[:3], pivot + s * a2, atol=1e-12)
+    assert abs(np.degrees(np.arccos((np.trace(M[:3, :3]) - 1) / 2)) - np.degrees(turn)) < 1e-9

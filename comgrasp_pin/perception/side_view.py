@@ -30,6 +30,8 @@ TABLE_MARGIN = 0.003  # points less than this above the table are the table (m)
 MIN_PIXELS = 60
 MAX_AXIS_FROM_TCP = 0.035  # a held rod's axis passes this close to the TCP (m)
 MIN_EXTENT = 0.05  # a held rod is at least this long in view (m)
+DEPTH_MARGIN = 0.003  # the handle's surface lies within its radius (+ this) of y_ee = 0 (m)
+DEPTH_SLICE = 0.01  # slices along the rod for its depth line (m)
 OFF_AXIS_PERCENTILE = 99.0  # SideView.off_axis: nearly the farthest point, robust to a stray
 # The gripper's own volume in the ee frame (from the URDF): fingers and pads (with margin),
 # palm, and the wrist above it.
@@ -208,7 +210,10 @@ def observe_held_rod(
     # Where the handle's visible surface lies along the jaw axis (the camera's depth), as a
     # line along the rod: its change between two views is the rod shifting along the jaws
     # and turning out of their plane (the grasp's compliance), which the axis cannot show.
-    depth_line = _depth_line(along[handle], points[handle, 1])
+    # Only the handle's own surface (within its radius of the jaws' mid-plane): a head that
+    # stands within the axis' silhouette but far across the jaws (an axe's blade) is not it.
+    own = handle & (np.abs(points[:, 1]) <= radius + DEPTH_MARGIN)
+    depth_line = _depth_line(along[own], points[own, 1])
     n_handle = max(int(handle.sum()), 1)
     axis_std = float(np.std(rho[handle] - radius) / np.sqrt(n_handle)) if handle.any() else radius
     return SideView(T_ee_obj, theta, float(hi - lo), grasp_offset, mask, rect,
@@ -217,13 +222,22 @@ def observe_held_rod(
 
 
 def _depth_line(along: np.ndarray, y: np.ndarray) -> tuple[float, float, float, float]:
-    """(y at along = 0, dy/d along, and their standard errors) of a line through (along, y)."""
-    if len(along) < 3 or np.ptp(along) <= 0.0:
-        return float(np.median(y)), 0.0, float("inf"), float("inf")
-    A = np.c_[np.ones(len(along)), along]
-    coef, *_ = np.linalg.lstsq(A, y, rcond=None)
-    res = y - A @ coef
-    cov = np.linalg.inv(A.T @ A) * float(res @ res) / max(len(y) - 2, 1)
+    """(y at along = 0, dy/d along, and their standard errors) of a line through (along, y).
+
+    Fitted to the medians of 1 cm slices along the rod: the points of one slice are one
+    piece of surface, not independent samples, so the standard errors come from how the
+    slices scatter about the line (point by point they would be some 30 times too small).
+    """
+    bins = np.floor(along / DEPTH_SLICE).astype(int)
+    labels, counts = np.unique(bins, return_counts=True)
+    labels = labels[counts >= 5]
+    if len(labels) < 3:
+        return float(np.median(y)) if len(y) else 0.0, 0.0, float("inf"), float("inf")
+    c = np.array([(np.median(along[bins == b]), np.median(y[bins == b])) for b in labels])
+    A = np.c_[np.ones(len(c)), c[:, 0]]
+    coef, *_ = np.linalg.lstsq(A, c[:, 1], rcond=None)
+    res = c[:, 1] - A @ coef
+    cov = np.linalg.inv(A.T @ A) * float(res @ res) / max(len(c) - 2, 1)
     return float(coef[0]), float(coef[1]), float(np.sqrt(cov[0, 0])), float(np.sqrt(cov[1, 1]))
 
 

@@ -57,9 +57,12 @@ def rod_motion(
     dslope = sign * second.surface_slope - first.surface_slope if depth else 0.0
     a2, p2 = axis_and_foot(second, T2, dy, dslope)
     R = _rotation_between(a1, a2)
+    # the rod turns about where the jaws hold it (the first axis' foot), then shifts across
+    # its axis onto the second: that foot lands on the point of the second axis nearest it
+    c2 = p2 + ((p1 - p2) @ a2) * a2
     M = np.eye(4)
     M[:3, :3] = R
-    M[:3, 3] = p2 + slide * a2 - R @ p1
+    M[:3, 3] = c2 + slide * a2 - R @ p1
     return M
 
 
