@@ -337,7 +337,7 @@ def test_depth_line_standard_error_matches_the_scatter_of_surfaces():
         along = rng.uniform(-0.15, 0.15, 6000)
         piece = rng.normal(0.0, 0.001, 30)[np.clip(((along + 0.15) / 0.01).astype(int), 0, 29)]
         y = -0.02 + 0.01 * along + piece + rng.normal(0.0, 5e-5, along.size)
-        y0, _, y0_std, _ = _depth_line(along, y)
+        y0, _, y0_std, _, _ = _depth_line(along, y)
         y0s.append(y0)
         stds.append(y0_std)
     spread = np.std(np.array(y0s) + 0.02)

@@ -126,3 +126,35 @@ def test_a_rod_that_turns_far_about_the_jaws_does_not_slide_along_itself():
         p = pivot + s * first.T_ee_obj[:3, 0]
         np.testing.assert_allclose((M @ np.r_[p, 1.0])[:3], pivot + s * a2, atol=1e-12)
     assert abs(np.degrees(np.arccos((np.trace(M[:3, :3]) - 1) / 2)) - np.degrees(turn)) < 1e-9
+
+
+def test_depth_change_std_pairs_the_slices_two_views_share():
+    """Two views of one handle whose surface wanders by 1 mm from slice to slice (the same
+    pieces in both) and a 0.05 mm reading noise per slice median, the rod shifted 0.4 mm
+    along the jaws: the paired standard error of the shift must match the Monte Carlo
+    spread of the lines' difference, far below the two lines' errors combined."""
+    from dataclasses import replace
+
+    from comgrasp_pin.perception.side_view import _depth_line
+    from comgrasp_pin.procedures.rod_motion import depth_change_std
+
+    rng = np.random.default_rng(5)
+    along = np.arange(-0.145, 0.15, 0.01)
+    shifts, paired, unpaired = [], [], []
+    for _ in range(300):
+        surface = rng.normal(0.0, 0.001, along.size)
+        lines = []
+        for dy in (0.0, 0.0004):
+            y = -0.02 + dy + surface + rng.normal(0.0, 5e-5, along.size)
+            y0, slope, y0_std, slope_std, slices = _depth_line(np.repeat(along, 5),
+                                                               np.repeat(y, 5))  # fmt: skip
+            lines.append(replace(_view(0.1, 0.0), surface_y=y0, surface_slope=slope,
+                                 surface_y_std=y0_std, surface_slope_std=slope_std,
+                                 depth_slices=slices))  # fmt: skip
+        shifts.append(lines[1].surface_y - lines[0].surface_y)
+        paired.append(depth_change_std(lines[0], lines[1])[0])
+        unpaired.append(np.hypot(lines[0].surface_y_std, lines[1].surface_y_std))
+    spread = np.std(shifts)
+    assert abs(np.mean(shifts) - 0.0004) < 3 * spread / np.sqrt(len(shifts))
+    assert 0.7 < np.median(paired) / spread < 1.4, (np.median(paired), spread)
+    assert np.median(unpaired) > 5 * spread

@@ -71,6 +71,10 @@ class SideView:
             standard errors.
         creep: (4, 4) the rod's motion in the jaws while the view was averaged over a torque
             window (from a view at its start to one at its end), or None for a single frame.
+        depth_slices: (k, 3) the depth line's slices: index of the 1 cm slice along ee
+            ``x_axis`` from the TCP, its points' median position along and median ee-y (m);
+            two views pair them slice by slice (``procedures.rod_motion.depth_change``), or
+            None.
     """
 
     T_ee_obj: np.ndarray
@@ -90,6 +94,7 @@ class SideView:
     surface_y_std: float
     surface_slope_std: float
     creep: np.ndarray | None = None
+    depth_slices: np.ndarray | None = None
 
 
 def _gripper_volume(p: np.ndarray) -> np.ndarray:
@@ -218,27 +223,39 @@ def observe_held_rod(
     axis_std = float(np.std(rho[handle] - radius) / np.sqrt(n_handle)) if handle.any() else radius
     return SideView(T_ee_obj, theta, float(hi - lo), grasp_offset, mask, rect,
                     camera.project(ends_cam), camera.project(tcp_cam[None])[0],
-                    float(radius), off_axis, axis_std, tilt_std, *depth_line)  # fmt: skip
+                    float(radius), off_axis, axis_std, tilt_std, *depth_line[:4],
+                    depth_slices=depth_line[4])  # fmt: skip
 
 
-def _depth_line(along: np.ndarray, y: np.ndarray) -> tuple[float, float, float, float]:
-    """(y at along = 0, dy/d along, and their standard errors) of a line through (along, y).
+def _depth_line(along: np.ndarray, y: np.ndarray) -> tuple:
+    """A line through (along, y): y at along = 0, dy/d along, their std, the slices.
 
-    Fitted to the medians of 1 cm slices along the rod: the points of one slice are one
-    piece of surface, not independent samples, so the standard errors come from how the
-    slices scatter about the line (point by point they would be some 30 times too small).
+    Fitted to the medians of 1 cm slices along the rod (the slices: (k, 3) of index,
+    median along, median y): the points of one slice are one piece of surface, not
+    independent samples, so the standard errors come from how the slices scatter about the
+    line (point by point they would be some 30 times too small).
     """
     bins = np.floor(along / DEPTH_SLICE).astype(int)
     labels, counts = np.unique(bins, return_counts=True)
     labels = labels[counts >= 5]
     if len(labels) < 3:
-        return float(np.median(y)) if len(y) else 0.0, 0.0, float("inf"), float("inf")
-    c = np.array([(np.median(along[bins == b]), np.median(y[bins == b])) for b in labels])
-    A = np.c_[np.ones(len(c)), c[:, 0]]
-    coef, *_ = np.linalg.lstsq(A, c[:, 1], rcond=None)
-    res = c[:, 1] - A @ coef
-    cov = np.linalg.inv(A.T @ A) * float(res @ res) / max(len(c) - 2, 1)
-    return float(coef[0]), float(coef[1]), float(np.sqrt(cov[0, 0])), float(np.sqrt(cov[1, 1]))
+        y_mid = float(np.median(y)) if len(y) else 0.0
+        return y_mid, 0.0, float("inf"), float("inf"), None
+    c = np.array([(b, np.median(along[bins == b]), np.median(y[bins == b])) for b in labels])
+    coef, std = fit_line_with_errors(c[:, 1], c[:, 2])
+    return float(coef[0]), float(coef[1]), float(std[0]), float(std[1]), c
+
+
+def fit_line_with_errors(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Least-squares line y = a + b x through k >= 3 points, and the std of (a, b).
+
+    The standard errors come from the points' scatter about the line.
+    """
+    A = np.c_[np.ones(len(x)), x]
+    coef, *_ = np.linalg.lstsq(A, y, rcond=None)
+    res = y - A @ coef
+    cov = np.linalg.inv(A.T @ A) * float(res @ res) / max(len(x) - 2, 1)
+    return coef, np.sqrt(np.diag(cov))
 
 
 def _in_capsule(p: np.ndarray, p0: np.ndarray, p1: np.ndarray, radius: float) -> np.ndarray:

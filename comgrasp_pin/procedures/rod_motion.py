@@ -7,6 +7,7 @@ from dataclasses import replace
 import numpy as np
 
 from comgrasp_pin.perception import SideView
+from comgrasp_pin.perception.side_view import fit_line_with_errors
 
 
 def _same_direction(T: np.ndarray, T_ref: np.ndarray) -> np.ndarray:
@@ -16,6 +17,25 @@ def _same_direction(T: np.ndarray, T_ref: np.ndarray) -> np.ndarray:
     T = T.copy()
     T[:3, :2] *= -1.0
     return T
+
+
+def depth_change_std(first: SideView, second: SideView) -> tuple[float, float]:
+    """Standard errors (m, and per m along the rod) of the change of the depth line from
+    ``first`` to ``second``. Paired slice by slice where both views kept their slices and
+    point the same way: a piece of surface seen in both cancels from the difference, so the
+    error is the scatter of the slices' differences about a line; the two lines' standard
+    errors combined otherwise (as if independent)."""
+    a, b = first.depth_slices, second.depth_slices
+    unpaired = (float(np.hypot(first.surface_y_std, second.surface_y_std)),
+                float(np.hypot(first.surface_slope_std, second.surface_slope_std)))  # fmt: skip
+    if a is None or b is None or second.T_ee_obj[:3, 0] @ first.T_ee_obj[:3, 0] < 0:
+        return unpaired
+    common, ia, ib = np.intersect1d(a[:, 0], b[:, 0], return_indices=True)
+    if len(common) < 4:
+        return unpaired
+    along = 0.5 * (a[ia, 1] + b[ib, 1])
+    _, std = fit_line_with_errors(along, b[ib, 2] - a[ia, 2])
+    return float(std[0]), float(std[1])
 
 
 def depth_agrees(first: SideView, second: SideView, max_shift: float, max_turn: float) -> bool:
@@ -103,4 +123,14 @@ def mid_window_view(start: SideView | None, end: SideView) -> SideView:
         surface_y=0.5 * (start.surface_y + end.surface_y),
         surface_slope=0.5 * (sign * start.surface_slope + end.surface_slope),
         creep=rod_motion(start, end),
+        depth_slices=_mean_slices(start, end) if sign > 0 else end.depth_slices,
     )
+
+
+def _mean_slices(start: SideView, end: SideView) -> np.ndarray | None:
+    """The two views' depth slices averaged where both have them."""
+    a, b = start.depth_slices, end.depth_slices
+    if a is None or b is None:
+        return b
+    _, ia, ib = np.intersect1d(a[:, 0], b[:, 0], return_indices=True)
+    return 0.5 * (a[ia] + b[ib])

@@ -24,7 +24,7 @@ from dataclasses import replace
 import numpy as np
 
 from comgrasp_pin.estimation import AxisPrior, ComEstimate, com_along_axis, estimate_com
-from comgrasp_pin.procedures.rod_motion import rod_motion
+from comgrasp_pin.procedures.rod_motion import depth_change_std, rod_motion
 from comgrasp_pin.robot import RobotModel
 
 STEP = 1e-5
@@ -98,8 +98,7 @@ def motion_stds(
     parts = {"tilt": 0.0, "shift": 0.0, "out of plane": 0.0, "slide": 0.0}
     for i, view in enumerate(views[1:]):
         if depth[i]:
-            dy = float(np.hypot(first.surface_y_std, view.surface_y_std))
-            dslope = float(np.hypot(first.surface_slope_std, view.surface_slope_std))
+            dy, dslope = depth_change_std(first, view)
         else:  # the depth lines disagree: the motion is within the compliance's bounds,
             # uniform there (std: bound / sqrt 3)
             dy, dslope = bounds[0] / np.sqrt(3.0), float(np.tan(bounds[1])) / np.sqrt(3.0)
