@@ -218,13 +218,13 @@ def observe_held_rod(
     # Only the handle's own surface (within its radius of the jaws' mid-plane): a head that
     # stands within the axis' silhouette but far across the jaws (an axe's blade) is not it.
     own = handle & (np.abs(points[:, 1]) <= radius + DEPTH_MARGIN)
-    depth_line = _depth_line(along[own], points[own, 1])
+    y0, slope, y0_std, slope_std, slices = _depth_line(along[own], points[own, 1])
     n_handle = max(int(handle.sum()), 1)
     axis_std = float(np.std(rho[handle] - radius) / np.sqrt(n_handle)) if handle.any() else radius
     return SideView(T_ee_obj, theta, float(hi - lo), grasp_offset, mask, rect,
                     camera.project(ends_cam), camera.project(tcp_cam[None])[0],
-                    float(radius), off_axis, axis_std, tilt_std, *depth_line[:4],
-                    depth_slices=depth_line[4])  # fmt: skip
+                    float(radius), off_axis, axis_std, tilt_std, y0, slope, y0_std, slope_std,
+                    depth_slices=slices)  # fmt: skip
 
 
 def _depth_line(along: np.ndarray, y: np.ndarray) -> tuple:
