@@ -34,6 +34,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
 
 
 def _options(args: argparse.Namespace):
+    from comgrasp_pin.experiments.ray_backend import check_backend
     from comgrasp_pin.experiments.reproduce import PAPER_TRIALS, QUICK_TRIALS, RunOptions
 
     if args.overwrite and args.retry_failed:
@@ -42,9 +43,11 @@ def _options(args: argparse.Namespace):
     trials = args.trials
     if trials is None:
         trials = QUICK_TRIALS if getattr(args, "quick", False) else PAPER_TRIALS
+    check_backend(args.backend, args.ray_address)
     return RunOptions(args.out, args.objects, trials, args.seed, args.workers,
                       args.resume or args.retry_failed, args.overwrite, args.noise,
-                      args.estimator, args.retry_failed)  # fmt: skip
+                      args.estimator, args.retry_failed, args.backend,
+                      args.ray_address)  # fmt: skip
 
 
 def _cmd_experiment(args: argparse.Namespace) -> int:
@@ -120,7 +123,16 @@ def _add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
                    help="run seed, >= 0 (%(default)s)")  # fmt: skip
     p.add_argument("--workers", type=cli_args.int_at_least(1),
                    default=os.cpu_count() or 1,
-                   help="parallel processes (default: one per core, %(default)s here)")  # fmt: skip
+                   help="parallel processes, or Ray tasks in flight with --backend ray "
+                   "(default: one per core, %(default)s here)")  # fmt: skip
+    p.add_argument("--backend", default="local", choices=("local", "ray"),
+                   help="where trials run: local processes, or Ray tasks (needs the ray extra; "
+                   "a local Ray of --workers CPUs unless --ray-address) (%(default)s)")  # fmt: skip
+    p.add_argument(
+        "--ray-address",
+        default=None,
+        help="an existing Ray cluster to run on (e.g. auto, ray://head:10001)",
+    )
     p.add_argument("--noise", type=cli_args.float_at_least(0.0), default=0.05,
                    help="torque sensor noise per sample, N m, >= 0 (%(default)s)")  # fmt: skip
     p.add_argument("--estimator", default="ipopt", choices=("ipopt", "lstsq"),

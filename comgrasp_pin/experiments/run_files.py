@@ -2,7 +2,8 @@
 
 - ``DIR/NAME.settings.json`` holds every setting of the run (seed, noise, estimator, the whole
   config tree, the package version, the objects and trials). ``--resume`` refuses a run
-  whose settings differ, naming each setting; only ``objects`` and ``trials`` may grow.
+  whose settings differ, naming each setting; only ``objects`` and ``trials`` may grow, and
+  ``backend`` (where the trials run) may change: a run started locally may resume on Ray.
 - Every row is one line, written whole: appended with one unbuffered write, flushed and
   fsynced, so the CSV is readable while a run goes on. A write that fails (full disk) is
   undone and reported as ``OutputError``; the rows before it stay intact.
@@ -31,6 +32,8 @@ from comgrasp_pin.errors import OutputError, ResumeError
 
 GROWABLE = ("objects", "trials")
 """Settings ``--resume`` lets change: a run may be extended with more trials or objects."""
+FREE = ("backend", "ray_address")
+"""Settings recorded but not compared: where the trials run changes none of their rows."""
 
 
 def settings_path(csv_path: Path) -> Path:
@@ -53,9 +56,10 @@ def _flat(tree: object, prefix: str = "") -> dict[str, object]:
 
 
 def settings_differences(recorded: dict, wanted: dict) -> list[str]:
-    """Every setting (dotted path) other than GROWABLE whose value differs, as text."""
-    old = {k: v for k, v in _flat(_normal(recorded)).items() if k not in GROWABLE}
-    new = {k: v for k, v in _flat(_normal(wanted)).items() if k not in GROWABLE}
+    """Every setting (dotted path) other than GROWABLE and FREE whose value differs, as text."""
+    skip = (*GROWABLE, *FREE)
+    old = {k: v for k, v in _flat(_normal(recorded)).items() if k not in skip}
+    new = {k: v for k, v in _flat(_normal(wanted)).items() if k not in skip}
     missing = object()
     return [
         f"{key}: {old.get(key, 'not set')!r} in the run, {new.get(key, 'not set')!r} now"
