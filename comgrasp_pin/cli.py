@@ -117,7 +117,8 @@ def _add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
         "--trials",
         type=cli_args.int_at_least(1, MAX_TRIALS),
         default=None,
-        help=f"per object and method, 1 to {MAX_TRIALS} (default 50, the paper's; 3 with --quick)",
+        help=f"per object and method, 1 to {MAX_TRIALS} (default 50, the paper's, 10 for a "
+        "sweep; 3 with --quick)",
     )
     p.add_argument("--seed", type=SEED, default=0,
                    help="run seed, >= 0 (%(default)s)")  # fmt: skip
@@ -207,7 +208,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     scene.set_defaults(func=_cmd_scene)
 
+    from comgrasp_pin import cli_sweep
     from comgrasp_pin.cli_robot import add_subcommands
+
+    cli_sweep.add_subcommand(sub, _add_experiment_args)
 
     add_subcommands(sub)  # estimate, plan-poses: the real-arm path
     return parser

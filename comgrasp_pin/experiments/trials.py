@@ -13,6 +13,7 @@ from dataclasses import asdict
 import numpy as np
 
 from comgrasp_pin.config import EpisodeConfig, SensorConfig, TorqueSensorConfig, TrialConfig
+from comgrasp_pin.config_paths import with_values
 from comgrasp_pin.experiments.design import grasp_for_lever, side_and_lever, target_tilt
 
 ACCURACY_COLUMNS = [
@@ -65,7 +66,10 @@ def episode_config(noise: float = 0.05, estimator: str = "ipopt") -> EpisodeConf
 
 
 def _episode_config(task: dict) -> EpisodeConfig:
-    return episode_config(task.get("noise", 0.05), task.get("estimator", "ipopt"))
+    """The task's config: ``episode_config`` of its noise and estimator, with the values of
+    ``task["overrides"]`` (dotted path -> number, a sweep's grid point) put in."""
+    config = episode_config(task.get("noise", 0.05), task.get("estimator", "ipopt"))
+    return with_values(config, task["overrides"]) if task.get("overrides") else config
 
 
 def accuracy_grasp(obj: str, seed: int, config) -> tuple[float, float]:
