@@ -37,9 +37,11 @@ def _heatmap(fig, ax, table, paths: list[str], measure: str) -> None:
     fig.colorbar(image, ax=ax)
     for i in range(len(rows)):
         for j in range(len(cols)):
-            text = "–" if not math.isfinite(grid[i, j]) else f"{grid[i, j]:.1f}"
+            finite = math.isfinite(grid[i, j])
+            text = f"{grid[i, j]:.1f}" if finite else "–"
+            light = finite and float(image.norm(grid[i, j])) > 0.5  # viridis: yellow on top
             ax.text(j, i, f"{text}\nn={counts[i, j]}", ha="center", va="center", fontsize=8,
-                    color="w")  # fmt: skip
+                    color="k" if light else "w")  # fmt: skip
     ax.set_xticks(range(len(cols)), [f"{c:g}" for c in cols])
     ax.set_yticks(range(len(rows)), [f"{r:g}" for r in rows])
     ax.set_xlabel(paths[1])
