@@ -97,6 +97,13 @@ def test_ray_rows_equal_local_rows_and_a_local_run_resumes_on_ray(tmp_path):
     assert _same(on_ray) == _same(reference)
     settings = json.loads((mixed / "accuracy.settings.json").read_text())
     assert settings["backend"] == "ray" and settings["trials"] == 2
+    # a sweep on Ray: its point at the default grip force is the experiment's row
+    sweep = tmp_path / "sweep"
+    assert main(["sweep", "--param", "grip_force=15", "--objects", "obj1", "--trials", "1",
+                 "--backend", "ray", "--workers", "2", "--out", str(sweep)]) == 0  # fmt: skip
+    (point,) = read_rows(sweep / "sweep.csv")
+    assert point.pop("motion.grip_force") == "15.0"
+    assert _same([point]) == {k: v for k, v in _same(reference).items() if k[:2] == ("obj1", "0")}
 
 
 @pytest.mark.slow
