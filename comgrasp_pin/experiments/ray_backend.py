@@ -63,15 +63,24 @@ def check_backend(backend: str, address: str | None) -> None:
 
 
 def ensure_ray(workers: int, address: str | None = None):
-    """The ``ray`` module, initialised: as it is, on ``address``, or a local Ray of
-    ``workers`` CPUs."""
+    """The ``ray`` module, initialised: as it is, on ``address``, or a local Ray of ``workers``.
+
+    Raises:
+        BackendError: Ray not installed, or the cluster cannot be started or reached.
+    """
     ray = import_ray()
-    if not ray.is_initialized():
-        os.environ.setdefault("MUJOCO_GL", "egl")  # the workers inherit it from the driver
+    if ray.is_initialized():
+        return ray
+    # headless rendering on every worker, wherever it runs
+    env = {"env_vars": {"MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}}
+    try:
         if address:
-            ray.init(address=address, **RAY_INIT_OPTIONS)
+            ray.init(address=address, runtime_env=env, **RAY_INIT_OPTIONS)
         else:
-            ray.init(num_cpus=workers, **RAY_INIT_OPTIONS)
+            ray.init(num_cpus=workers, runtime_env=env, **RAY_INIT_OPTIONS)
+    except (ConnectionError, RuntimeError) as exc:
+        where = f"the Ray cluster at {address!r}" if address else "a local Ray"
+        raise BackendError(f"cannot start or reach {where}: {exc}") from None
     return ray
 
 

@@ -27,7 +27,7 @@ from tqdm import tqdm
 
 from comgrasp_pin.errors import InvalidInputError, ResumeError, WorkerDiedError
 from comgrasp_pin.experiments import run_files
-from comgrasp_pin.experiments.ray_backend import check_backend, run_on_ray
+from comgrasp_pin.experiments.ray_backend import check_backend, ensure_ray, run_on_ray
 from comgrasp_pin.experiments.run_files import RowAppender
 
 KEY_COLUMNS = ("object", "trial", "method")
@@ -144,6 +144,7 @@ def _key_of(keys: tuple[str, ...]) -> Callable[[dict], tuple[str, ...]]:
 def _executor(backend: str, workers: int, ray_address: str | None):
     """``execute(fn, todo, record)`` for the backend."""
     if backend == "ray":
+        ensure_ray(workers, ray_address)  # before any file is touched: a failure leaves none
         return lambda fn, todo, record: run_on_ray(_safe_call, fn, todo, workers, record,
                                                    ray_address)  # fmt: skip
     if workers <= 1:
