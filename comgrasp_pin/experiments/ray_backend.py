@@ -111,7 +111,9 @@ def run_on_ray(
         while queue and len(running) < workers:
             task = queue.pop()
             running[remote.remote(fn_ref, task)] = task
-        done, _ = ray.wait(list(running), num_returns=1)
+        done, rest = ray.wait(list(running), num_returns=1)
+        if rest:  # every task finished by now, in one pass: O(in flight) per batch, not per row
+            done += ray.wait(rest, num_returns=len(rest), timeout=0)[0]
         for ref in done:
             task = running.pop(ref)
             try:
