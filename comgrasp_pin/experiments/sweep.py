@@ -11,6 +11,10 @@ point: common random numbers, so differences between points are the settings', n
 appends rows as they finish and ``--resume`` continues it (``sweep.settings.json`` records
 the grid and every point's whole config tree). Per measure (``MEASURES``): a figure (one
 swept value: a line with 95 % intervals; two: a heatmap) and ``sweep_table.md``.
+
+The accuracy experiment places each grasp at a lever in units of the jaws' holding lever
+(``experiments.design``), which grows with ``motion.grip_force`` and ``world.pad_friction``:
+sweeping those moves the grasp with them (the target tilts stay), as the design intends.
 """
 
 from __future__ import annotations
