@@ -22,6 +22,7 @@ def _line(ax, table, path: str, measure: str) -> None:
     upper = np.where(np.isfinite(hi), hi - value, 0.0)
     ax.errorbar(x, value, yerr=[lower, upper], fmt="o-", capsize=4)
     ax.set_xlabel(path)
+    ax.ticklabel_format(axis="y", useOffset=False)
     ax.grid(alpha=0.3)
 
 
