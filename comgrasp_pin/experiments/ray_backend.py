@@ -100,25 +100,37 @@ def run_on_ray(
 ) -> None:
     """Run ``call(fn, task)`` for every task of ``todo`` as Ray tasks, at most ``workers`` at
     a time, and ``record`` each row (in the order they finish)."""
-    from comgrasp_pin.experiments.runner import _error_row
-
     ray = ensure_ray(workers, address)
     remote = ray.remote(**TASK_OPTIONS)(call)
     fn_ref = ray.put(fn)
     queue, running = list(todo), {}
     queue.reverse()
-    while queue or running:
-        while queue and len(running) < workers:
-            task = queue.pop()
-            running[remote.remote(fn_ref, task)] = task
-        done, rest = ray.wait(list(running), num_returns=1)
-        if rest:  # every task finished by now, in one pass: O(in flight) per batch, not per row
-            done += ray.wait(rest, num_returns=len(rest), timeout=0)[0]
-        for ref in done:
-            task = running.pop(ref)
-            try:
-                row = ray.get(ref)
-            except ray.exceptions.RayError as exc:  # the worker died, or Ray failed the task
-                crashed = isinstance(exc, ray.exceptions.WorkerCrashedError)
-                row = _error_row(task, WorkerDiedError(_died_message(exc)) if crashed else exc)
-            record(row)
+    try:
+        while queue or running:
+            while queue and len(running) < workers:
+                task = queue.pop()
+                running[remote.remote(fn_ref, task)] = task
+            for ref in _finished(ray, list(running)):
+                record(_row(ray, ref, running.pop(ref)))
+    finally:  # the run stopped (a row that cannot be written, ^C): stop what is in flight
+        for ref in running:
+            ray.cancel(ref, force=True)
+
+
+def _finished(ray, refs: list) -> list:
+    """The refs done now, at least one: O(in flight) per pass, not per row."""
+    done, rest = ray.wait(refs, num_returns=1)
+    if rest:
+        done += ray.wait(rest, num_returns=len(rest), timeout=0)[0]
+    return done
+
+
+def _row(ray, ref, task: dict) -> dict:
+    """The task's row, or its error row when Ray could not run it (a dead worker)."""
+    from comgrasp_pin.experiments.runner import _error_row
+
+    try:
+        return ray.get(ref)
+    except ray.exceptions.RayError as exc:
+        crashed = isinstance(exc, ray.exceptions.WorkerCrashedError)
+        return _error_row(task, WorkerDiedError(_died_message(exc)) if crashed else exc)
