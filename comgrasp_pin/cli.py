@@ -44,7 +44,10 @@ def _options(args: argparse.Namespace):
     if trials is None:
         trials = QUICK_TRIALS if getattr(args, "quick", False) else PAPER_TRIALS
     check_backend(args.backend, args.ray_address)
-    return RunOptions(args.out, args.objects, trials, args.seed, args.workers,
+    workers = args.workers
+    if workers is None:  # 0: as many as the Ray cluster has CPUs
+        workers = 0 if args.ray_address else os.cpu_count() or 1
+    return RunOptions(args.out, args.objects, trials, args.seed, workers,
                       args.resume or args.retry_failed, args.overwrite, args.noise,
                       args.estimator, args.retry_failed, args.backend,
                       args.ray_address)  # fmt: skip
@@ -122,10 +125,10 @@ def _add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
     )
     p.add_argument("--seed", type=SEED, default=0,
                    help="run seed, >= 0 (%(default)s)")  # fmt: skip
-    p.add_argument("--workers", type=cli_args.int_at_least(1),
-                   default=os.cpu_count() or 1,
+    p.add_argument("--workers", type=cli_args.int_at_least(1), default=None,
                    help="parallel processes, or Ray tasks in flight with --backend ray "
-                   "(default: one per core, %(default)s here)")  # fmt: skip
+                   f"(default: one per core, {os.cpu_count() or 1} here; with --ray-address, "
+                   "every CPU of the cluster)")  # fmt: skip
     p.add_argument("--backend", default="local", choices=("local", "ray"),
                    help="where trials run: local processes, or Ray tasks (needs the ray extra; "
                    "a local Ray of --workers CPUs unless --ray-address) (%(default)s)")  # fmt: skip

@@ -71,8 +71,9 @@ def _slow_value(task: dict) -> dict:
     return _value(task)
 
 
-def test_two_workers_run_two_tasks_at_a_time(tmp_path):
-    rows = run_trials(_slow_value, _tasks(4), tmp_path / "out.csv", COLUMNS, workers=2,
+@pytest.mark.parametrize("workers", [2, 0])  # 0: one task per CPU of the cluster (2)
+def test_two_workers_run_two_tasks_at_a_time(tmp_path, workers):
+    rows = run_trials(_slow_value, _tasks(4), tmp_path / "out.csv", COLUMNS, workers=workers,
                       backend="ray")  # fmt: skip
     assert len({r["pid"] for r in rows}) == 2
 

@@ -77,7 +77,7 @@ def ensure_ray(workers: int, address: str | None = None):
         if address:
             ray.init(address=address, runtime_env=env, **RAY_INIT_OPTIONS)
         else:
-            ray.init(num_cpus=workers, runtime_env=env, **RAY_INIT_OPTIONS)
+            ray.init(num_cpus=workers or os.cpu_count(), runtime_env=env, **RAY_INIT_OPTIONS)
     except (ConnectionError, RuntimeError) as exc:
         where = f"the Ray cluster at {address!r}" if address else "a local Ray"
         raise BackendError(f"cannot start or reach {where}: {exc}") from None

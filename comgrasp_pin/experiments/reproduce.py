@@ -33,7 +33,8 @@ class RunOptions:
 
     Attributes:
         out: output folder. objects: object names. trials: trials per object (and method).
-        seed: the run's seed. workers: parallel processes. resume: continue the CSVs in
+        seed: the run's seed. workers: parallel processes (0 with Ray: one per CPU of
+        the cluster). resume: continue the CSVs in
         ``out``. overwrite: start them again. noise: torque sensor noise (N m per sample).
         estimator: the trial grasp's estimator, "ipopt" (with the side view's axis prior)
         or "lstsq" (closed form). retry_failed: with ``resume``, run again the trials
@@ -130,7 +131,7 @@ def reproduce(opts: RunOptions) -> Path:
     text = f"""# comgrasp_pin: the paper's experiments, reproduced
 
 {report.run_summary(acc, reg, seed)}
-Run time on {workers} worker(s) ({opts.backend} backend): accuracy
+Run time on {workers or "all the cluster's"} worker(s) ({opts.backend} backend): accuracy
 {meta["accuracy_minutes"]:.1f} min, regrasp {meta["regrasp_minutes"]:.1f} min.
 
 ## Experiment 1: CoM accuracy against the tilt in the jaws

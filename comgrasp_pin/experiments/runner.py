@@ -111,7 +111,8 @@ def run_trials(
             into the row.
         csv_path: results file; rows are appended as trials finish.
         columns: the CSV header (an ``error`` column is added).
-        workers: processes (1: in this process).
+        workers: processes (1: in this process), or Ray tasks in flight (0: as many as the
+            Ray cluster has CPUs).
         resume: keep the rows already in ``csv_path`` and run only the missing tasks.
         overwrite: start a new file even if one exists.
         retry_failed: with ``resume``, run again the tasks whose rows hold an error.
@@ -144,7 +145,8 @@ def _key_of(keys: tuple[str, ...]) -> Callable[[dict], tuple[str, ...]]:
 def _executor(backend: str, workers: int, ray_address: str | None):
     """``execute(fn, todo, record)`` for the backend."""
     if backend == "ray":
-        ensure_ray(workers, ray_address)  # before any file is touched: a failure leaves none
+        ray = ensure_ray(workers, ray_address)  # before any file is touched: none if it fails
+        workers = workers or max(1, int(ray.cluster_resources().get("CPU", 1)))
         return lambda fn, todo, record: run_on_ray(_safe_call, fn, todo, workers, record,
                                                    ray_address)  # fmt: skip
     if workers <= 1:
