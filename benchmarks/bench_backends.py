@@ -38,6 +38,7 @@ from comgrasp_pin.experiments.trials import (  # noqa: E402
 )
 
 APPEND_ROWS = 300  # rows written to measure the driver's append + fsync rate
+APPEND_BATCHES = (10, 100)  # rows per fsync when a Ray pass brings several
 
 
 def _run(tasks, folder: Path, name: str, backend: str, workers: int) -> tuple[float, list]:
@@ -47,13 +48,13 @@ def _run(tasks, folder: Path, name: str, backend: str, workers: int) -> tuple[fl
     return time.perf_counter() - start, rows
 
 
-def _append_rate(rows: list[dict], folder: Path) -> float:
-    """Rows per second RowAppender writes (one write and fsync each) of real rows."""
+def _append_rate(rows: list[dict], folder: Path, batch: int = 1) -> float:
+    """Rows per second RowAppender writes of real rows, ``batch`` rows per write and fsync."""
     columns = [*ACCURACY_COLUMNS, "error"]
-    with RowAppender(folder / "append.csv", columns) as out:
+    with RowAppender(folder / f"append{batch}.csv", columns) as out:
         start = time.perf_counter()
-        for k in range(APPEND_ROWS):
-            out.write(rows[k % len(rows)])
+        for k in range(0, APPEND_ROWS, batch):
+            out.write_rows([rows[(k + i) % len(rows)] for i in range(batch)])
         return APPEND_ROWS / (time.perf_counter() - start)
 
 
@@ -84,6 +85,7 @@ def main() -> None:
                 assert all(not r["error"] for r in rows), [r["error"] for r in rows]
                 seconds[name].append(elapsed)
         append_rows_per_s = _append_rate(rows, folder)
+        append_batched = {n: _append_rate(rows, folder, n) for n in APPEND_BATCHES}
     ray.shutdown()
     best = {name: min(s) for name, s in seconds.items()}
     throughput = {name: len(tasks) / s for name, s in best.items()}
@@ -108,6 +110,7 @@ def main() -> None:
             "csv_row_bytes": len(",".join(str(rows[0].get(c, "")) for c in ACCURACY_COLUMNS)),
         },
         "driver_append_rows_per_s": append_rows_per_s,
+        "driver_append_rows_per_s_by_batch": append_batched,
         "environment": {
             "python": platform.python_version(),
             "ray": ray.__version__,

@@ -99,7 +99,8 @@ def run_on_ray(
     address: str | None = None,
 ) -> None:
     """Run ``call(fn, task)`` for every task of ``todo`` as Ray tasks, at most ``workers`` at
-    a time, and ``record`` each row (in the order they finish)."""
+    a time, and ``record`` the rows (in the order they finish; those that finished together
+    in one call, written with one fsync)."""
     ray = ensure_ray(workers, address)
     remote = ray.remote(**TASK_OPTIONS)(call)
     fn_ref = ray.put(fn)
@@ -110,8 +111,7 @@ def run_on_ray(
             while queue and len(running) < workers:
                 task = queue.pop()
                 running[remote.remote(fn_ref, task)] = task
-            for ref in _finished(ray, list(running)):
-                record(_row(ray, ref, running.pop(ref)))
+            record(*(_row(ray, ref, running.pop(ref)) for ref in _finished(ray, list(running))))
     finally:  # the run stopped (a row that cannot be written, ^C): stop what is in flight
         for ref in running:
             ray.cancel(ref, force=True)

@@ -167,12 +167,13 @@ def _run_missing(fn, tasks, rows: list[dict], csv_path: Path, columns: list[str]
     bar = tqdm(total=len(tasks), initial=len(tasks) - len(todo), desc=desc, unit="trial")
     with RowAppender(csv_path, columns) as out:
 
-        def record(row: dict) -> None:
-            out.write(row)
-            rows.append(row)
-            bar.update(1)
-            if row.get("error"):
-                bar.write(f"trial {key(row)} failed: {row['error']}")
+        def record(*finished: dict) -> None:
+            out.write_rows(finished)  # one fsync for the rows that finished together
+            rows.extend(finished)
+            bar.update(len(finished))
+            for row in finished:
+                if row.get("error"):
+                    bar.write(f"trial {key(row)} failed: {row['error']}")
 
         try:
             execute(fn, todo, record)
