@@ -34,6 +34,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
 
 
 def _options(args: argparse.Namespace):
+    from comgrasp_pin.experiments.ray_backend import check_backend
     from comgrasp_pin.experiments.reproduce import PAPER_TRIALS, QUICK_TRIALS, RunOptions
 
     if args.overwrite and args.retry_failed:
@@ -42,10 +43,14 @@ def _options(args: argparse.Namespace):
     trials = args.trials
     if trials is None:
         trials = QUICK_TRIALS if getattr(args, "quick", False) else PAPER_TRIALS
-    return RunOptions(args.out, args.objects, trials, args.seed, args.workers,
+    check_backend(args.backend, args.ray_address)
+    workers = args.workers
+    if workers is None:  # 0: as many as the Ray cluster has CPUs
+        workers = 0 if args.ray_address else os.cpu_count() or 1
+    return RunOptions(args.out, args.objects, trials, args.seed, workers,
                       args.resume or args.retry_failed, args.overwrite, args.noise,
-                      args.estimator, args.retry_failed,
-                      getattr(args, "second_seed", None))  # fmt: skip
+                      args.estimator, args.retry_failed, args.backend,
+                      args.ray_address, getattr(args, "second_seed", None))  # fmt: skip
 
 
 def _cmd_experiment(args: argparse.Namespace) -> int:
@@ -115,13 +120,23 @@ def _add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
         "--trials",
         type=cli_args.int_at_least(1, MAX_TRIALS),
         default=None,
-        help=f"per object and method, 1 to {MAX_TRIALS} (default 50, the paper's; 3 with --quick)",
+        help=f"per object and method, 1 to {MAX_TRIALS} (default 50, the paper's, 10 for a "
+        "sweep; 3 with --quick)",
     )
     p.add_argument("--seed", type=SEED, default=0,
                    help="run seed, >= 0 (%(default)s)")  # fmt: skip
-    p.add_argument("--workers", type=cli_args.int_at_least(1),
-                   default=os.cpu_count() or 1,
-                   help="parallel processes (default: one per core, %(default)s here)")  # fmt: skip
+    p.add_argument("--workers", type=cli_args.int_at_least(1), default=None,
+                   help="parallel processes, or Ray tasks in flight with --backend ray "
+                   f"(default: one per core, {os.cpu_count() or 1} here; with --ray-address, "
+                   "every CPU of the cluster)")  # fmt: skip
+    p.add_argument("--backend", default="local", choices=("local", "ray"),
+                   help="where trials run: local processes, or Ray tasks (needs the ray extra; "
+                   "a local Ray of --workers CPUs unless --ray-address) (%(default)s)")  # fmt: skip
+    p.add_argument(
+        "--ray-address",
+        default=None,
+        help="an existing Ray cluster to run on (e.g. auto, ray://head:10001)",
+    )
     p.add_argument("--noise", type=cli_args.float_at_least(0.0), default=0.05,
                    help="torque sensor noise per sample, N m, >= 0 (%(default)s)")  # fmt: skip
     p.add_argument("--estimator", default="ipopt", choices=("ipopt", "lstsq"),
@@ -205,7 +220,10 @@ def build_parser() -> argparse.ArgumentParser:
     )
     scene.set_defaults(func=_cmd_scene)
 
+    from comgrasp_pin import cli_sweep
     from comgrasp_pin.cli_robot import add_subcommands
+
+    cli_sweep.add_subcommand(sub, _add_experiment_args)
 
     add_subcommands(sub)  # estimate, plan-poses: the real-arm path
     return parser

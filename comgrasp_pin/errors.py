@@ -106,3 +106,8 @@ class UnstablePhysicsError(ComGraspError):
 
 class WorkerDiedError(ComGraspError):
     """A worker process running a trial died (killed, crashed, out of memory)."""
+
+
+class BackendError(ComGraspError):
+    """The requested backend cannot run trials here (``--backend ray`` without Ray installed,
+    or a Ray cluster that cannot be reached)."""

@@ -27,6 +27,8 @@ BAD = [
     (["--resume", "--overwrite"], "not allowed with argument"),
     (["--retry-failed", "--overwrite"], "--retry-failed continues a run, --overwrite starts"),
     (["--estimator", "magic"], "invalid choice: 'magic'"),
+    (["--backend", "spark"], "invalid choice: 'spark'"),
+    (["--ray-address", "auto"], "--ray-address is for --backend ray"),
 ]
 
 
@@ -86,3 +88,26 @@ def test_the_installed_command_prints_no_traceback(tmp_path):
     )
     assert result.returncode == 2
     assert "Traceback" not in result.stderr and "is not a folder" in result.stderr
+
+
+_WITHOUT_RAY = """
+import sys
+sys.modules["ray"] = None  # as if ray were not installed: `import ray` raises ImportError
+from comgrasp_pin.cli import main
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+@pytest.mark.parametrize("command", ["accuracy", "sweep"])
+def test_backend_ray_without_ray_installed_exits_2_saying_how_to_install_it(tmp_path, command):
+    args = [command, "--backend", "ray", "--objects", "obj1", "--trials", "1",
+            "--out", str(tmp_path / "x")]  # fmt: skip
+    if command == "sweep":
+        args += ["--param", "grip_force=10,15"]
+    result = subprocess.run([sys.executable, "-c", _WITHOUT_RAY, *args], capture_output=True,
+                            text=True, check=False)  # fmt: skip
+    assert result.returncode == 2, result.stderr
+    assert "Traceback" not in result.stderr
+    assert "--backend ray needs Ray, which is not installed" in result.stderr
+    assert "pip install 'comgrasp_pin[ray]'" in result.stderr
+    assert not (tmp_path / "x").exists()

@@ -4,11 +4,12 @@ headers refused, failed rows retried (issue 15)."""
 import csv
 import json
 import warnings
+from pathlib import Path
 
 import pytest
 
 from comgrasp_pin.cli import main
-from comgrasp_pin.errors import ComGraspError, ResumeError
+from comgrasp_pin.errors import ComGraspError, OutputError, ResumeError
 from comgrasp_pin.experiments.run_files import read_results, settings_path
 from comgrasp_pin.experiments.runner import read_rows, run_trials
 
@@ -254,3 +255,19 @@ def test_a_second_run_on_the_same_csv_is_refused(tmp_path):
     assert len(outcome) == 1 and "another run is writing" in outcome[0]
     assert [int(r["value"]) for r in read_rows(path)] == [0, 10, 20, 30]
     _run(path, resume=True)  # the lock went with the run
+
+
+def test_rows_that_finished_together_are_written_whole_with_one_fsync(tmp_path):
+    from comgrasp_pin.experiments.run_files import RowAppender, rewrite
+
+    path, columns = tmp_path / "out.csv", [*COLUMNS, "error"]
+    rewrite(path, columns, [])
+    with RowAppender(path, columns) as out:
+        out.write_rows(
+            [{"object": "obj1", "trial": k, "method": "m", "value": k} for k in range(3)]
+        )
+        assert out.written == 3
+    rows, repaired = read_results(path, columns)
+    assert [r["value"] for r in rows] == ["0", "1", "2"] and not repaired
+    with RowAppender(Path("/dev/full"), columns) as out, pytest.raises(OutputError):
+        out.write_rows(rows)

@@ -11,6 +11,7 @@ from pathlib import Path
 
 from comgrasp_pin import __version__
 from comgrasp_pin.experiments import report
+from comgrasp_pin.experiments.ray_backend import check_backend
 from comgrasp_pin.experiments.runner import run_trials
 from comgrasp_pin.experiments.trials import (
     ACCURACY_COLUMNS,
@@ -32,13 +33,16 @@ class RunOptions:
 
     Attributes:
         out: output folder. objects: object names. trials: trials per object (and method).
-        seed: the run's seed. workers: parallel processes. resume: continue the CSVs in
+        seed: the run's seed. workers: parallel processes (0 with Ray: one per CPU of
+        the cluster). resume: continue the CSVs in
         ``out``. overwrite: start them again. noise: torque sensor noise (N m per sample).
         estimator: the trial grasp's estimator, "ipopt" (with the side view's axis prior)
         or "lstsq" (closed form). retry_failed: with ``resume``, run again the trials
-        that ended in an error. second_seed: ``reproduce`` also runs the accuracy
-        experiment with this seed (in ``out/seed<S>``) and reports its calibration and
-        accuracy beside the first's, or None.
+        that ended in an error. backend: "local" (processes) or "ray" (Ray tasks, at most
+        ``workers`` at a time); ray_address: an existing Ray cluster (None: a local Ray).
+        second_seed: ``reproduce`` also runs the accuracy experiment with this seed (in
+        ``out/seed<S>``) and reports its calibration and accuracy beside the first's, or
+        None.
     """
 
     out: Path
@@ -51,6 +55,8 @@ class RunOptions:
     noise: float = 0.05
     estimator: str = "ipopt"
     retry_failed: bool = False
+    backend: str = "local"
+    ray_address: str | None = None
     second_seed: int | None = None
 
 
@@ -64,6 +70,7 @@ def run_settings(opts: RunOptions) -> dict:
         "version": __version__,
         "objects": list(opts.objects),
         "trials": opts.trials,
+        "backend": opts.backend,  # recorded, not compared: a local run may resume on Ray
     }
 
 
@@ -73,7 +80,8 @@ def _run(opts: RunOptions, fn, methods, name: str, columns) -> list[dict]:
         task["noise"] = opts.noise
         task["estimator"] = opts.estimator
     return run_trials(fn, tasks, opts.out / f"{name}.csv", columns, opts.workers, opts.resume,
-                      opts.overwrite, name, opts.retry_failed, run_settings(opts))  # fmt: skip
+                      opts.overwrite, name, opts.retry_failed, run_settings(opts),
+                      opts.backend, opts.ray_address)  # fmt: skip
 
 
 def run_accuracy(opts: RunOptions) -> list[dict]:
@@ -126,6 +134,7 @@ def reproduce(opts: RunOptions) -> Path:
     """Both experiments and ``report.md`` with figures, tables and the settings used."""
     out, objects, trials, seed, noise = opts.out, opts.objects, opts.trials, opts.seed, opts.noise
     workers = opts.workers
+    check_backend(opts.backend, opts.ray_address)
     out.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
     acc = run_accuracy(opts)
@@ -136,6 +145,7 @@ def reproduce(opts: RunOptions) -> Path:
     settings = settings_summary(noise, opts.estimator)
     meta = {
         "objects": list(objects), "trials_per_object": trials, "seed": seed, "workers": workers,
+        "backend": opts.backend,
         "accuracy_minutes": (mid - start) / 60, "regrasp_minutes": (end - mid) / 60,
         "versions": _versions(), "settings": settings,
     }  # fmt: skip
@@ -145,8 +155,8 @@ def reproduce(opts: RunOptions) -> Path:
     text = f"""# comgrasp_pin: the paper's experiments, reproduced
 
 {report.run_summary(acc, reg, seed)}
-Run time on {workers} worker(s): accuracy {meta["accuracy_minutes"]:.1f} min, regrasp
-{meta["regrasp_minutes"]:.1f} min.
+Run time on {workers or "all the cluster's"} worker(s) ({opts.backend} backend): accuracy
+{meta["accuracy_minutes"]:.1f} min, regrasp {meta["regrasp_minutes"]:.1f} min.
 
 ## Experiment 1: CoM accuracy against the tilt in the jaws
 

@@ -2,9 +2,11 @@
 
 - ``DIR/NAME.settings.json`` holds every setting of the run (seed, noise, estimator, the whole
   config tree, the package version, the objects and trials). ``--resume`` refuses a run
-  whose settings differ, naming each setting; only ``objects`` and ``trials`` may grow.
+  whose settings differ, naming each setting; only ``objects`` and ``trials`` may grow, and
+  ``backend`` (where the trials run) may change: a run started locally may resume on Ray.
 - Every row is one line, written whole: appended with one unbuffered write, flushed and
-  fsynced, so the CSV is readable while a run goes on. A write that fails (full disk) is
+  fsynced (the rows a Ray driver collects in one pass: one write and one fsync for them
+  all), so the CSV is readable while a run goes on. A write that fails (full disk) is
   undone and reported as ``OutputError``; the rows before it stay intact.
 - A run killed while writing leaves a last line without its newline: ``read_results`` drops
   it with a warning (its trial runs again). A CSV with another header, or a damaged row
@@ -31,6 +33,8 @@ from comgrasp_pin.errors import OutputError, ResumeError
 
 GROWABLE = ("objects", "trials")
 """Settings ``--resume`` lets change: a run may be extended with more trials or objects."""
+FREE = ("backend", "ray_address")
+"""Settings recorded but not compared: where the trials run changes none of their rows."""
 
 
 def settings_path(csv_path: Path) -> Path:
@@ -53,9 +57,10 @@ def _flat(tree: object, prefix: str = "") -> dict[str, object]:
 
 
 def settings_differences(recorded: dict, wanted: dict) -> list[str]:
-    """Every setting (dotted path) other than GROWABLE whose value differs, as text."""
-    old = {k: v for k, v in _flat(_normal(recorded)).items() if k not in GROWABLE}
-    new = {k: v for k, v in _flat(_normal(wanted)).items() if k not in GROWABLE}
+    """Every setting (dotted path) other than GROWABLE and FREE whose value differs, as text."""
+    skip = (*GROWABLE, *FREE)
+    old = {k: v for k, v in _flat(_normal(recorded)).items() if k not in skip}
+    new = {k: v for k, v in _flat(_normal(wanted)).items() if k not in skip}
     missing = object()
     return [
         f"{key}: {old.get(key, 'not set')!r} in the run, {new.get(key, 'not set')!r} now"
@@ -220,7 +225,13 @@ class RowAppender:
 
     def write(self, row: dict) -> None:
         """Append ``row``; on failure undo the partial line and raise OutputError."""
-        data = format_row(row, self.columns)
+        self.write_rows([row])
+
+    def write_rows(self, rows: Sequence[dict]) -> None:
+        """Append ``rows``, each a whole line, with one fsync for them all (a driver that
+        collects several finished trials at once); on failure undo the partial lines and
+        raise OutputError."""
+        data = b"".join(format_row(row, self.columns) for row in rows)
         f = self._file
         start = f.seek(0, os.SEEK_END)
         try:
@@ -241,7 +252,7 @@ class RowAppender:
                 f"{self.written} rows written by this run before are intact: make room and "
                 "continue it with --resume"
             ) from None
-        self.written += 1
+        self.written += len(rows)
 
     def close(self) -> None:
         """Close the file."""

@@ -4,11 +4,12 @@ Every finished trial is appended to the CSV at once, whole (``run_files.RowAppen
 interrupted run loses nothing and ``resume=True`` continues where it stopped; the run's
 settings are kept beside the CSV and a resumed run must match them. A trial that raises is
 recorded with its error and does not stop the run; ``retry_failed=True`` runs those again.
-``workers > 1`` runs trials in separate processes (spawned, so each has its own MuJoCo and
-OpenGL context); a worker that dies (killed, crashed) breaks the pool: it is restarted, the
-trials that were in flight are run again one at a time, and the one that kills its worker
-again is recorded as failed (``WorkerDiedError``). A row that cannot be written (full disk)
-stops the run with ``OutputError``; the rows before it stay intact.
+``backend="ray"`` runs the same trials as Ray tasks (``ray_backend``), the driver appending
+rows as they finish. ``workers > 1`` runs trials in separate processes (spawned, so each has
+its own MuJoCo and OpenGL context); a worker that dies (killed, crashed) breaks the pool:
+it is restarted, the trials that were in flight are run again one at a time, and the one
+that kills its worker again is recorded as failed (``WorkerDiedError``). A row that cannot
+be written (full disk) stops the run with ``OutputError``; the rows before it stay intact.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from tqdm import tqdm
 
 from comgrasp_pin.errors import InvalidInputError, ResumeError, WorkerDiedError
 from comgrasp_pin.experiments import run_files
+from comgrasp_pin.experiments.ray_backend import check_backend, ensure_ray, run_on_ray
 from comgrasp_pin.experiments.run_files import RowAppender
 
 KEY_COLUMNS = ("object", "trial", "method")
@@ -97,6 +99,9 @@ def run_trials(
     desc: str = "trials",
     retry_failed: bool = False,
     settings: dict | None = None,
+    backend: str = "local",
+    ray_address: str | None = None,
+    keys: Sequence[str] = KEY_COLUMNS,
 ) -> list[dict]:
     """Run ``fn(task)`` for every task not already in ``csv_path``; return all rows.
 
@@ -106,47 +111,72 @@ def run_trials(
             into the row.
         csv_path: results file; rows are appended as trials finish.
         columns: the CSV header (an ``error`` column is added).
-        workers: processes (1: in this process).
+        workers: processes (1: in this process), or Ray tasks in flight (0: as many as the
+            Ray cluster has CPUs).
         resume: keep the rows already in ``csv_path`` and run only the missing tasks.
         overwrite: start a new file even if one exists.
         retry_failed: with ``resume``, run again the tasks whose rows hold an error.
         settings: every setting of the run, recorded beside the CSV; with ``resume`` the
             recorded ones must match (``run_files.check_settings``).
+        backend: "local" (this process or ``workers`` processes) or "ray" (Ray tasks, at
+            most ``workers`` at a time, on ``ray_address`` or a local Ray).
+        keys: the columns that identify a trial (each task once).
 
     Raises:
         ResumeError: the CSV cannot be continued (see ``run_files``).
         OutputError: a row cannot be written; the run stopped, earlier rows intact.
     """
     columns = [*columns, "error"] if "error" not in columns else list(columns)
-    repeated = sorted(k for k, n in Counter(task_key(t) for t in tasks).items() if n > 1)
+    key = _key_of(tuple(keys))
+    repeated = sorted(k for k, n in Counter(key(t) for t in tasks).items() if n > 1)
     if repeated:
         raise InvalidInputError(f"tasks {repeated[:5]} are listed more than once")
+    check_backend(backend, ray_address)
+    execute = _executor(backend, workers, ray_address)
     with run_files.run_lock(Path(csv_path)):
         rows = _kept_rows(Path(csv_path), columns, resume, overwrite, retry_failed, settings)
-        return _run_missing(fn, tasks, rows, Path(csv_path), columns, workers, desc)
+        return _run_missing(fn, tasks, rows, Path(csv_path), columns, execute, desc, key)
+
+
+def _key_of(keys: tuple[str, ...]) -> Callable[[dict], tuple[str, ...]]:
+    return lambda row: tuple(str(row.get(k, "")) for k in keys)
+
+
+def _executor(backend: str, workers: int, ray_address: str | None):
+    """``execute(fn, todo, record)`` for the backend."""
+    if backend == "ray":
+        ray = ensure_ray(workers, ray_address)  # before any file is touched: none if it fails
+        workers = workers or max(1, int(ray.cluster_resources().get("CPU", 1)))
+        return lambda fn, todo, record: run_on_ray(_safe_call, fn, todo, workers, record,
+                                                   ray_address)  # fmt: skip
+    if workers <= 1:
+        return _run_serial
+    return lambda fn, todo, record: _run_parallel(fn, todo, workers, record)
+
+
+def _run_serial(fn, todo, record) -> None:
+    for task in todo:
+        record(_safe_call(fn, task))
 
 
 def _run_missing(fn, tasks, rows: list[dict], csv_path: Path, columns: list[str],
-                 workers: int, desc: str) -> list[dict]:  # fmt: skip
+                 execute, desc: str, key) -> list[dict]:  # fmt: skip
     """Run the tasks that have no row in ``rows`` yet, appending theirs; all rows."""
-    done = {task_key(row) for row in rows}
-    todo = [task for task in tasks if task_key(task) not in done]
+    done = {key(row) for row in rows}
+    todo = [task for task in tasks if key(task) not in done]
     bar = tqdm(total=len(tasks), initial=len(tasks) - len(todo), desc=desc, unit="trial")
     with RowAppender(csv_path, columns) as out:
 
-        def record(row: dict) -> None:
-            out.write(row)
-            rows.append(row)
-            bar.update(1)
-            if row.get("error"):
-                bar.write(f"trial {task_key(row)} failed: {row['error']}")
+        def record(*finished: dict) -> None:
+            out.write_rows(finished)  # one fsync for the rows that finished together
+            rows.extend(finished)
+            bar.update(len(finished))
+            for row in finished:
+                if row.get("error"):
+                    bar.write(f"trial {key(row)} failed: {row['error']}")
 
         try:
-            if workers <= 1:
-                for task in todo:
-                    record(_safe_call(fn, task))
-            else:
-                _run_parallel(fn, todo, workers, record)
+            execute(fn, todo, record)
         finally:
             bar.close()
     return rows

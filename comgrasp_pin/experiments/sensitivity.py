@@ -1,7 +1,8 @@
-"""Sensitivity studies for the notebook: torque noise, grip force, rod thickness.
+"""Sensitivity of the estimator to the torque sensor's noise, for the notebook.
 
-``noise_sweep`` is pure estimation (Monte Carlo on the regression model, no simulator);
-``grip_force_sweep`` runs trial grasps in the simulated world.
+``noise_sweep`` is pure estimation (Monte Carlo on the regression model, no simulator).
+Sweeps of the simulated experiments over any config value (grip force, noise, friction)
+are ``experiments.sweep`` (``comgrasp sweep``).
 """
 
 from __future__ import annotations
@@ -55,32 +56,4 @@ def noise_sweep(
             "com_std_predicted_m": predicted,
             "mass_rms_kg": float(np.sqrt(np.mean(mass_err))),
         })  # fmt: skip
-    return rows
-
-
-def grip_force_sweep(obj: str, forces: list[float], seeds: list[int]) -> list[dict]:
-    """Tilt, accuracy and whether the rod was kept, for trial grasps at the geometric centre
-    of ``obj`` with each grip force (N) on the scenes drawn from ``seeds``."""
-    from dataclasses import replace
-
-    from comgrasp_pin.config import EpisodeConfig
-    from comgrasp_pin.errors import EmptyGripperError
-    from comgrasp_pin.simulation.episode import measure_and_score
-    from comgrasp_pin.simulation.scene import Scene, World
-
-    rows = []
-    for force in forces:
-        base = EpisodeConfig()
-        config = replace(base, motion=replace(base.motion, grip_force=force))
-        for seed in seeds:
-            world = World(Scene.sample(obj, seed), config, seed)
-            try:
-                t, score = measure_and_score(world)
-                row = {"theta_deg": float(np.degrees(t.theta)), "accuracy": score.accuracy,
-                       "held": 1}  # fmt: skip
-            except EmptyGripperError:
-                row = {"theta_deg": float("nan"), "accuracy": float("nan"), "held": 0}
-            finally:
-                world.close()
-            rows.append({"object": obj, "grip_force_N": force, "seed": seed, **row})
     return rows

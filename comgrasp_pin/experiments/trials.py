@@ -13,6 +13,7 @@ from dataclasses import asdict
 import numpy as np
 
 from comgrasp_pin.config import EpisodeConfig, SensorConfig, TorqueSensorConfig, TrialConfig
+from comgrasp_pin.config_paths import with_values
 from comgrasp_pin.experiments.design import grasp_for_lever, side_and_lever, target_tilt
 
 ACCURACY_COLUMNS = [
@@ -22,12 +23,12 @@ ACCURACY_COLUMNS = [
     "rolled_slip", "dropped_at_roll", "pos_std_m", "com_path", "extra_pose", "estimator",
     *(f"pos_std_{part}_m" for part in
       ("estimator", "tilt", "shift", "out_of_plane", "slide", "creep", "off_axis")),
-    "wall_s",
+    "sim_s", "wall_s",
 ]  # fmt: skip
 REGRASP_COLUMNS = [
     "object", "trial", "method", "seed", "success", "regrasped", "reason", "length_m",
     "pos_real_m", "pos_esti_m", "theta_deg", "accuracy", "mass_real_kg", "mass_esti_kg",
-    "final_grasp_offset_m", "pos_std_m", "extra_pose", "wall_s",
+    "final_grasp_offset_m", "pos_std_m", "extra_pose", "sim_s", "wall_s",
 ]  # fmt: skip
 ACCURACY_COM_RANGE = (0.0, 0.3)  # true CoM |pos_real| / length, uniform (capped, see below)
 ACCURACY_GRASP_OFFSET = 0.25  # grasp offsets from the rectangle's centre, |offset| / length
@@ -65,7 +66,10 @@ def episode_config(noise: float = 0.05, estimator: str = "ipopt") -> EpisodeConf
 
 
 def _episode_config(task: dict) -> EpisodeConfig:
-    return episode_config(task.get("noise", 0.05), task.get("estimator", "ipopt"))
+    """The task's config: ``episode_config`` of its noise and estimator, with the values of
+    ``task["overrides"]`` (dotted path -> number, a sweep's grid point) put in."""
+    config = episode_config(task.get("noise", 0.05), task.get("estimator", "ipopt"))
+    return with_values(config, task["overrides"]) if task.get("overrides") else config
 
 
 def accuracy_grasp(obj: str, seed: int, config) -> tuple[float, float]:
@@ -103,6 +107,7 @@ def accuracy_trial(task: dict) -> dict:
         start = time.perf_counter()
         t, score = measure_and_score(world, offset)
         wall = time.perf_counter() - start
+        sim_s = world.sim.time
     finally:
         world.close()
     std = t.estimate.std
@@ -128,6 +133,7 @@ def accuracy_trial(task: dict) -> dict:
         "extra_pose": int(t.extra_pose),
         "estimator": config.trial.estimator,
         **{f"pos_std_{k.replace(' ', '_')}_m": v for k, v in t.std_parts.items()},
+        "sim_s": sim_s,
         "wall_s": wall,
     }
 

@@ -16,6 +16,10 @@ MAX_MISFIT_PER_RADIUS = 0.03  # ... or this fraction of its radius (a flat bar: 
 MAX_REFINE_TURN_DEG = 8.0  # a cylinder this far from the slice line locked on a wrong side
 MAX_REFINE_SHIFT = 0.01  # the same, for its offset (m)
 RADIUS_GIVE = np.arange(0.25, 2.01, 0.25) * 1e-3  # the handle's radius above the fingers' (m)
+FIT_ITERATIONS = 8  # Levenberg-Marquardt steps of the cylinder fit, each refitting the inliers
+FIT_STEPS = (1e-6, 1e-7, 1e-7)  # finite-difference steps of angle (rad), offset, radius (m)
+FIT_DAMPING = (1e-6, 1e-3, 1e-1, 1.0)  # damping tried in turn until the cost falls
+FIT_OUTLIER_MARGIN = 0.002  # inliers: within 3 median residuals plus this (m)
 
 
 def centre_line(
@@ -68,6 +72,20 @@ def _slope_std(c: np.ndarray, slope: float, intercept: float) -> float:
     return float(np.sqrt(np.sum(residual**2) / (k - 2) / spread))
 
 
+def _cylinder_residuals(prm: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """Distance (m) of the points (N, 3) from the axis of the cylinder ``prm``, less its radius.
+
+    ``prm``: axis angle in the x-z plane (rad), its offset along the normal (m), radius (m).
+    The arithmetic of ``np.linalg.norm(rel - np.outer(rel @ u, u), axis=1)`` (the same
+    results to the bit), without its copies.
+    """
+    c, s = np.cos(prm[0]), np.sin(prm[0])
+    u = np.array([c, 0.0, s])
+    rel = pts - prm[1] * np.array([-s, 0.0, c])
+    d = rel - np.multiply.outer(rel @ u, u)
+    return np.sqrt(np.add.reduce(d * d, axis=1)) - prm[2]
+
+
 def fit_cylinder(
     points: np.ndarray, direction: np.ndarray, point: np.ndarray, radius: float | None = None
 ) -> tuple[np.ndarray, np.ndarray, float]:
@@ -87,33 +105,28 @@ def fit_cylinder(
     angle = np.arctan2(direction[1], direction[0])
     normal = np.array([-direction[1], direction[0]])
     params = np.array([angle, point @ normal, 0.0])
-
-    def residuals(prm: np.ndarray, pts: np.ndarray) -> np.ndarray:
-        u = np.array([np.cos(prm[0]), 0.0, np.sin(prm[0])])
-        n = np.array([-np.sin(prm[0]), 0.0, np.cos(prm[0])])
-        rel = pts - prm[1] * n
-        return np.linalg.norm(rel - np.outer(rel @ u, u), axis=1) - prm[2]
-
-    params[2] = np.median(residuals(params, points)) if radius is None else radius
+    params[2] = np.median(_cylinder_residuals(params, points)) if radius is None else radius
     free = 2 if radius is not None else 3
     keep = np.ones(len(points), dtype=bool)
-    for _ in range(8):
-        res = residuals(params, points[keep])
+    for _ in range(FIT_ITERATIONS):
+        kept = points[keep]
+        res = _cylinder_residuals(params, kept)
         jac = np.empty((len(res), free))
-        for k, h in enumerate((1e-6, 1e-7, 1e-7)[:free]):
+        for k, h in enumerate(FIT_STEPS[:free]):
             step = np.zeros(3)
             step[k] = h
-            jac[:, k] = (residuals(params + step, points[keep]) - res) / h
+            jac[:, k] = (_cylinder_residuals(params + step, kept) - res) / h
         # Levenberg-Marquardt step: damped, accepted only if it lowers the cost.
         jtj, jtr = jac.T @ jac, jac.T @ res
-        for damping in (1e-6, 1e-3, 1e-1, 1.0):
+        cost = np.sum(res**2)
+        for damping in FIT_DAMPING:
             delta = np.linalg.solve(jtj + damping * np.diag(np.diag(jtj)), jtr)
             trial = params - np.r_[delta, np.zeros(3 - free)]
-            if np.sum(residuals(trial, points[keep]) ** 2) < np.sum(res**2):
+            if np.sum(_cylinder_residuals(trial, kept) ** 2) < cost:
                 params = trial
                 break
-        res_all = np.abs(residuals(params, points))
-        keep = res_all < 3.0 * np.median(res_all[keep]) + 0.002
+        res_all = np.abs(_cylinder_residuals(params, points))
+        keep = res_all < 3.0 * np.median(res_all[keep]) + FIT_OUTLIER_MARGIN
     u = np.array([np.cos(params[0]), np.sin(params[0])])
     if u[0] < 0:
         u = -u

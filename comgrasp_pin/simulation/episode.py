@@ -51,6 +51,7 @@ class EpisodeResult:
         trial: the trial grasp's measurement (regrasp only); trial_score: it, scored.
         final_grasp_offset: where the carrying grasp held the rod, from its centre (true, m).
         timings: wall-clock seconds per phase.
+        sim_s: simulated seconds of the episode (from the world's construction on).
     """
 
     scene: Scene
@@ -62,6 +63,7 @@ class EpisodeResult:
     trial_score: TrialScore | None
     final_grasp_offset: float
     timings: dict
+    sim_s: float = float("nan")
 
     def row(self) -> dict:
         t, s = self.trial, self.trial_score
@@ -80,6 +82,7 @@ class EpisodeResult:
             "final_grasp_offset_m": self.final_grasp_offset,
             "pos_std_m": t.x_com_std if t else nan,
             "extra_pose": int(t.extra_pose) if t else 0,
+            "sim_s": self.sim_s,
             "wall_s": sum(self.timings.values()),
         }
 
@@ -142,6 +145,7 @@ def run_episode(
             recorder.write_video(video)
             recorder.write_strip(video.with_suffix(".png"))
     finally:
+        sim_s = world.sim.time
         if recorder is not None:
             recorder.close()
         world.close()
@@ -149,4 +153,4 @@ def run_episode(
     trial = grasped.trial if grasped is not None else None
     trial_score = score(cell, trial) if trial is not None else None
     return EpisodeResult(scene, method, success, grasped is not None and grasped.regrasped,
-                         reason, trial, trial_score, final_offset, timings)  # fmt: skip
+                         reason, trial, trial_score, final_offset, timings, sim_s)  # fmt: skip

@@ -1,0 +1,167 @@
+"""`comgrasp sweep` (issue 16): config values by dotted path, the grid, its validation, and a
+real tiny sweep whose default point gives the accuracy experiment's own row."""
+
+import json
+
+import numpy as np
+import pytest
+
+from comgrasp_pin import config_paths
+from comgrasp_pin.cli import main
+from comgrasp_pin.config import EpisodeConfig
+from comgrasp_pin.errors import InvalidInputError
+from comgrasp_pin.experiments.reproduce import RunOptions
+from comgrasp_pin.experiments.runner import read_rows
+from comgrasp_pin.experiments.sweep import (
+    SweepOptions,
+    grid,
+    markdown_table,
+    parse_param,
+    point_measures,
+    summarise,
+    sweep_tasks,
+)
+
+
+def test_values_by_dotted_path_alias_and_tuple_element():
+    config = config_paths.with_values(
+        EpisodeConfig(),
+        {"grip_force": 10, "sensors.torque.noise_std": 0.2, "world.pad_friction": 0.5,
+         "world.pad_friction.1": 0.004, "world.noslip_iterations": 20},
+    )  # fmt: skip
+    assert config.motion.grip_force == 10.0
+    assert config.sensors.torque.noise_std == 0.2
+    assert config.world.pad_friction == (0.5, 0.004, 0.0001)
+    assert config.world.noslip_iterations == 20 and isinstance(config.world.noslip_iterations, int)
+    assert EpisodeConfig().motion.grip_force == 15.0  # the default is untouched
+    assert config_paths.resolve("noise") == "sensors.torque.noise_std"
+    assert config_paths.resolve("world.pad_friction") == "world.pad_friction.0"
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [("grip=1,2", "unknown config value 'grip'"),
+     ("motion.grip_forces=1", "unknown config value 'motion.grip_forces'"),
+     ("trial.estimator=1", "unknown config value 'trial.estimator'"),
+     ("grip_force=", "needs a comma-separated list of numbers"),
+     ("grip_force=10,,20", "needs a comma-separated list of numbers"),
+     ("grip_force=ten", "values must be numbers"),
+     ("grip_force=10,nan", "values must be finite"),
+     ("grip_force=10,10", "listed more than once"),
+     ("grip_force", "needs NAME=V1,V2")],
+)  # fmt: skip
+def test_bad_params_are_refused(text, message):
+    with pytest.raises(InvalidInputError, match=message):
+        parse_param(text)
+
+
+def test_an_unknown_path_lists_the_valid_ones():
+    with pytest.raises(InvalidInputError) as info:
+        parse_param("motion.grip=1")
+    text = str(info.value)
+    assert "motion.grip_force" in text and "sensors.torque.noise_std" in text
+    assert "grip_force (motion.grip_force)" in text
+
+
+@pytest.mark.parametrize(
+    ("param", "message"),
+    [("motion.grip=1", "motion.grip_force"),  # the valid paths are listed
+     ("noise=", "needs a comma-separated list"),
+     ("noise=-0.1,0.1", "noise_std and drift_std must be >= 0"),
+     ("world.noslip_iterations=2.5", "world.noslip_iterations takes an integer")],
+)  # fmt: skip
+def test_the_cli_refuses_bad_params_with_exit_2(tmp_path, capsys, param, message):
+    out = tmp_path / "sweep"
+    try:
+        code = main(["sweep", "--param", param, "--objects", "obj1", "--trials", "1",
+                     "--out", str(out)])  # fmt: skip
+    except SystemExit as exc:
+        code = exc.code
+    err = capsys.readouterr().err
+    assert code == 2 and message in err and "Traceback" not in err
+    assert not out.exists()
+
+
+def test_the_grid_and_its_tasks_share_the_seeds(tmp_path):
+    params = (("motion.grip_force", (10.0, 20.0)), ("sensors.torque.noise_std", (0.02, 0.05, 0.1)))
+    points = grid(params)
+    assert len(points) == 6 and points[1] == {"motion.grip_force": 10.0,
+                                              "sensors.torque.noise_std": 0.05}  # fmt: skip
+    opts = SweepOptions(RunOptions(tmp_path, ("obj1", "obj2"), 2), "regrasp", params)
+    tasks = sweep_tasks(opts)
+    assert len(tasks) == 6 * 2 * 2 * 2  # points x objects x trials x methods
+    seeds = {}
+    for task in tasks:
+        seeds.setdefault((task["object"], task["trial"]), set()).add(task["seed"])
+        assert task["overrides"]["motion.grip_force"] == task["motion.grip_force"]
+    assert all(len(s) == 1 for s in seeds.values())
+
+
+def _row(accuracy, esti, real, std, **extra):
+    return {"accuracy": accuracy, "pos_esti_m": esti, "pos_real_m": real, "pos_std_m": std,
+            "error": "", **extra}  # fmt: skip
+
+
+def test_point_measures_by_hand():
+    rows = [_row(0.9, 0.01, 0.0, 0.01), _row(0.7, 0.03, 0.0, 0.01),
+            {**_row("", "", "", ""), "error": "RodDroppedError: dropped"}]  # fmt: skip
+    m = point_measures(rows, "accuracy")
+    assert m["accuracy"][0] == pytest.approx(80.0) and m["accuracy"][3] == 2
+    # t interval of (90, 70): 80 +- t_{0.975,1} * 14.142 / sqrt(2) = 80 +- 127.06
+    assert m["accuracy"][2] - 80.0 == pytest.approx(12.706 * 10.0, rel=1e-3)
+    assert m["success"][:1] == (pytest.approx(200 / 3),) and m["success"][3] == 3
+    assert m["coverage"][0] == pytest.approx(50.0) and m["coverage"][3] == 2  # z = 1 and 3
+    regrasp = [{**_row(0.9, 0.0, 0.0, 0.01), "method": "regrasp", "success": 1},
+               {**_row(0.8, 0.0, 0.0, 0.01), "method": "regrasp", "success": 0},
+               {**_row(0.1, 0.0, 0.0, 0.01), "method": "baseline", "success": 1}]  # fmt: skip
+    m = point_measures(regrasp, "regrasp")
+    assert m["success"][0] == pytest.approx(50.0) and m["accuracy"][0] == pytest.approx(85.0)
+
+
+@pytest.mark.slow
+def test_a_tiny_sweep_gives_the_experiments_row_at_the_default_point(tmp_path):
+    acc = tmp_path / "acc"
+    assert main(["accuracy", "--objects", "obj1", "--trials", "1", "--workers", "1",
+                 "--out", str(acc)]) == 0  # fmt: skip
+    out = tmp_path / "sweep"
+    argv = ["sweep", "--param", "grip_force=15,25", "--param", "noise=0.05,0.5", "--objects",
+            "obj1", "--trials", "1", "--workers", "2", "--out", str(out)]  # fmt: skip
+    assert main(argv) == 0
+    rows = read_rows(out / "sweep.csv")
+    assert len(rows) == 4 and all(r["error"] == "" for r in rows)
+    assert list(rows[0])[:2] == ["motion.grip_force", "sensors.torque.noise_std"]
+    by_point = {(float(r["motion.grip_force"]), float(r["sensors.torque.noise_std"])): r
+                for r in rows}  # fmt: skip
+    reference = read_rows(acc / "accuracy.csv")[0]
+    default = by_point[(15.0, 0.05)]
+    assert {k: v for k, v in reference.items() if k != "wall_s"} == {
+        k: default[k] for k in reference if k != "wall_s"
+    }
+    # ten times the torque noise moves the estimate; a firmer grip holds the rod otherwise
+    assert by_point[(15.0, 0.5)]["mass_esti_kg"] != default["mass_esti_kg"]
+    assert by_point[(25.0, 0.05)]["theta_true_deg"] != default["theta_true_deg"]
+    for measure in ("accuracy", "success", "coverage"):
+        assert (out / f"sweep_{measure}.png").stat().st_size > 10_000
+    table = (out / "sweep_table.md").read_text()
+    assert table.count("\n") == 2 + 4 and "| 25 | 0.5 |" in table
+    settings = json.loads((out / "sweep.settings.json").read_text())
+    assert settings["params"] == {"motion.grip_force": [15.0, 25.0],
+                                  "sensors.torque.noise_std": [0.05, 0.5]}  # fmt: skip
+    assert settings["points"][3]["config"]["motion"]["grip_force"] == 25.0
+    assert settings["points"][3]["config"]["sensors"]["torque"]["noise_std"] == 0.5
+    # resumable: nothing left to run; another grid is refused, naming what differs
+    before = (out / "sweep.csv").read_bytes()
+    assert main([*argv, "--resume"]) == 0
+    assert (out / "sweep.csv").read_bytes() == before
+    other = [a.replace("grip_force=15,25", "grip_force=15,30") for a in argv]
+    assert main([*other, "--resume"]) == 2
+    # one swept value: a line plot with intervals
+    one = (("motion.grip_force", (15.0, 25.0)),)
+    sel = [r for r in rows if float(r["sensors.torque.noise_std"]) == 0.05]
+    table = summarise(sel, one, "accuracy")
+    assert [point for point, _ in table] == [{"motion.grip_force": 15.0},
+                                             {"motion.grip_force": 25.0}]  # fmt: skip
+    assert np.isfinite(table[0][1]["accuracy"][0]) and "| 15 |" in markdown_table(table, one)
+    from comgrasp_pin.experiments.report.sweep_plot import sweep_figures
+
+    assert len(sweep_figures(table, one, tmp_path)) == 3
