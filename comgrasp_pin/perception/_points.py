@@ -88,8 +88,9 @@ def fit_line(points: np.ndarray, iterations: int = 3) -> tuple[np.ndarray, np.nd
 
 
 def fill_holes(depth: np.ndarray, max_gap_px: float = 2.5) -> np.ndarray:
-    """``depth`` with each lost pixel (0, inf) within ``max_gap_px`` of a valid one given
-    the depth of the nearest valid pixel (OpenCV's distance transform with labels): holes and
+    """``depth`` with each lost pixel (0, inf) within ``max_gap_px`` of a valid one given ...
+
+    ... the depth of the nearest valid pixel (OpenCV's distance transform with labels): holes and
     dropouts inside surfaces close, edges stay sharp (a pixel takes one side's depth, never a
     mix). Larger empty regions stay empty. No lost pixel: ``depth`` itself.
     """
@@ -108,8 +109,9 @@ def fill_holes(depth: np.ndarray, max_gap_px: float = 2.5) -> np.ndarray:
 
 
 def denoise(depth: np.ndarray) -> np.ndarray:
-    """A 5 x 5 median of ``depth`` (m): noise falls 3-4 times, straight edges stay where they
-    are; lost pixels (inf) stay lost.
+    """A 5 x 5 median of ``depth`` (m): noise falls 3-4 times, straight edges stay where they ...
+
+    ... are; lost pixels (inf) stay lost.
     """
     valid = np.isfinite(depth)
     out = cv2.medianBlur(np.where(valid, depth, 0.0).astype(np.float32), 5).astype(float)
@@ -126,8 +128,9 @@ def noise_level(heights: np.ndarray) -> float:
 
 
 def trusted_pixels(depth: np.ndarray, smooth: np.ndarray, max_off: float) -> np.ndarray:
-    """(H, W) bool: pixels whose ``depth`` is valid and within ``max_off`` (m) of ``smooth``
-    (its median): not lost, not flying.
+    """(H, W) bool: pixels whose ``depth`` is valid and within ``max_off`` (m) of ``smooth`` ...
+
+    ... (its median): not lost, not flying.
     """
     valid = np.isfinite(depth) & (depth > 0)
     return valid & (np.abs(np.where(valid, depth, 0.0) - smooth) < max_off)
