@@ -10,6 +10,8 @@ import numpy as np
 import pytest
 from _corruption import (
     OBJECTS,
+    SIDE_GRASP_BOUND,
+    SIDE_TILT_BOUND_DEG,
     TOP_CENTRE_BOUND,
     TOP_YAW_BOUND_DEG,
     corruptions,
@@ -114,3 +116,49 @@ def test_two_rods_side_by_side_are_refused(name, gap):
         if min(e[0] for e in errors) > TOP_CENTRE_BOUND:
             silent.append((same_way, yaw, errors))
     assert silent == []
+
+
+SIDE_OBJECTS = ("obj1", "obj2", "obj4", "obj6")
+SIDE_POSES = ((0.0, 0.03), (15.0, -0.03))  # (tilt deg, grasp offset m)
+
+
+@pytest.fixture(scope="module")
+def side_results(ur5):
+    """(object, tilt, corruption, (tilt error deg, grasp error m) or the exception)."""
+    from test_perception import _held_rod_scene, _side_view_errors
+
+    from comgrasp_pin.perception import observe_held_rod
+    from comgrasp_pin.simulation.eyes import arm_capsules, handle_radius, side_camera_pose
+    from comgrasp_pin.simulation.world import SIDE_CAMERA
+    from comgrasp_pin.workcell import TABLE_Z
+
+    results = []
+    for name in SIDE_OBJECTS:
+        sim, rig, place = _held_rod_scene(ur5, name)
+        for tilt, offset in SIDE_POSES:
+            T_ee_obj = place(tilt, offset)
+            depth = rig.depth(sim.data, SIDE_CAMERA)
+            T_world_ee, T_ee_cam = side_camera_pose(ur5, sim.q)
+            args = (rig.intrinsics(SIDE_CAMERA),)
+            rest = (T_world_ee, TABLE_Z, OBJECTS[name].length, arm_capsules(ur5, sim.q), None,
+                    handle_radius(sim.finger_q[0]))  # fmt: skip
+            for label, (corrupt, T_cal) in corruptions("side", 5).items():
+                out = _outcome(observe_held_rod, None, corrupt(depth), *args, T_ee_cam @ T_cal,
+                               *rest)  # fmt: skip
+                if not isinstance(out, PerceptionError):
+                    # The truth as the calibrated camera would see it (calibration error).
+                    T_true = np.linalg.inv(T_cal) @ np.linalg.inv(T_ee_cam) @ T_ee_obj
+                    theta, _, grasp = _side_view_errors(out, T_ee_cam @ T_cal @ T_true, offset)
+                    out = (float(np.degrees(theta)), float(grasp))
+                results.append((name, tilt, label, out))
+        rig.close()
+    return results
+
+
+def test_side_view_holds_or_refuses(side_results):
+    assert len(side_results) == len(SIDE_OBJECTS) * len(SIDE_POSES) * 7
+    silent = [r for r in side_results if not isinstance(r[3], PerceptionError)
+              and (r[3][0] > SIDE_TILT_BOUND_DEG or r[3][1] > SIDE_GRASP_BOUND)]  # fmt: skip
+    assert silent == []
+    refused = [r for r in side_results if isinstance(r[3], PerceptionError)]
+    assert len(refused) <= 0.1 * len(side_results), refused

@@ -18,7 +18,14 @@ import numpy as np
 
 from comgrasp_pin.camera import PinholeCamera
 from comgrasp_pin.errors import ObjectNotFoundError
-from comgrasp_pin.perception._points import blobs, check_images, points_in
+from comgrasp_pin.perception._points import (
+    blobs,
+    check_images,
+    denoise,
+    fill_holes,
+    noise_level,
+    points_in,
+)
 from comgrasp_pin.perception.rod_axis import centre_line, refine_axis
 from comgrasp_pin.perception.rod_ends import centre_along, end_profile
 
@@ -26,6 +33,7 @@ SLAB_HALF_WIDTH = 0.08  # |y_ee| of the region the held object may occupy (m)
 REACH = 0.40  # distance from the TCP beyond which nothing is the held object (m)
 TABLE_MARGIN = 0.003  # points less than this above the table are the table (m)
 MIN_PIXELS = 60
+CLEAN_NOISE = 3e-4  # depth noisier than this (m, robust std about its median) is filtered
 MAX_AXIS_FROM_TCP = 0.035  # a held rod's axis passes this close to the TCP (m)
 MIN_EXTENT = 0.05  # a held rod is at least this long in view (m)
 OFF_AXIS_PERCENTILE = 99.0  # SideView.off_axis: nearly the farthest point, robust to a stray
@@ -88,6 +96,21 @@ class SideView:
     creep: np.ndarray | None = None
 
 
+def clean_side_depth(depth: np.ndarray) -> tuple[np.ndarray, float]:
+    """(depth, noise (m)): ``depth`` itself and 0 when it is clean.
+
+    Else (pixels lost, or noisier than CLEAN_NOISE against its 5 x 5 median) its holes
+    filled, the median taken, and its noise.
+    """
+    smooth = denoise(fill_holes(depth))
+    both = np.isfinite(depth) & np.isfinite(smooth)
+    lost = np.any((depth <= 0) | (~np.isfinite(depth) & np.isfinite(smooth)))
+    noise = noise_level(depth[both] - smooth[both])
+    if lost or noise > CLEAN_NOISE:
+        return smooth, noise
+    return depth, 0.0
+
+
 def _gripper_volume(p: np.ndarray) -> np.ndarray:
     x, y, z = p[..., 0], p[..., 1], p[..., 2]
     inside = np.zeros(x.shape, dtype=bool)
@@ -134,7 +157,7 @@ def observe_held_rod(
     Raises:
         ObjectNotFoundError, ObjectCutByBorderError, InvalidDepthError.
     """
-    depth = check_images(rgb, depth, camera)
+    depth, noise = clean_side_depth(check_images(rgb, depth, camera))
     p = points_in(T_ee_cam, depth, camera)
     finite = np.isfinite(p[..., 0])
     candidate = finite & (np.abs(p[..., 1]) < SLAB_HALF_WIDTH)
@@ -159,7 +182,7 @@ def observe_held_rod(
     # Tilt lives in the ee x-z plane; the jaws fix the axis at y = 0.
     x_axis, offset_xz, handle, tilt_std = centre_line(points[:, [0, 2]])
     if handle.sum() >= MIN_PIXELS:
-        x_axis, offset_xz = refine_axis(points[handle], x_axis, offset_xz, handle_radius)
+        x_axis, offset_xz = refine_axis(points[handle], x_axis, offset_xz, handle_radius, noise)
     x_axis = np.array([x_axis[0], 0.0, x_axis[1]])
     along = points @ x_axis
     lo, hi = np.percentile(along, [0.1, 99.9])
