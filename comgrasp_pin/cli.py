@@ -41,7 +41,7 @@ def _options(args: argparse.Namespace):
     if trials is None:
         trials = QUICK_TRIALS if getattr(args, "quick", False) else PAPER_TRIALS
     return RunOptions(Path(args.out), objects, trials, args.seed, args.workers, args.resume,
-                      args.overwrite, args.noise, args.estimator)  # fmt: skip
+                      args.overwrite, args.noise, args.estimator, args.sensors)  # fmt: skip
 
 
 def _cmd_experiment(args: argparse.Namespace) -> int:
@@ -70,7 +70,12 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         raise InvalidInputError(
             "--viewer needs a display (DISPLAY is not set); drop it for the video"
         )
-    result = run_episode(args.object, args.seed, args.method, video=video, viewer=args.viewer)
+    from comgrasp_pin.experiments.trials import episode_config
+
+    config = episode_config(sensors=args.sensors)
+    result = run_episode(args.object, args.seed, args.method, config=config, video=video,
+                         viewer=args.viewer)  # fmt: skip
+    print(f"sensors {args.sensors}")
     print(f"object {args.object}, method {args.method}, seed {args.seed}")
     if result.trial is not None:
         t, s = result.trial, result.trial_score
@@ -102,6 +107,15 @@ def _cmd_views(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_sensors_arg(p: argparse.ArgumentParser) -> None:
+    from comgrasp_pin.config import SENSOR_PRESETS
+
+    p.add_argument("--sensors", default="ideal", choices=SENSOR_PRESETS,
+                   help="sensor preset: ideal renders and torques, or realistic (RealSense-class "
+                   "depth, link-side torque sensors, gripper model error; realistic_current: a "
+                   "UR CB3's current-based torques) (%(default)s)")  # fmt: skip
+
+
 def _add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
     p.add_argument("--out", default=default_out, help="output folder (%(default)s)")
     p.add_argument("--objects", default=",".join(OBJECTS), help="comma-separated (%(default)s)")
@@ -120,6 +134,7 @@ def _add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
                    help="the trial grasp's estimator: IPOPT with the side view's prior on the "
                    "CoM's distance from the rod's axis, or the closed-form least squares "
                    "(%(default)s)")  # fmt: skip
+    _add_sensors_arg(p)
     p.add_argument("--resume", action="store_true", help="continue the CSV in --out")
     p.add_argument("--overwrite", action="store_true", help="start the CSV in --out again")
     p.add_argument("--quick", action="store_true", help="a few-minute run (3 trials)")
@@ -151,6 +166,7 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--method", default="regrasp", choices=("baseline", "regrasp"))
     demo.add_argument("--out", default="results/demo", help="output folder (%(default)s)")
     demo.add_argument("--viewer", action="store_true", help="also show MuJoCo's viewer (display)")
+    _add_sensors_arg(demo)
     demo.set_defaults(func=_cmd_demo)
 
     views = sub.add_parser("views", help="both camera views with mask, rectangle, axis, grasp")

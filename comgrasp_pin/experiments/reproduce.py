@@ -34,7 +34,7 @@ class RunOptions:
         seed: the run's seed. workers: parallel processes. resume: continue the CSVs in
         ``out``. overwrite: start them again. noise: torque sensor noise (N m per sample).
         estimator: the trial grasp's estimator, "ipopt" (with the side view's axis prior)
-        or "lstsq" (closed form).
+        or "lstsq" (closed form). sensors: the sensor preset (``config.sensor_preset``).
     """
 
     out: Path
@@ -46,6 +46,7 @@ class RunOptions:
     overwrite: bool = False
     noise: float = 0.05
     estimator: str = "ipopt"
+    sensors: str = "ideal"
 
 
 def _run(opts: RunOptions, fn, methods, name: str, columns) -> list[dict]:
@@ -53,6 +54,7 @@ def _run(opts: RunOptions, fn, methods, name: str, columns) -> list[dict]:
     for task in tasks:
         task["noise"] = opts.noise
         task["estimator"] = opts.estimator
+        task["sensors"] = opts.sensors
     return run_trials(fn, tasks, opts.out / f"{name}.csv", columns, opts.workers,
                       opts.resume, opts.overwrite, desc=name)  # fmt: skip
 
@@ -94,7 +96,7 @@ def reproduce(opts: RunOptions) -> Path:
     mid = time.perf_counter()
     reg = run_regrasp(opts)
     end = time.perf_counter()
-    settings = settings_summary(noise, opts.estimator)
+    settings = settings_summary(noise, opts.estimator, opts.sensors)
     meta = {
         "objects": list(objects), "trials_per_object": trials, "seed": seed, "workers": workers,
         "accuracy_minutes": (mid - start) / 60, "regrasp_minutes": (end - mid) / 60,
