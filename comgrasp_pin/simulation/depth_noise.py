@@ -34,7 +34,7 @@ class DepthNoise:
             camera frame: ``T_world_cam_true @ T_cam_calibrated`` is what the robot believes.
     """
 
-    def __init__(self, config: DepthNoiseConfig, seed: int | None = None):
+    def __init__(self, config: DepthNoiseConfig, seed: int | tuple[int, ...] | None = None):
         self.config = config
         self._rng = np.random.default_rng(seed)
         c, rng = config, self._rng
@@ -80,8 +80,8 @@ class DepthNoise:
         c = self.config
         if c.focal_px <= 0 or c.baseline <= 0:
             return np.zeros_like(depth)
-        white = self._rng.standard_normal(depth.shape).astype(np.float32)
+        white: np.ndarray = self._rng.standard_normal(depth.shape).astype(np.float32)
         if c.noise_corr_px > 0:
-            white = cv2.GaussianBlur(white, (0, 0), c.noise_corr_px)
-            white /= max(float(white.std()), 1e-12)
-        return white.astype(float) * depth * depth * c.subpixel / (c.focal_px * c.baseline)
+            blurred = cv2.GaussianBlur(white, (0, 0), c.noise_corr_px)
+            white = blurred / max(float(blurred.std()), 1e-12)
+        return white.astype(float) * c.axial_std(1.0) * depth * depth
