@@ -14,6 +14,8 @@ import numpy as np
 from comgrasp_pin.errors import AmbiguousObjectError
 
 SECOND_OBJECT = 0.05  # another blob of this share of the rod's pixels is another object
+END_REACH, END_BAND = 0.05, 0.003  # pixels this far beyond an end, on the axis (m) ...
+END_PIXELS = 3  # ... this many: the rod may go on
 SLICE = 0.01  # slices across the rod (m)
 ACROSS_BIN = 0.002  # the across profile's resolution (m): about one pixel on the table
 GAP_BINS = 2  # this many empty bins in a row between two pieces split a slice
@@ -22,6 +24,7 @@ VALLEY_SHARE = 0.3  # ... or this share of the lower top's height splits a slice
 VALLEY_SIGMAS = 4.0  # ... and this many noise stds
 SPLIT_SLICES = 0.2  # a blob with this share of its slices split is two objects
 MIN_SPLIT_SLICES = 3
+_KERNEL3, _KERNEL5 = np.ones((3, 3), np.uint8), np.ones((5, 5), np.uint8)
 
 
 def check_one_object(standing: np.ndarray, blob: np.ndarray, min_pixels: int = 40) -> None:
@@ -39,6 +42,43 @@ def check_one_object(standing: np.ndarray, blob: np.ndarray, min_pixels: int = 4
         raise AmbiguousObjectError(
             f"{1 + len(big)} objects lie in the pick area ({area} px and {max(big)} px seen "
             "from above); the top view measures one rod alone on the table: clear the others"
+        )
+
+
+def check_ends_seen(
+    points: np.ndarray,
+    standing: np.ndarray,
+    blob: np.ndarray,
+    centroid: np.ndarray,
+    direction: np.ndarray,
+    ends: tuple[float, float],
+    p: np.ndarray,
+) -> None:
+    """AmbiguousObjectError when the rod may go on beyond an end it seems to have.
+
+    That is: blobs standing on the table apart from the rod's ``blob`` (``standing``, both
+    (H, W) bool; ``points`` (H, W, 3)), after the same opening and more than 2 px from it,
+    lie on its axis (``direction`` (2,) through ``centroid`` (2,)) within END_REACH beyond
+    one of its ``ends`` (coordinates along the axis, m): parts of the rod lost in the image's
+    holes and noise. ``p``: the rod's points (N, 3), whose spread across the axis sets the
+    band.
+    """
+    opened = cv2.morphologyEx(standing.astype(np.uint8), cv2.MORPH_OPEN, _KERNEL3) > 0
+    others = opened & ~(cv2.dilate(blob.astype(np.uint8), _KERNEL5) > 0)
+    if not others.any():
+        return
+    normal = np.array([-direction[1], direction[0]])
+    half_width = np.percentile(np.abs((p[:, :2] - centroid) @ normal), 95) + END_BAND
+    rel = points[others][:, :2] - centroid
+    along, across = rel @ direction, np.abs(rel @ normal)
+    lo, hi = ends
+    beyond = ((along < lo) & (along > lo - END_REACH)) | ((along > hi) & (along < hi + END_REACH))
+    count = int(np.count_nonzero(beyond & (across < half_width)))
+    if count >= END_PIXELS:
+        raise AmbiguousObjectError(
+            f"{count} px stand on the table on the rod's axis beyond the end seen: the rod "
+            "may go on there, lost in the depth image's holes and noise; its length and centre "
+            "are not known (a closer view or a less noisy camera is needed)"
         )
 
 

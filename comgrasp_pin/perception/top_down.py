@@ -18,27 +18,20 @@ import numpy as np
 from comgrasp_pin.camera import PinholeCamera
 from comgrasp_pin.errors import ObjectCutByBorderError, ObjectNotFoundError
 from comgrasp_pin.geometry import GraspPose
-from comgrasp_pin.perception._points import (
-    check_images,
-    denoise,
-    fill_holes,
-    largest_component,
-    noise_level,
-    points_in,
-    trusted_pixels,
-)
-from comgrasp_pin.perception.rod_shape import check_one_object, check_one_rod
+from comgrasp_pin.perception._points import check_images, largest_component
+from comgrasp_pin.perception.rod_shape import check_ends_seen, check_one_object, check_one_rod
+from comgrasp_pin.perception.table_view import TableView, in_area, view_table
 
 PICK_AREA = (0.30, 0.80, -0.35, 0.35)  # x_min, x_max, y_min, y_max of the table (m, world)
 MIN_HEIGHT = 0.003  # a pixel counts as object if it stands this far above the table (m)
 MAX_HEIGHT = 0.15  # ... and no higher than this (the robot above the table is not the rod)
 MIN_PIXELS = 40
-CLEAN_NOISE = 3e-4  # table heights noisier than this (m, robust std) are filtered first ...
-ERODE_KERNEL = np.ones((3, 3), np.uint8)  # the fringe measured without (noisy images)
-CLOSE_KERNEL = np.ones((5, 5), np.uint8)  # gaps of up to 4 px within a rod close (noisy images)
-TRUST_SIGMAS, TRUST_MARGIN = 3.0, 0.002  # a pixel this far off the median is not measured
-END_SNR = 5.0  # a rod lower than this many noise stds has ends lost in the noise
-HEIGHT_SIGMAS = 2.5  # ... and a pixel stands on the table this many camera noise stds above it
+# In a cleaned image (``table_view``): a pixel stands on the table this many camera noise
+# stds above it, gaps of up to 4 px close, and the rod is measured without its 1 px fringe.
+HEIGHT_SIGMAS = 2.5
+CLOSE_KERNEL = np.ones((5, 5), np.uint8)
+ERODE_KERNEL = np.ones((3, 3), np.uint8)
+END_SNR = 8.0  # a rod lower than this many noise stds (after the median) may lose its ends
 EDGE_BAND = 0.01  # an object within 2 bands of the pick area's edge may leave it (m)
 
 
@@ -81,93 +74,89 @@ def detect_rod_top_down(
     Raises:
         ObjectNotFoundError: nothing above the table.
         ObjectCutByBorderError: the rod leaves the image or reaches the edge of the pick area.
-        AmbiguousObjectError: two objects, or two rods side by side, where one rod should be.
+        AmbiguousObjectError: two objects, or two rods side by side, where one rod should be,
+            or parts of the rod lost in a noisy image beyond the end seen.
         InvalidDepthError: unusable depth.
     """
     depth = check_images(rgb, depth, camera)
-    points = points_in(T_world_cam, depth, camera)
-    x0, x1, y0, y1 = pick_area
+    view = view_table(depth, camera, T_world_cam, pick_area, EDGE_BAND)
+    mask, standing = _segment(view, pick_area)
+    core = mask
+    if view.cleaned:  # a real camera's fringe (flying pixels) is 1-2 px wide
+        core = cv2.erode(mask.astype(np.uint8), ERODE_KERNEL).astype(bool)
+        core &= np.isfinite(view.geometry[..., 0])
+        core = core if np.count_nonzero(core) >= MIN_PIXELS else mask
+    p = view.geometry[core] if core is not mask else view.points[mask]
+    p[:, 2] = view.points[core][:, 2]  # heights from the median
+    centroid = p[:, :2].mean(axis=0)
+    _, _, vt = np.linalg.svd(p[:, :2] - centroid, full_matrices=False)
+    direction = vt[0]
+    check_one_rod(view.points[mask], centroid, direction, view.table_z, view.points_noise)
+    along = (p[:, :2] - centroid) @ direction
+    lo, hi = np.percentile(along, [0.02, 99.98])
+    if view.cleaned:
+        check_ends_seen(view.points, standing, mask, centroid, direction, (lo, hi), p)
+    centre = centroid + 0.5 * (lo + hi) * direction
+    near_centre = np.abs(along - 0.5 * (lo + hi)) < 0.01
+    heights = p[near_centre, 2] - view.table_z if near_centre.any() else p[:, 2] - view.table_z
+    handle_height = float(np.median(heights))
+    if view.cleaned and handle_height < END_SNR * view.points_noise:
+        raise ObjectNotFoundError(
+            f"the rod stands {1e3 * handle_height:.0f} mm above the table, less than "
+            f"{END_SNR:g} times the filtered depth noise ({1e3 * view.points_noise:.1f} mm): "
+            "its ends cannot be told from the table; view it closer or with a less noisy camera"
+        )
+    yaw = float(np.arctan2(direction[1], direction[0]))
+    yaw = (yaw + np.pi / 2) % np.pi - np.pi / 2  # (-pi/2, pi/2]
+    grasp = GraspPose(float(centre[0]), float(centre[1]), view.table_z + 0.5 * handle_height,
+                      yaw)  # fmt: skip
+    length = float(hi - lo)
+    if core is not mask:  # the erosion took pixels off each end
+        length += (ERODE_KERNEL.shape[0] - 1) * float(np.median(depth[core])) / camera.fx
+    widths = _widths(p, centroid, direction, along - 0.5 * (lo + hi), yaw)
+    contours, _ = cv2.findContours(mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    rect = cv2.minAreaRect(max(contours, key=cv2.contourArea))
+    ends_world = np.array([[*(centre + s * direction), view.table_z] for s in (lo, hi)])
+    T_cam_world = np.linalg.inv(T_world_cam)
+    ends_cam = ends_world @ T_cam_world[:3, :3].T + T_cam_world[:3, 3]
+    return RodDetection(grasp, length, widths, view.table_z, handle_height, mask, rect,
+                        camera.project(ends_cam))  # fmt: skip
 
-    def within(margin: float) -> np.ndarray:
-        x, y = points[..., 0], points[..., 1]
-        return (x > x0 + margin) & (x < x1 - margin) & (y > y0 + margin) & (y < y1 - margin)
 
-    inside = within(EDGE_BAND) & np.isfinite(points[..., 2])
-    if inside.sum() < 100:
-        raise ObjectNotFoundError("the pick area is not in view of the camera")
-    table_z = float(np.median(points[..., 2][inside]))  # the rod covers a small part of it
-    noise = noise_level(points[..., 2][inside] - table_z)
-    geometry = points  # the points the rod's extent and direction come from
-    raw_noise = noise
-    if noise > CLEAN_NOISE or np.any(~np.isfinite(depth) | (depth <= 0)):
-        # Holes, dropouts or noise (a real camera): fill the holes; segment on their median
-        # (which rounds corners), measure on the pixels the camera gave that agree with it
-        # (a flying pixel's wrong depth moves its point along its oblique ray).
-        smooth = denoise(fill_holes(depth))
-        points = points_in(T_world_cam, smooth, camera)
-        trusted = trusted_pixels(depth, smooth, TRUST_SIGMAS * raw_noise + TRUST_MARGIN)
-        geometry = np.where(trusted[..., None], points_in(T_world_cam, depth, camera), np.nan)
-        inside = within(EDGE_BAND) & np.isfinite(points[..., 2])
-        table_z = float(np.median(points[..., 2][inside]))
-        noise = noise_level(points[..., 2][inside] - table_z)
-    z = points[..., 2]
-    # The median's heights beside a tall head are biased by the noise before it: the
-    # threshold follows the camera's own noise (``noise`` is the median's from here on).
-    min_height = max(MIN_HEIGHT, HEIGHT_SIGMAS * raw_noise)
-    standing = (z > table_z + min_height) & (z < table_z + MAX_HEIGHT)
-    if geometry is not points:  # a thin rod broken by holes at its edges is one rod
+def _segment(view: TableView, pick_area) -> tuple[np.ndarray, np.ndarray]:
+    """(the rod's mask, every pixel standing on the table), both (H, W) bool.
+
+    The threshold follows the camera's own noise (the median's heights beside a tall head
+    are biased by the noise before it); in a cleaned image gaps of a few pixels close (a
+    thin rod broken by holes at its edges is one rod). Raises ObjectNotFoundError,
+    ObjectCutByBorderError, AmbiguousObjectError (a second object).
+    """
+    z = view.points[..., 2]
+    inside = in_area(view.points, pick_area, EDGE_BAND) & np.isfinite(z)
+    min_height = max(MIN_HEIGHT, HEIGHT_SIGMAS * view.noise)
+    standing = (z > view.table_z + min_height) & (z < view.table_z + MAX_HEIGHT)
+    if view.cleaned:
         standing = cv2.morphologyEx(standing.astype(np.uint8), cv2.MORPH_CLOSE, CLOSE_KERNEL) > 0
     mask = largest_component(inside & standing, MIN_PIXELS, "top-down image")
     check_one_object(inside & standing, mask)
     grown = cv2.dilate(mask.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
-    if np.any(grown & standing & ~within(2 * EDGE_BAND) & np.isfinite(z)):
+    near_edge = ~in_area(view.points, pick_area, 2 * EDGE_BAND)
+    if np.any(grown & standing & near_edge & np.isfinite(z)):
         raise ObjectCutByBorderError("the object reaches the edge of the pick area")
+    return mask, inside & standing
 
-    core = mask
-    if geometry is not points:  # a real camera's fringe (flying pixels) is 1-2 px wide
-        core = cv2.erode(mask.astype(np.uint8), ERODE_KERNEL).astype(bool)
-        core &= np.isfinite(geometry[..., 0])
-    if np.count_nonzero(core) >= MIN_PIXELS:
-        p, heights = geometry[core], points[core][:, 2]
-    else:
-        p, heights = points[mask], points[mask][:, 2]
-    centroid = p[:, :2].mean(axis=0)
-    _, _, vt = np.linalg.svd(p[:, :2] - centroid, full_matrices=False)
-    direction = vt[0]
-    check_one_rod(points[mask], centroid, direction, table_z, noise)
-    p[:, 2] = heights  # from the median
-    along = (p[:, :2] - centroid) @ direction
-    lo, hi = np.percentile(along, [0.02, 99.98])
-    centre = centroid + 0.5 * (lo + hi) * direction
-    near_centre = np.abs(along - 0.5 * (lo + hi)) < 0.01
-    heights = p[near_centre, 2] - table_z if near_centre.any() else p[:, 2] - table_z
-    handle_height = float(np.median(heights))
-    if handle_height < END_SNR * raw_noise:
-        raise ObjectNotFoundError(
-            f"the rod stands {1e3 * handle_height:.0f} mm above the table, less than "
-            f"{END_SNR:g} times the depth noise ({1e3 * raw_noise:.1f} mm): its ends cannot "
-            "be told from the table; view it closer or with a less noisy camera"
-        )
-    yaw = float(np.arctan2(direction[1], direction[0]))
-    yaw = (yaw + np.pi / 2) % np.pi - np.pi / 2  # (-pi/2, pi/2]
-    grasp = GraspPose(float(centre[0]), float(centre[1]), table_z + 0.5 * handle_height, yaw)
 
-    contours, _ = cv2.findContours(mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
-    rect = cv2.minAreaRect(max(contours, key=cv2.contourArea))
-    ends_world = np.array([[*(centre + s * direction), table_z] for s in (lo, hi)])
-    T_cam_world = np.linalg.inv(T_world_cam)
-    ends_cam = ends_world @ T_cam_world[:3, :3].T + T_cam_world[:3, 3]
+def _widths(p, centroid, direction, s_rel, yaw) -> np.ndarray:
+    """(K, 2) the rod's width across its axis in 1 cm slices (m).
+
+    Rows: (position along the rod from its centre towards +yaw, width).
+    """
     across = (p[:, :2] - centroid) @ np.array([-direction[1], direction[0]])
-    s_rel = along - 0.5 * (lo + hi)
     bins = np.floor(s_rel / 0.01).astype(int)
     widths = np.array([((b + 0.5) * 0.01, np.ptp(across[bins == b])) for b in np.unique(bins)])
     if direction @ np.array([np.cos(yaw), np.sin(yaw)]) < 0:  # rows towards +yaw
         widths = widths[::-1] * np.array([-1.0, 1.0])
-    length = float(hi - lo)
-    if core is not mask:  # the erosion took pixels off each end
-        length += (ERODE_KERNEL.shape[0] - 1) * float(np.median(depth[core])) / camera.fx
-    return RodDetection(grasp, length, widths, table_z, handle_height, mask, rect,
-                        camera.project(ends_cam))  # fmt: skip
+    return widths
 
 
 def nearest_graspable(
