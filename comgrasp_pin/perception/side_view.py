@@ -99,14 +99,14 @@ class SideView:
 def clean_side_depth(depth: np.ndarray) -> tuple[np.ndarray, float]:
     """(depth, noise (m)): ``depth`` itself and 0 when it is clean.
 
-    Else (pixels lost, or noisier than CLEAN_NOISE against its 5 x 5 median) its holes
-    filled, the median taken, and its noise.
+    Else (pixels lost, i.e. 0, or noisier than CLEAN_NOISE against its 5 x 5 median) its
+    holes (0 or inf) filled, the median taken, and its noise.
     """
     smooth = denoise(fill_holes(depth))
     both = np.isfinite(depth) & np.isfinite(smooth)
-    lost = np.any((depth <= 0) | (~np.isfinite(depth) & np.isfinite(smooth)))
     noise = noise_level(depth[both] - smooth[both])
-    if lost or noise > CLEAN_NOISE:
+    # A camera marks a lost pixel 0; inf is also what a render gives where nothing is seen.
+    if np.any(depth <= 0) or noise > CLEAN_NOISE:
         return smooth, noise
     return depth, 0.0
 
