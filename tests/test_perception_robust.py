@@ -75,11 +75,16 @@ def test_top_view_holds_or_refuses(top_results, label):
     assert len(refused) <= 1, refused
 
 
-def test_top_view_of_thin_rods_in_noise_refuses_with_the_reason(top_results):
-    """A 1 cm rod at 1.25 m under 2 mm of noise: its ends are lost in the noise."""
-    thin = [r for r in top_results if r[0] in ("obj1", "obj3") and r[2] == "noise2mm"]
-    assert all(isinstance(r[3], PerceptionError) for r in thin)
-    assert "depth noise" in str(thin[0][3])
+def test_top_view_of_thin_rods_measured_in_white_noise_refused_in_a_cameras(top_results):
+    """1 cm rods at 1.25 m: under 2 mm of white noise the median leaves 0.5 mm and they are
+    measured; a D415's patchy noise leaves 1.4 mm, in which a thin rod's ends may be lost:
+    refused, with the reason (never a pose with a lost end)."""
+    thin = [r for r in top_results if r[0] in ("obj1", "obj3")]
+    white = [r for r in thin if r[2] == "noise2mm"]
+    assert not any(isinstance(r[3], PerceptionError) for r in white), white
+    camera = [r[3] for r in thin if r[2] == "realistic"]
+    assert all(isinstance(e, PerceptionError) for e in camera), camera
+    assert any("noise" in str(e) for e in camera)
 
 
 def _side_by_side(name, gap, same_way, yaw):
