@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import cv2
 import numpy as np
 
@@ -127,10 +129,26 @@ def noise_level(heights: np.ndarray) -> float:
     return float(1.4826 * np.median(np.abs(heights - np.median(heights))))
 
 
-def trusted_pixels(depth: np.ndarray, smooth: np.ndarray, max_off: float) -> np.ndarray:
-    """(H, W) bool: pixels whose ``depth`` is valid and within ``max_off`` (m) of ``smooth`` ...
+def drop_flying(depth: np.ndarray, tolerance: float) -> np.ndarray:
+    """``depth`` with its flying pixels lost (set to 0).
 
-    ... (its median): not lost, not flying.
+    A flying pixel (a stereo camera's mix of the near and the far side of an edge) lies
+    between its neighbours and agrees with none: some are nearer and some farther by more
+    than ``tolerance`` (m), and none is within it. A pixel of a surface agrees with some
+    neighbour; one at an edge whose own side was lost is not between. Lost pixels (0, inf)
+    stay lost and are no one's neighbours.
     """
     valid = np.isfinite(depth) & (depth > 0)
-    return valid & (np.abs(np.where(valid, depth, 0.0) - smooth) < max_off)
+    padded = np.pad(np.where(valid, depth, np.nan), 1, constant_values=np.nan)
+    h, w = depth.shape
+    shifts = [(dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if dy or dx]
+    stack = np.stack([padded[1 + dy : 1 + dy + h, 1 + dx : 1 + dx + w] for dy, dx in shifts])
+    with np.errstate(invalid="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # pixels with no valid neighbour
+        d = np.where(valid, depth, np.nan)
+        near, far = np.nanmin(stack, axis=0), np.nanmax(stack, axis=0)
+        closest = np.nanmin(np.abs(stack - d), axis=0)
+    flying = (d - near > tolerance) & (far - d > tolerance) & (closest > tolerance)
+    out = depth.copy()
+    out[valid & flying] = 0.0
+    return out

@@ -17,14 +17,15 @@ from comgrasp_pin.camera import PinholeCamera
 from comgrasp_pin.errors import ObjectNotFoundError
 from comgrasp_pin.perception._points import (
     denoise,
+    drop_flying,
     fill_holes,
     noise_level,
     points_in,
-    trusted_pixels,
 )
 
 CLEAN_NOISE = 3e-4  # table heights noisier than this (m, robust std) are filtered first
-TRUST_SIGMAS, TRUST_MARGIN = 3.0, 0.002  # a pixel this far off the median is not measured
+FLYING_MIN, FLYING_SIGMAS = 0.005, 4.0  # a pixel this far (m, noise stds) from all its
+# neighbours flies
 
 
 @dataclass(frozen=True)
@@ -33,18 +34,14 @@ class TableView:
 
     Attributes:
         points: (H, W, 3) every pixel in the world (NaN where no depth): the image's median
-            when ``cleaned`` (for segmenting and heights).
-        geometry: (H, W, 3) the points to measure the rod on: the camera's own pixels that
-            agree with the median (NaN for lost and flying pixels) when ``cleaned``, else
-            ``points``.
+            when ``cleaned``.
         table_z: height of the table plane (m), the median of the pick area.
         noise: the camera's depth noise on the table (m, robust std, before the median).
         points_noise: the same of ``points`` (after the median, when ``cleaned``).
-        cleaned: whether holes were filled and the median taken.
+        cleaned: whether flying pixels were dropped, holes filled and the median taken.
     """
 
     points: np.ndarray
-    geometry: np.ndarray
     table_z: float
     noise: float
     points_noise: float
@@ -68,16 +65,14 @@ def view_table(
     points = points_in(T_world_cam, depth, camera)
     table_z, noise = _table(points, pick_area, margin)
     if noise <= CLEAN_NOISE and np.all(np.isfinite(depth) & (depth > 0)):
-        return TableView(points, points, table_z, noise, noise, False)
-    # Holes, dropouts or noise: segment on the median of the filled image (it rounds
-    # corners), measure on the camera's pixels that agree with it (a flying pixel's wrong
-    # depth moves its point along its oblique ray).
-    smooth = denoise(fill_holes(depth))
-    trusted = trusted_pixels(depth, smooth, TRUST_SIGMAS * noise + TRUST_MARGIN)
-    geometry = np.where(trusted[..., None], points, np.nan)
-    points = points_in(T_world_cam, smooth, camera)
+        return TableView(points, table_z, noise, noise, False)
+    # Holes, dropouts, flying pixels or noise: drop the flying pixels, fill the holes, take
+    # the median.
+    tolerance = max(FLYING_MIN, FLYING_SIGMAS * noise)
+    grounded = drop_flying(depth, tolerance)
+    points = points_in(T_world_cam, denoise(fill_holes(grounded)), camera)
     table_z, points_noise = _table(points, pick_area, margin)
-    return TableView(points, geometry, table_z, noise, points_noise, True)
+    return TableView(points, table_z, noise, points_noise, True)
 
 
 def in_area(points: np.ndarray, pick_area: tuple[float, float, float, float], margin: float):
