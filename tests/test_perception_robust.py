@@ -108,6 +108,7 @@ def _side_by_side(name, gap, same_way, yaw):
 @pytest.mark.parametrize("gap", [0.001, 0.02])
 @pytest.mark.parametrize("name", ["obj1", "obj2", "obj4", "obj5"])
 def test_two_rods_side_by_side_are_refused(name, gap):
+    """Heads the same way and opposite: one blob (1 mm) or two (2 cm); never one pose."""
     silent = []
     for same_way, yaw in ((True, 0.3), (False, -0.7)):
         rods = _side_by_side(name, gap, same_way, yaw)
@@ -119,8 +120,7 @@ def test_two_rods_side_by_side_are_refused(name, gap):
             assert isinstance(out, AmbiguousObjectError), out
             continue
         errors = [top_errors(out, t, T, np.eye(4)) for t in truths]
-        if min(e[0] for e in errors) > TOP_CENTRE_BOUND:
-            silent.append((same_way, yaw, errors))
+        silent.append((same_way, yaw, errors))  # measured one rod of two: not what was asked
     assert silent == []
 
 
