@@ -55,12 +55,16 @@ def _run(opts: RunOptions, fn, methods, name: str, columns) -> list[dict]:
         task["noise"] = opts.noise
         task["estimator"] = opts.estimator
         task["sensors"] = opts.sensors
+    opts.out.mkdir(parents=True, exist_ok=True)
+    settings = settings_summary(opts.noise, opts.estimator, opts.sensors)
+    (opts.out / f"{name}_settings.json").write_text(json.dumps(settings, indent=2, default=str))
     return run_trials(fn, tasks, opts.out / f"{name}.csv", columns, opts.workers,
                       opts.resume, opts.overwrite, desc=name)  # fmt: skip
 
 
 def run_accuracy(opts: RunOptions) -> list[dict]:
-    """Experiment 1: writes accuracy.csv, accuracy.png and accuracy_table.md."""
+    """Experiment 1: writes accuracy.csv, accuracy_settings.json (the config tree, with the
+    sensor preset), accuracy.png and accuracy_table.md."""
     rows = _run(opts, accuracy_trial, ("trial",), "accuracy", ACCURACY_COLUMNS)
     report.accuracy_figure(rows, opts.out / "accuracy.png")
     (opts.out / "accuracy_table.md").write_text(report.accuracy_table(rows) + "\n")
@@ -68,7 +72,8 @@ def run_accuracy(opts: RunOptions) -> list[dict]:
 
 
 def run_regrasp(opts: RunOptions) -> list[dict]:
-    """Experiment 2: writes regrasp.csv, regrasp.png and regrasp_table.md."""
+    """Experiment 2: writes regrasp.csv, regrasp_settings.json, regrasp.png and
+    regrasp_table.md."""
     rows = _run(opts, regrasp_trial, ("baseline", "regrasp"), "regrasp", REGRASP_COLUMNS)
     report.regrasp_figure(rows, opts.out / "regrasp.png")
     (opts.out / "regrasp_table.md").write_text(report.regrasp_table(rows) + "\n")
