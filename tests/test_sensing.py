@@ -152,3 +152,20 @@ def test_measured_tau_before_absorbs_the_gripper_model_error(ur5):
     assert with_error == pytest.approx(exact, abs=0.005)  # within the noise
     # Not vacuous: the model's tau_before carries the 5 % (32 g) error into the estimate.
     assert abs(from_model - 0.5) > 0.02
+
+
+def test_sensors_option_reaches_the_episode_config():
+    from comgrasp_pin.cli import _options, build_parser
+    from comgrasp_pin.config import EpisodeConfig
+    from comgrasp_pin.experiments.trials import episode_config, settings_summary
+
+    args = build_parser().parse_args(["accuracy", "--sensors", "realistic", "--noise", "0.02"])
+    opts = _options(args)
+    assert opts.sensors == "realistic"
+    config = episode_config(opts.noise, opts.estimator, opts.sensors)
+    assert config.sensors.preset == "realistic" and config.sensors.torque.noise_std == 0.02
+    assert config.sensors.top_depth.enabled and config.sensors.gripper_mass_error > 0
+    assert settings_summary(sensors="realistic")["sensors"]["preset"] == "realistic"
+    assert episode_config() == EpisodeConfig()  # the default is the ideal world, unchanged
+    with pytest.raises(SystemExit):
+        build_parser().parse_args(["demo", "--sensors", "perfect"])
