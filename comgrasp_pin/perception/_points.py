@@ -90,11 +90,12 @@ def fit_line(points: np.ndarray, iterations: int = 3) -> tuple[np.ndarray, np.nd
 
 
 def fill_holes(depth: np.ndarray, max_gap_px: float = 2.5) -> np.ndarray:
-    """``depth`` with each lost pixel (0, inf) within ``max_gap_px`` of a valid one given ...
+    """``depth`` with its holes filled from the nearest valid pixel.
 
-    ... the depth of the nearest valid pixel (OpenCV's distance transform with labels): holes and
-    dropouts inside surfaces close, edges stay sharp (a pixel takes one side's depth, never a
-    mix). Larger empty regions stay empty. No lost pixel: ``depth`` itself.
+    Each lost pixel (0, inf) within ``max_gap_px`` of a valid one is given the depth of the
+    nearest valid pixel (OpenCV's distance transform with labels): holes and dropouts inside
+    surfaces close, edges stay sharp (a pixel takes one side's depth, never a mix). Larger
+    empty regions stay empty. No lost pixel: ``depth`` itself.
     """
     valid = np.isfinite(depth) & (depth > 0)
     if valid.all():
@@ -111,9 +112,9 @@ def fill_holes(depth: np.ndarray, max_gap_px: float = 2.5) -> np.ndarray:
 
 
 def denoise(depth: np.ndarray) -> np.ndarray:
-    """A 5 x 5 median of ``depth`` (m): noise falls 3-4 times, straight edges stay where they ...
+    """A 5 x 5 median of ``depth`` (m).
 
-    ... are; lost pixels (inf) stay lost.
+    Noise falls 3-4 times, straight edges stay where they are; lost pixels (inf) stay lost.
     """
     valid = np.isfinite(depth)
     out = cv2.medianBlur(np.where(valid, depth, 0.0).astype(np.float32), 5).astype(float)

@@ -28,9 +28,10 @@ _KERNEL3, _KERNEL5 = np.ones((3, 3), np.uint8), np.ones((5, 5), np.uint8)
 
 
 def check_one_object(standing: np.ndarray, blob: np.ndarray, min_pixels: int = 40) -> None:
-    """AmbiguousObjectError when, besides ``blob``, another blob of ``standing`` (both (H, W) ...
+    """AmbiguousObjectError when a second object lies in the pick area.
 
-    ... bool) is at least SECOND_OBJECT of its size: a second object lies in the pick area.
+    That is: besides ``blob``, another blob of ``standing`` (both (H, W) bool) is at least
+    SECOND_OBJECT of its size: a second object lies in the pick area.
     """
     mask = cv2.morphologyEx(standing.astype(np.uint8), cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
@@ -85,10 +86,11 @@ def check_ends_seen(
 def check_one_rod(
     p: np.ndarray, centroid: np.ndarray, direction: np.ndarray, table_z: float, noise: float
 ) -> None:
-    """AmbiguousObjectError when the blob's points ``p`` (N, 3) are not one rod lying along ...
+    """AmbiguousObjectError when the blob is not one rod.
 
-    ... ``direction`` (2,) through ``centroid`` (2,): too many of its slices across the axis are
-    split in two pieces or two tops (``split_slices``).
+    That is: the blob's points ``p`` (N, 3), which should lie along ``direction`` (2,)
+    through ``centroid`` (2,): too many of its slices across the axis are split in two
+    pieces or two tops (``split_slices``).
     """
     split, total = split_slices(p, centroid, direction, table_z, noise)
     if total and split >= max(MIN_SPLIT_SLICES, SPLIT_SLICES * total):
@@ -102,11 +104,12 @@ def check_one_rod(
 def split_slices(
     p: np.ndarray, centroid: np.ndarray, direction: np.ndarray, table_z: float, noise: float
 ) -> tuple[int, int]:
-    """(slices split in two, slices) of the blob's points ``p`` (N, 3) in SLICE-wide slices ...
+    """(slices split in two, slices) of the blob's points ``p`` (N, 3).
 
-    ... across ``direction``: a slice is split when its profile across the axis (the highest
-    point per ACROSS_BIN) has an empty bin between occupied ones, or a valley between two
-    tops deeper than MIN_VALLEY, VALLEY_SHARE of the lower top and VALLEY_SIGMAS noise stds.
+    The slices are SLICE wide, across ``direction``: a slice is split when its profile
+    across the axis (the highest point per ACROSS_BIN) has an empty bin between occupied
+    ones, or a valley between two tops deeper than MIN_VALLEY, VALLEY_SHARE of the lower top
+    and VALLEY_SIGMAS noise stds.
     """
     rel = p[:, :2] - centroid
     along = rel @ direction
