@@ -22,6 +22,7 @@ from comgrasp_pin.perception._points import (
     blobs,
     check_images,
     denoise,
+    drop_flying,
     fill_holes,
     noise_level,
     points_in,
@@ -34,6 +35,7 @@ REACH = 0.40  # distance from the TCP beyond which nothing is the held object (m
 TABLE_MARGIN = 0.003  # points less than this above the table are the table (m)
 MIN_PIXELS = 60
 CLEAN_NOISE = 3e-4  # depth noisier than this (m, robust std about its median) is filtered
+FLYING_MIN, FLYING_SIGMAS = 0.005, 4.0  # flying pixels: this far from all neighbours (m, stds)
 MAX_AXIS_FROM_TCP = 0.035  # a held rod's axis passes this close to the TCP (m)
 MIN_EXTENT = 0.05  # a held rod is at least this long in view (m)
 OFF_AXIS_PERCENTILE = 99.0  # SideView.off_axis: nearly the farthest point, robust to a stray
@@ -100,14 +102,15 @@ def clean_side_depth(depth: np.ndarray) -> tuple[np.ndarray, float]:
     """(depth, noise (m)): ``depth`` itself and 0 when it is clean.
 
     Else (pixels lost, i.e. 0, or noisier than CLEAN_NOISE against its 5 x 5 median) its
-    holes (0 or inf) filled, the median taken, and its noise.
+    flying pixels dropped, its holes (0 or inf) filled, the median taken, and its noise.
     """
     smooth = denoise(fill_holes(depth))
     both = np.isfinite(depth) & np.isfinite(smooth)
     noise = noise_level(depth[both] - smooth[both])
     # A camera marks a lost pixel 0; inf is also what a render gives where nothing is seen.
     if np.any(depth <= 0) or noise > CLEAN_NOISE:
-        return smooth, noise
+        grounded = drop_flying(depth, max(FLYING_MIN, FLYING_SIGMAS * noise))
+        return denoise(fill_holes(grounded)), noise
     return depth, 0.0
 
 
