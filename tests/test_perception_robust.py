@@ -124,8 +124,8 @@ def test_two_rods_side_by_side_are_refused(name, gap):
     assert silent == []
 
 
-SIDE_OBJECTS = ("obj1", "obj2", "obj4", "obj6")
-SIDE_POSES = ((0.0, 0.03), (15.0, -0.03))  # (tilt deg, grasp offset m)
+SIDE_OBJECTS = ("obj1", "obj2", "obj4", "obj5", "obj6")  # round handles
+SIDE_POSES = ((0.0, 0.03), (15.0, -0.03), (-20.0, -0.04), (35.0, 0.0))  # (tilt deg, offset m)
 
 
 @pytest.fixture(scope="module")
@@ -167,4 +167,4 @@ def test_side_view_holds_or_refuses(side_results):
               and (r[3][0] > SIDE_TILT_BOUND_DEG or r[3][1] > SIDE_GRASP_BOUND)]  # fmt: skip
     assert silent == []
     refused = [r for r in side_results if isinstance(r[3], PerceptionError)]
-    assert len(refused) <= 0.1 * len(side_results), refused
+    assert len(refused) <= 0.25 * len(side_results), refused
