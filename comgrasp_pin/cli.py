@@ -50,7 +50,8 @@ def _options(args: argparse.Namespace):
     return RunOptions(args.out, args.objects, trials, args.seed, workers,
                       args.resume or args.retry_failed, args.overwrite, args.noise,
                       args.estimator, args.retry_failed, args.backend,
-                      args.ray_address, getattr(args, "second_seed", None))  # fmt: skip
+                      args.ray_address, getattr(args, "second_seed", None),
+                      args.sensors)  # fmt: skip
 
 
 def _cmd_experiment(args: argparse.Namespace) -> int:
@@ -79,7 +80,12 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         raise InvalidInputError(
             "--viewer needs a display (DISPLAY is not set); drop it for the video"
         )
-    result = run_episode(args.object, args.seed, args.method, video=video, viewer=args.viewer)
+    from comgrasp_pin.experiments.trials import episode_config
+
+    config = episode_config(sensors=args.sensors)
+    result = run_episode(args.object, args.seed, args.method, config=config, video=video,
+                         viewer=args.viewer)  # fmt: skip
+    print(f"sensors {args.sensors}")
     print(f"object {args.object}, method {args.method}, seed {args.seed}")
     if result.trial is not None:
         t, s = result.trial, result.trial_score
@@ -109,6 +115,15 @@ def _cmd_views(args: argparse.Namespace) -> int:
     for path in save_camera_views(Path(args.out), args.object, args.seed):
         print(f"wrote {path}")
     return 0
+
+
+def _add_sensors_arg(p: argparse.ArgumentParser) -> None:
+    from comgrasp_pin.config import SENSOR_PRESETS
+
+    p.add_argument("--sensors", default="ideal", choices=SENSOR_PRESETS,
+                   help="sensor preset: ideal renders and torques, or realistic (RealSense-class "
+                   "depth, link-side torque sensors, gripper model error; realistic_current: a "
+                   "UR CB3's current-based torques) (%(default)s)")  # fmt: skip
 
 
 def _add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
@@ -143,6 +158,7 @@ def _add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
                    help="the trial grasp's estimator: IPOPT with the side view's prior on the "
                    "CoM's distance from the rod's axis, or the closed-form least squares "
                    "(%(default)s)")  # fmt: skip
+    _add_sensors_arg(p)
     again = p.add_mutually_exclusive_group()
     again.add_argument("--resume", action="store_true",
                        help="continue the CSV in --out (same settings; trials and objects may "
@@ -195,6 +211,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--out", type=cli_args.out_dir, default="results/demo", help="output folder (%(default)s)"
     )
     demo.add_argument("--viewer", action="store_true", help="also show MuJoCo's viewer (display)")
+    _add_sensors_arg(demo)
     demo.set_defaults(func=_cmd_demo)
 
     views = sub.add_parser("views", help="both camera views with mask, rectangle, axis, grasp")

@@ -4,7 +4,8 @@
       trial:   TrialConfig     the trial grasp and its torque measurement
       regrasp: RegraspConfig   when to regrasp, how to retry, how to put the rod down
       motion:  MotionConfig    the skills: speeds, approach, gripper, carrying
-      sensors: SensorConfig    the joint-torque sensor and the side camera's watch
+      sensors: SensorConfig    torque sensor, depth cameras' errors, model error, the watch
+                               (``config_sensors``: presets "ideal", "realistic", ...)
       world:   WorldConfig     the simulated world (physics, contacts, servo)
 
 Skills and procedures take their numbers from this tree only (no defaults of their own), and
@@ -16,45 +17,27 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from comgrasp_pin.config_sensors import (
+    SENSOR_PRESETS,
+    DepthNoiseConfig,
+    SensorConfig,
+    TorqueSensorConfig,
+    sensor_preset,
+)
 from comgrasp_pin.errors import InvalidInputError
 
-
-@dataclass(frozen=True)
-class TorqueSensorConfig:
-    """Error model of each joint's torque reading (N m).
-
-    Attributes:
-        noise_std: standard deviation of the white noise on every sample (N m); 0.05 is a
-            joint-torque-sensor class arm.
-        bias: constant offset added to every sample (N m), the same for all joints.
-        drift_std: random-walk drift, standard deviation after one second (N m / sqrt(s)).
-    """
-
-    noise_std: float = 0.05
-    bias: float = 0.0
-    drift_std: float = 0.0
-
-    def __post_init__(self) -> None:
-        if not (self.noise_std >= 0 and self.drift_std >= 0):
-            raise InvalidInputError(
-                f"noise_std and drift_std must be >= 0, got {self.noise_std}, {self.drift_std}"
-            )
-
-
-@dataclass(frozen=True)
-class SensorConfig:
-    """The robot's sensors.
-
-    Attributes:
-        torque: the joint-torque sensor's error model.
-        watch_dt: period of the side camera while the rod is lifted and held (s).
-        watch_stride: the slip watch measures every stride-th pixel of each row and column
-            (it needs the tilt only).
-    """
-
-    torque: TorqueSensorConfig = field(default_factory=TorqueSensorConfig)
-    watch_dt: float = 0.2
-    watch_stride: int = 3
+__all__ = [
+    "SENSOR_PRESETS",
+    "DepthNoiseConfig",
+    "EpisodeConfig",
+    "MotionConfig",
+    "RegraspConfig",
+    "SensorConfig",
+    "TorqueSensorConfig",
+    "TrialConfig",
+    "WorldConfig",
+    "sensor_preset",
+]
 
 
 @dataclass(frozen=True)

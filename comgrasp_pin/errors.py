@@ -43,6 +43,11 @@ class ObjectCutByBorderError(PerceptionError):
     centre) cannot be measured."""
 
 
+class AmbiguousObjectError(PerceptionError):
+    """What the camera sees is not one rod: two objects, or two rods side by side seen as
+    one blob. Measuring it would give a pose that belongs to neither."""
+
+
 class InvalidDepthError(PerceptionError):
     """The depth image is missing, of the wrong shape, or has no valid values where needed."""
 

@@ -2,6 +2,7 @@
 
 import mujoco
 import numpy as np
+import pytest
 
 from comgrasp_pin.simulation import Simulation, build_model
 
@@ -73,3 +74,98 @@ def test_measured_average_is_unbiased_with_honest_error_bar(ur5):
     np.testing.assert_allclose(measurement.std_error, 0.05 / np.sqrt(n), rtol=0.2)
     error = measurement.tau - ur5.gravity_torques(measurement.q)
     assert np.all(np.abs(error) < 5 * measurement.std_error), error / measurement.std_error
+
+
+def test_link_sensor_offsets_change_per_episode_and_cancel_in_a_difference():
+    from comgrasp_pin.config import TorqueSensorConfig
+    from comgrasp_pin.simulation.torque_sensor import make_torque_sensor
+
+    config = TorqueSensorConfig(noise_std=0.0, offset_std=0.2)
+    tau = np.array([1.0, -2.0, 3.0, 0.0, 0.5, -0.1])
+    first, second = (make_torque_sensor(6, config, seed) for seed in (1, 2))
+    assert not np.allclose(first.offsets, second.offsets)
+    np.testing.assert_allclose(first.read(tau, 1e-3), tau + first.offsets)
+    # The same episode, the same offset: tau_after - tau_before is free of it.
+    np.testing.assert_allclose(first.read(tau + 1.0, 1e-3) - first.read(tau, 1e-3), 1.0)
+    spread = np.concatenate([make_torque_sensor(6, config, s).offsets for s in range(300)])
+    assert abs(spread.std() - 0.2) < 0.02
+
+
+def test_current_sensor_at_rest_keeps_the_friction_of_the_last_motion():
+    from comgrasp_pin.config import TorqueSensorConfig
+    from comgrasp_pin.simulation.torque_sensor import make_torque_sensor
+
+    coulomb = (3.0, 3.0, 2.0, 1.0, 1.0, 1.0)
+    config = TorqueSensorConfig(kind="current", noise_std=0.0, coulomb=coulomb,
+                                viscous=(0.5,) * 6)  # fmt: skip
+    sensor = make_torque_sensor(6, config, seed=3)
+    tau, up, down, rest = np.ones(6), np.full(6, 0.2), np.full(6, -0.2), np.zeros(6)
+    np.testing.assert_allclose(sensor.read(tau, 1e-3, up), tau + coulomb + 0.5 * up)
+    after_up = sensor.read(tau, 1e-3, rest)
+    sensor.read(tau, 1e-3, down)
+    after_down = sensor.read(tau, 1e-3, rest)
+    # The same load at rest reads 2 * Coulomb apart, by the direction the joint came from.
+    np.testing.assert_allclose(after_up - after_down, 2 * np.array(coulomb))
+    np.testing.assert_allclose(after_up, tau + coulomb)
+
+
+def test_presets():
+    from comgrasp_pin.config import EpisodeConfig, SensorConfig, sensor_preset
+    from comgrasp_pin.errors import InvalidInputError
+
+    assert sensor_preset("ideal") == SensorConfig() == EpisodeConfig().sensors
+    realistic = sensor_preset("realistic")
+    # D415 at the table, 1.25 m: d^2 0.08 / (f b) from Intel's tuning guide.
+    assert realistic.top_depth.axial_std(1.0) == pytest.approx(0.0014, rel=0.05)
+    assert realistic.side_depth.axial_std(0.5) == pytest.approx(0.00094, rel=0.05)
+    assert sensor_preset("realistic_current").torque.kind == "current"
+    with pytest.raises(InvalidInputError, match="presets are"):
+        sensor_preset("perfect")
+
+
+def _payload_estimate(ur5, mass_error, tau_before, seed):
+    """The CoM estimate (theta = m, m c_ee) of a welded point mass, measured in a world whose
+    gripper is ``mass_error`` heavier and 5 mm off (the model error), with tau_before
+    "measured" (empty arm, same pose) or "model" (RobotModel.gravity_torques)."""
+    import comgrasp_pin as cg
+    from comgrasp_pin.config import TorqueSensorConfig
+    from comgrasp_pin.simulation.scene import misstate_gripper
+
+    misstate = [lambda s: misstate_gripper(s, mass_error, 0.005)] if mass_error else []
+    sensor = TorqueSensorConfig(noise_std=0.05)
+    taus, qs = [], []
+    for extras in (misstate, misstate + [_weld_point_mass(0.5, np.array([0.02, 0.0, 0.2]))]):
+        sim = Simulation(build_model(extras=extras), sensor=sensor, seed=seed)
+        sim.reset_arm(Q_HOLD)
+        m = sim.measure_torques(settle=1.0, window=1.0)
+        taus.append(m.tau)
+        qs.append(m.q)
+    before = taus[0] if tau_before == "measured" else ur5.gravity_torques(qs[0])
+    return cg.estimate_com(ur5, qs[1], before, taus[1]).mass
+
+
+def test_measured_tau_before_absorbs_the_gripper_model_error(ur5):
+    exact = _payload_estimate(ur5, 0.0, "measured", seed=4)
+    with_error = _payload_estimate(ur5, 0.05, "measured", seed=4)
+    from_model = _payload_estimate(ur5, 0.05, "model", seed=4)
+    assert exact == pytest.approx(0.5, abs=0.01)
+    assert with_error == pytest.approx(exact, abs=0.005)  # within the noise
+    # Not vacuous: the model's tau_before carries the 5 % (32 g) error into the estimate.
+    assert abs(from_model - 0.5) > 0.02
+
+
+def test_sensors_option_reaches_the_episode_config():
+    from comgrasp_pin.cli import _options, build_parser
+    from comgrasp_pin.config import EpisodeConfig
+    from comgrasp_pin.experiments.trials import episode_config, settings_summary
+
+    args = build_parser().parse_args(["accuracy", "--sensors", "realistic", "--noise", "0.02"])
+    opts = _options(args)
+    assert opts.sensors == "realistic"
+    config = episode_config(opts.noise, opts.estimator, opts.sensors)
+    assert config.sensors.preset == "realistic" and config.sensors.torque.noise_std == 0.02
+    assert config.sensors.top_depth.enabled and config.sensors.gripper_mass_error > 0
+    assert settings_summary(sensors="realistic")["sensors"]["preset"] == "realistic"
+    assert episode_config() == EpisodeConfig()  # the default is the ideal world, unchanged
+    with pytest.raises(SystemExit):
+        build_parser().parse_args(["demo", "--sensors", "perfect"])

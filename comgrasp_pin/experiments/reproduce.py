@@ -42,7 +42,7 @@ class RunOptions:
         ``workers`` at a time); ray_address: an existing Ray cluster (None: a local Ray).
         second_seed: ``reproduce`` also runs the accuracy experiment with this seed (in
         ``out/seed<S>``) and reports its calibration and accuracy beside the first's, or
-        None.
+        None. sensors: the sensor preset (``config.sensor_preset``).
     """
 
     out: Path
@@ -58,6 +58,7 @@ class RunOptions:
     backend: str = "local"
     ray_address: str | None = None
     second_seed: int | None = None
+    sensors: str = "ideal"
 
 
 def run_settings(opts: RunOptions) -> dict:
@@ -66,7 +67,8 @@ def run_settings(opts: RunOptions) -> dict:
         "seed": opts.seed,
         "noise": opts.noise,
         "estimator": opts.estimator,
-        "config": settings_summary(opts.noise, opts.estimator),
+        "sensors": opts.sensors,
+        "config": settings_summary(opts.noise, opts.estimator, opts.sensors),
         "version": __version__,
         "objects": list(opts.objects),
         "trials": opts.trials,
@@ -79,13 +81,15 @@ def _run(opts: RunOptions, fn, methods, name: str, columns) -> list[dict]:
     for task in tasks:
         task["noise"] = opts.noise
         task["estimator"] = opts.estimator
+        task["sensors"] = opts.sensors
     return run_trials(fn, tasks, opts.out / f"{name}.csv", columns, opts.workers, opts.resume,
                       opts.overwrite, name, opts.retry_failed, run_settings(opts),
                       opts.backend, opts.ray_address)  # fmt: skip
 
 
 def run_accuracy(opts: RunOptions) -> list[dict]:
-    """Experiment 1: writes accuracy.csv, accuracy.png and accuracy_table.md."""
+    """Experiment 1: writes accuracy.csv (its settings beside it), accuracy.png and
+    accuracy_table.md."""
     rows = _run(opts, accuracy_trial, ("trial",), "accuracy", ACCURACY_COLUMNS)
     report.accuracy_figure(rows, opts.out / "accuracy.png")
     (opts.out / "accuracy_table.md").write_text(report.accuracy_table(rows) + "\n")
@@ -93,7 +97,8 @@ def run_accuracy(opts: RunOptions) -> list[dict]:
 
 
 def run_regrasp(opts: RunOptions) -> list[dict]:
-    """Experiment 2: writes regrasp.csv, regrasp.png and regrasp_table.md."""
+    """Experiment 2: writes regrasp.csv (its settings beside it), regrasp.png and
+    regrasp_table.md."""
     rows = _run(opts, regrasp_trial, ("baseline", "regrasp"), "regrasp", REGRASP_COLUMNS)
     report.regrasp_figure(rows, opts.out / "regrasp.png")
     (opts.out / "regrasp_table.md").write_text(report.regrasp_table(rows) + "\n")
@@ -142,7 +147,7 @@ def reproduce(opts: RunOptions) -> Path:
     reg = run_regrasp(opts)
     end = time.perf_counter()
     second = _second_seed_section(opts, out)
-    settings = settings_summary(noise, opts.estimator)
+    settings = settings_summary(noise, opts.estimator, opts.sensors)
     meta = {
         "objects": list(objects), "trials_per_object": trials, "seed": seed, "workers": workers,
         "backend": opts.backend,

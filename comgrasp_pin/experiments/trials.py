@@ -8,11 +8,11 @@ true CoM) and ``--resume`` reproduces what an uninterrupted run would have done.
 from __future__ import annotations
 
 import time
-from dataclasses import asdict
+from dataclasses import asdict, replace
 
 import numpy as np
 
-from comgrasp_pin.config import EpisodeConfig, SensorConfig, TorqueSensorConfig, TrialConfig
+from comgrasp_pin.config import EpisodeConfig, TrialConfig, sensor_preset
 from comgrasp_pin.config_paths import with_values
 from comgrasp_pin.experiments.design import grasp_for_lever, side_and_lever, target_tilt
 
@@ -58,17 +58,23 @@ def make_tasks(objects: list[str], trials: int, seed: int, methods: tuple[str, .
     ]
 
 
-def episode_config(noise: float = 0.05, estimator: str = "ipopt") -> EpisodeConfig:
-    """The configuration every trial runs with: the defaults, with the torque sensor's
-    white noise ``noise`` (N m per sample) and the trial grasp's ``estimator``."""
-    sensors = SensorConfig(torque=TorqueSensorConfig(noise_std=float(noise)))
-    return EpisodeConfig(trial=TrialConfig(estimator=estimator), sensors=sensors)
+def episode_config(
+    noise: float = 0.05, estimator: str = "ipopt", sensors: str = "ideal"
+) -> EpisodeConfig:
+    """The configuration every trial runs with: the defaults, with the sensor preset
+    ``sensors`` (``config.sensor_preset``), its torque sensor's white noise set to ``noise``
+    (N m per sample), and the trial grasp's ``estimator``."""
+    preset = sensor_preset(sensors)
+    preset = replace(preset, torque=replace(preset.torque, noise_std=float(noise)))
+    return EpisodeConfig(trial=TrialConfig(estimator=estimator), sensors=preset)
 
 
 def _episode_config(task: dict) -> EpisodeConfig:
-    """The task's config: ``episode_config`` of its noise and estimator, with the values of
-    ``task["overrides"]`` (dotted path -> number, a sweep's grid point) put in."""
-    config = episode_config(task.get("noise", 0.05), task.get("estimator", "ipopt"))
+    """The task's config: ``episode_config`` of its noise, estimator and sensor preset,
+    with the values of ``task["overrides"]`` (dotted path -> number, a sweep's grid point)
+    put in."""
+    config = episode_config(task.get("noise", 0.05), task.get("estimator", "ipopt"),
+                            task.get("sensors", "ideal"))  # fmt: skip
     return with_values(config, task["overrides"]) if task.get("overrides") else config
 
 
@@ -147,10 +153,10 @@ def regrasp_trial(task: dict) -> dict:
     return result.row()
 
 
-def settings_summary(noise: float = 0.05, estimator: str = "ipopt") -> dict:
-    """Every setting an experiment ran with (the whole config tree and the experiment
-    design), for ``run.json`` and the report."""
-    out = asdict(episode_config(noise, estimator))
+def settings_summary(noise: float = 0.05, estimator: str = "ipopt", sensors: str = "ideal") -> dict:
+    """Every setting an experiment ran with (the whole config tree, with its sensor preset's
+    name, and the experiment design), for ``run.json`` and the report."""
+    out = asdict(episode_config(noise, estimator, sensors))
     out["accuracy_com_range"] = ACCURACY_COM_RANGE
     out["accuracy_grasp_offset"] = ACCURACY_GRASP_OFFSET
     out["accuracy_lever_range"] = ACCURACY_LEVER_RANGE

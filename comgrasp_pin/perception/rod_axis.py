@@ -13,6 +13,7 @@ from comgrasp_pin.perception._points import fit_line
 MAX_FIT_POINTS = 3000
 MAX_MISFIT = 5e-4  # a round handle's points lie this close to the fitted cylinder (m) ...
 MAX_MISFIT_PER_RADIUS = 0.03  # ... or this fraction of its radius (a flat bar: 0.15-0.2)
+MISFIT_NOISE = 1.0  # ... or, in a noisy image, this many times its depth noise (m)
 MAX_REFINE_TURN_DEG = 8.0  # a cylinder this far from the slice line locked on a wrong side
 MAX_REFINE_SHIFT = 0.01  # the same, for its offset (m)
 RADIUS_GIVE = np.arange(0.25, 2.01, 0.25) * 1e-3  # the handle's radius above the fingers' (m)
@@ -135,7 +136,11 @@ def fit_cylinder(
 
 
 def refine_axis(
-    points: np.ndarray, direction: np.ndarray, point: np.ndarray, radius: float | None
+    points: np.ndarray,
+    direction: np.ndarray,
+    point: np.ndarray,
+    radius: float | None,
+    noise: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The slice line refined by a cylinder fitted to the handle, where it is round.
 
@@ -153,6 +158,7 @@ def refine_axis(
         fits += [fit_cylinder(points, direction, point, radius + dr) for dr in RADIUS_GIVE]
     x_fit, offset_fit, misfit = min(fits, key=lambda fit: fit[2])
     limit = max(MAX_MISFIT, MAX_MISFIT_PER_RADIUS * radius) if radius else MAX_MISFIT
+    limit = max(limit, MISFIT_NOISE * noise)
     near = (
         x_fit @ direction > np.cos(np.radians(MAX_REFINE_TURN_DEG))
         and np.linalg.norm(offset_fit - point) < MAX_REFINE_SHIFT

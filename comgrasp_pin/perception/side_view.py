@@ -20,7 +20,15 @@ from comgrasp_pin import validate
 from comgrasp_pin.camera import PinholeCamera
 from comgrasp_pin.errors import ObjectNotFoundError
 from comgrasp_pin.geometry import check_transform
-from comgrasp_pin.perception._points import blobs, check_images, points_in
+from comgrasp_pin.perception._points import (
+    blobs,
+    check_images,
+    denoise,
+    drop_flying,
+    fill_holes,
+    noise_level,
+    points_in,
+)
 from comgrasp_pin.perception.rod_axis import centre_line, refine_axis
 from comgrasp_pin.perception.rod_ends import centre_along, end_profile
 
@@ -28,6 +36,8 @@ SLAB_HALF_WIDTH = 0.08  # |y_ee| of the region the held object may occupy (m)
 REACH = 0.40  # distance from the TCP beyond which nothing is the held object (m)
 TABLE_MARGIN = 0.003  # points less than this above the table are the table (m)
 MIN_PIXELS = 60
+CLEAN_NOISE = 3e-4  # depth noisier than this (m, robust std about its median) is filtered
+FLYING_MIN, FLYING_SIGMAS = 0.005, 4.0  # flying pixels: this far from all neighbours (m, stds)
 MAX_AXIS_FROM_TCP = 0.035  # a held rod's axis passes this close to the TCP (m)
 MIN_EXTENT = 0.05  # a held rod is at least this long in view (m)
 DEPTH_MARGIN = 0.003  # the handle's surface lies within its radius (+ this) of y_ee = 0 (m)
@@ -97,6 +107,22 @@ class SideView:
     depth_slices: np.ndarray | None = None
 
 
+def clean_side_depth(depth: np.ndarray) -> tuple[np.ndarray, float, bool]:
+    """(depth, noise (m), cleaned): ``depth`` itself, 0 and False when it is clean.
+
+    Else (pixels lost, i.e. 0, or noisier than CLEAN_NOISE against its 5 x 5 median) its
+    flying pixels dropped, its holes (0 or inf) filled, the median taken, its noise, True.
+    """
+    smooth = denoise(fill_holes(depth))
+    both = np.isfinite(depth) & np.isfinite(smooth)
+    noise = noise_level(depth[both] - smooth[both])
+    # A camera marks a lost pixel 0; inf is also what a render gives where nothing is seen.
+    if np.any(depth <= 0) or noise > CLEAN_NOISE:
+        grounded = drop_flying(depth, max(FLYING_MIN, FLYING_SIGMAS * noise))
+        return denoise(fill_holes(grounded)), noise, True
+    return depth, 0.0, False
+
+
 def _gripper_volume(p: np.ndarray) -> np.ndarray:
     x, y, z = p[..., 0], p[..., 1], p[..., 2]
     inside = np.zeros(x.shape, dtype=bool)
@@ -153,7 +179,7 @@ def observe_held_rod(
     centre_hint = validate.optional_number(centre_hint, "centre_hint (m)")
     handle_radius = validate.optional_number(handle_radius, "handle_radius (m)", low=0.0,
                                              low_open=True)  # fmt: skip
-    depth = check_images(rgb, depth, camera)
+    depth, noise, cleaned = clean_side_depth(check_images(rgb, depth, camera))
     p = points_in(T_ee_cam, depth, camera)
     finite = np.isfinite(p[..., 0])
     candidate = finite & (np.abs(p[..., 1]) < SLAB_HALF_WIDTH)
@@ -178,7 +204,15 @@ def observe_held_rod(
     # Tilt lives in the ee x-z plane; the jaws fix the axis at y = 0.
     x_axis, offset_xz, handle, tilt_std = centre_line(points[:, [0, 2]])
     if handle.sum() >= MIN_PIXELS:
-        x_axis, offset_xz = refine_axis(points[handle], x_axis, offset_xz, handle_radius)
+        refined = refine_axis(points[handle], x_axis, offset_xz, handle_radius, noise)
+        unrefined = refined[0] is x_axis  # refine_axis hands the slice line back as it was
+        if cleaned and unrefined:
+            raise ObjectNotFoundError(
+                "no cylinder fits the held handle's points in this image with holes or noise, "
+                "and the slice centres alone bias the tilt by up to 1-3 deg (measured): a "
+                "round handle, seen with fewer holes or less noise, is needed"
+            )
+        x_axis, offset_xz = refined
     x_axis = np.array([x_axis[0], 0.0, x_axis[1]])
     along = points @ x_axis
     lo, hi = np.percentile(along, [0.1, 99.9])

@@ -18,12 +18,21 @@ import numpy as np
 from comgrasp_pin.camera import PinholeCamera
 from comgrasp_pin.errors import ObjectCutByBorderError, ObjectNotFoundError
 from comgrasp_pin.geometry import GraspPose
-from comgrasp_pin.perception._points import check_images, largest_component, points_in
+from comgrasp_pin.perception._points import check_images, largest_component
+from comgrasp_pin.perception.rod_shape import check_ends_seen, check_one_object, check_one_rod
+from comgrasp_pin.perception.table_view import TableView, in_area, view_table
 
 PICK_AREA = (0.30, 0.80, -0.35, 0.35)  # x_min, x_max, y_min, y_max of the table (m, world)
 MIN_HEIGHT = 0.003  # a pixel counts as object if it stands this far above the table (m)
 MAX_HEIGHT = 0.15  # ... and no higher than this (the robot above the table is not the rod)
 MIN_PIXELS = 40
+# In a cleaned image (``table_view``): a pixel stands on the table this many camera noise
+# stds above it, gaps of up to 4 px close, and the rod is measured without its 1 px fringe.
+HEIGHT_SIGMAS = 2.5
+CLOSE_KERNEL = np.ones((5, 5), np.uint8)
+ERODE_PX = 1  # (2 holds flying pixels better, 35 % dropouts worse)
+KEEP_EXTENT = 0.8  # ... unless the eroded rod is shorter than this share (a thin rod's handle gone)
+END_SNR = 8.0  # a rod lower than this many noise stds (after the median) may lose its ends
 EDGE_BAND = 0.01  # an object within 2 bands of the pick area's edge may leave it (m)
 
 
@@ -66,53 +75,106 @@ def detect_rod_top_down(
     Raises:
         ObjectNotFoundError: nothing above the table.
         ObjectCutByBorderError: the rod leaves the image or reaches the edge of the pick area.
+        AmbiguousObjectError: two objects, or two rods side by side, where one rod should be,
+            or parts of the rod lost in a noisy image beyond the end seen.
         InvalidDepthError: unusable depth.
     """
     depth = check_images(rgb, depth, camera)
-    points = points_in(T_world_cam, depth, camera)
-    x, y, z = points[..., 0], points[..., 1], points[..., 2]
-    x0, x1, y0, y1 = pick_area
-
-    def within(margin: float) -> np.ndarray:
-        return (x > x0 + margin) & (x < x1 - margin) & (y > y0 + margin) & (y < y1 - margin)
-
-    inside = within(EDGE_BAND) & np.isfinite(z)
-    if inside.sum() < 100:
-        raise ObjectNotFoundError("the pick area is not in view of the camera")
-    table_z = float(np.median(z[inside]))  # the rod covers a small part of the table
-    standing = (z > table_z + MIN_HEIGHT) & (z < table_z + MAX_HEIGHT)
-    mask = largest_component(inside & standing, MIN_PIXELS, "top-down image")
-    grown = cv2.dilate(mask.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
-    if np.any(grown & standing & ~within(2 * EDGE_BAND) & np.isfinite(z)):
-        raise ObjectCutByBorderError("the object reaches the edge of the pick area")
-
-    p = points[mask]
+    view = view_table(depth, camera, T_world_cam, pick_area, EDGE_BAND)
+    mask, standing = _segment(view, pick_area)
+    pixel = float(np.median(depth[mask & np.isfinite(depth)])) / camera.fx  # at the rod (m)
+    core, eroded_px = _core(view, mask) if view.cleaned else (mask, 0)
+    p = view.points[core]
     centroid = p[:, :2].mean(axis=0)
     _, _, vt = np.linalg.svd(p[:, :2] - centroid, full_matrices=False)
     direction = vt[0]
+    check_one_rod(view.points[mask], centroid, direction, view.table_z, view.points_noise)
     along = (p[:, :2] - centroid) @ direction
     lo, hi = np.percentile(along, [0.02, 99.98])
+    if view.cleaned:
+        check_ends_seen(view.points, standing, mask, centroid, direction, (lo, hi), p)
     centre = centroid + 0.5 * (lo + hi) * direction
     near_centre = np.abs(along - 0.5 * (lo + hi)) < 0.01
-    heights = p[near_centre, 2] - table_z if near_centre.any() else p[:, 2] - table_z
+    heights = p[near_centre, 2] - view.table_z if near_centre.any() else p[:, 2] - view.table_z
     handle_height = float(np.median(heights))
+    if view.cleaned and handle_height < END_SNR * view.points_noise:
+        raise ObjectNotFoundError(
+            f"the rod stands {1e3 * handle_height:.0f} mm above the table, less than "
+            f"{END_SNR:g} times the filtered depth noise ({1e3 * view.points_noise:.1f} mm): "
+            "its ends cannot be told from the table; view it closer or with a less noisy camera"
+        )
     yaw = float(np.arctan2(direction[1], direction[0]))
     yaw = (yaw + np.pi / 2) % np.pi - np.pi / 2  # (-pi/2, pi/2]
-    grasp = GraspPose(float(centre[0]), float(centre[1]), table_z + 0.5 * handle_height, yaw)
-
+    grasp = GraspPose(float(centre[0]), float(centre[1]), view.table_z + 0.5 * handle_height,
+                      yaw)  # fmt: skip
+    length = float(hi - lo)
+    if eroded_px:  # the erosion took pixels off each end
+        length += 2 * eroded_px * pixel
+    widths = _widths(p, centroid, direction, along - 0.5 * (lo + hi), yaw)
     contours, _ = cv2.findContours(mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     rect = cv2.minAreaRect(max(contours, key=cv2.contourArea))
-    ends_world = np.array([[*(centre + s * direction), table_z] for s in (lo, hi)])
+    ends_world = np.array([[*(centre + s * direction), view.table_z] for s in (lo, hi)])
     T_cam_world = np.linalg.inv(T_world_cam)
     ends_cam = ends_world @ T_cam_world[:3, :3].T + T_cam_world[:3, 3]
+    return RodDetection(grasp, length, widths, view.table_z, handle_height, mask, rect,
+                        camera.project(ends_cam))  # fmt: skip
+
+
+def _core(view: TableView, mask: np.ndarray) -> tuple[np.ndarray, int]:
+    """(the pixels to measure the rod on, the pixels eroded off its outline).
+
+    A real camera's outline of an object (flying pixels, holes filled, the median) is
+    unreliable over a pixel: the mask eroded by ERODE_PX (or fewer) pixels, as long as the
+    erosion keeps the rod's extent (a thin rod would lose its handle) and MIN_PIXELS; else
+    the mask.
+    """
+    pts = view.points[mask][:, :2]
+    axis = np.linalg.svd(pts - pts.mean(axis=0), full_matrices=False)[2][0]
+    extent = np.ptp(pts @ axis)
+    for px in range(ERODE_PX, 0, -1):
+        kernel = np.ones((2 * px + 1, 2 * px + 1), np.uint8)
+        core = cv2.erode(mask.astype(np.uint8), kernel).astype(bool)
+        if np.count_nonzero(core) < MIN_PIXELS:
+            continue
+        if np.ptp(view.points[core][:, :2] @ axis) > KEEP_EXTENT * extent:
+            return core, px
+    return mask, 0
+
+
+def _segment(view: TableView, pick_area) -> tuple[np.ndarray, np.ndarray]:
+    """(the rod's mask, every pixel standing on the table), both (H, W) bool.
+
+    The threshold follows the camera's own noise (the median's heights beside a tall head
+    are biased by the noise before it); in a cleaned image gaps of a few pixels close (a
+    thin rod broken by holes at its edges is one rod). Raises ObjectNotFoundError,
+    ObjectCutByBorderError, AmbiguousObjectError (a second object).
+    """
+    z = view.points[..., 2]
+    inside = in_area(view.points, pick_area, EDGE_BAND) & np.isfinite(z)
+    min_height = max(MIN_HEIGHT, HEIGHT_SIGMAS * view.noise)
+    standing = (z > view.table_z + min_height) & (z < view.table_z + MAX_HEIGHT)
+    if view.cleaned:
+        standing = cv2.morphologyEx(standing.astype(np.uint8), cv2.MORPH_CLOSE, CLOSE_KERNEL) > 0
+    mask = largest_component(inside & standing, MIN_PIXELS, "top-down image")
+    check_one_object(inside & standing, mask)
+    grown = cv2.dilate(mask.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
+    near_edge = ~in_area(view.points, pick_area, 2 * EDGE_BAND)
+    if np.any(grown & standing & near_edge & np.isfinite(z)):
+        raise ObjectCutByBorderError("the object reaches the edge of the pick area")
+    return mask, inside & standing
+
+
+def _widths(p, centroid, direction, s_rel, yaw) -> np.ndarray:
+    """(K, 2) the rod's width across its axis in 1 cm slices (m).
+
+    Rows: (position along the rod from its centre towards +yaw, width).
+    """
     across = (p[:, :2] - centroid) @ np.array([-direction[1], direction[0]])
-    s_rel = along - 0.5 * (lo + hi)
     bins = np.floor(s_rel / 0.01).astype(int)
     widths = np.array([((b + 0.5) * 0.01, np.ptp(across[bins == b])) for b in np.unique(bins)])
     if direction @ np.array([np.cos(yaw), np.sin(yaw)]) < 0:  # rows towards +yaw
         widths = widths[::-1] * np.array([-1.0, 1.0])
-    return RodDetection(grasp, float(hi - lo), widths, table_z, handle_height, mask, rect,
-                        camera.project(ends_cam))  # fmt: skip
+    return widths
 
 
 def nearest_graspable(

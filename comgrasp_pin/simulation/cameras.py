@@ -10,6 +10,7 @@ import mujoco
 import numpy as np
 
 from comgrasp_pin.camera import PinholeCamera
+from comgrasp_pin.simulation.depth_noise import DepthNoise
 
 # R_mujococam_optical: flip y and z.
 _R_MJ_OPTICAL = np.diag([1.0, -1.0, -1.0])
@@ -44,12 +45,23 @@ class CameraRig:
 
     One offscreen renderer per rig, handed back by ``close`` for the next rig of a model
     with the same assets (tests/test_cameras.py checks that the images are the same).
+
+    Attributes:
+        noise: the depth errors of each camera, by name (``DepthNoise``; none: the renders
+            as they are). ``depth`` applies them; ``calibration_error`` gives the pose error.
     """
 
-    def __init__(self, model: mujoco.MjModel, width: int = 640, height: int = 480):
+    def __init__(
+        self,
+        model: mujoco.MjModel,
+        width: int = 640,
+        height: int = 480,
+        noise: dict[str, DepthNoise] | None = None,
+    ):
         self.model = model
         self.width = width
         self.height = height
+        self.noise = dict(noise or {})
         self._renderer = _take_renderer(model, width, height)
 
     def close(self) -> None:
@@ -91,10 +103,18 @@ class CameraRig:
         return self._render(data, camera)
 
     def depth(self, data: mujoco.MjData, camera: str) -> np.ndarray:
-        """(H, W) float z-depth along the optical axis (m); ``inf`` where nothing is seen."""
+        """(H, W) float z-depth along the optical axis (m); ``inf`` where nothing is seen,
+        and, with the camera's ``noise``, 0 or inf where the sensor lost the pixel."""
         depth = self._render(data, camera, depth=True).astype(float)
         depth[depth >= self.model.vis.map.zfar * self.model.stat.extent * 0.999] = np.inf
-        return depth
+        noise = self.noise.get(camera)
+        return depth if noise is None else noise.apply(depth)
+
+    def calibration_error(self, camera: str) -> np.ndarray:
+        """(4, 4) T_cam_calibrated: the camera frame the robot's calibration gives, in the
+        true one (identity without ``noise``)."""
+        noise = self.noise.get(camera)
+        return np.eye(4) if noise is None else noise.T_cam_calibrated.copy()
 
     def segmentation(self, data: mujoco.MjData, camera: str) -> np.ndarray:
         """(H, W) int geom id per pixel, -1 for background (ground truth: tests only)."""

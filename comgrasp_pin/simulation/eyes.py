@@ -1,7 +1,9 @@
 """The simulated robot's eyes: render a camera, hand the images to ``comgrasp_pin.perception``.
 
 Only images, the robot's own joint readings and its description (T_ee_cam from the URDF)
-are used, as on a real robot; no ground truth.
+are used, as on a real robot; no ground truth. With a realistic sensor preset the images
+carry the camera's errors and the camera poses its calibration error
+(``CameraRig.noise``, ``simulation.depth_noise``).
 """
 
 from __future__ import annotations
@@ -31,8 +33,8 @@ def look_from_above(rig: CameraRig, data: mujoco.MjData) -> RodDetection:
     """Detect the rod on the table with the top-down camera (the detection needs depth
     only: no colour image is rendered)."""
     depth = rig.depth(data, TOP_CAMERA)
-    return detect_rod_top_down(None, depth, rig.intrinsics(TOP_CAMERA),
-                               rig.T_world_cam(data, TOP_CAMERA))  # fmt: skip
+    T_world_cam = rig.T_world_cam(data, TOP_CAMERA) @ rig.calibration_error(TOP_CAMERA)
+    return detect_rod_top_down(None, depth, rig.intrinsics(TOP_CAMERA), T_world_cam)
 
 
 def side_camera_pose(robot: RobotModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -59,6 +61,7 @@ def look_from_side(
     stride-th pixel of each row and column (stride^2 times fewer points: the slip monitor's
     frames, which need the tilt only)."""
     T_world_ee, T_ee_cam = side_camera_pose(robot, q)
+    T_ee_cam = T_ee_cam @ rig.calibration_error(SIDE_CAMERA)
     camera = rig.intrinsics(SIDE_CAMERA).subsampled(stride)
     depth = rig.depth(data, SIDE_CAMERA)[::stride, ::stride]
     return observe_held_rod(None, depth, camera, T_ee_cam, T_world_ee,

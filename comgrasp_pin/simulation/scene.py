@@ -12,13 +12,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from comgrasp_pin import validate
-from comgrasp_pin.config import EpisodeConfig
+from comgrasp_pin.config import EpisodeConfig, SensorConfig
 from comgrasp_pin.geometry import invert_transform
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.simulation.cameras import CameraRig
+from comgrasp_pin.simulation.depth_noise import DepthNoise
 from comgrasp_pin.simulation.objects import ObjectState, add_object, get_object, object_state
 from comgrasp_pin.simulation.sim import Simulation
-from comgrasp_pin.simulation.world import build_model
+from comgrasp_pin.simulation.world import SIDE_CAMERA, TOP_CAMERA, build_model
 from comgrasp_pin.workcell import PICK_AREA, Q_PARK
 
 SCENE_MARGIN = 0.09  # rods (heads up to 0.07 m across) lie this far inside the pick area (m)
@@ -74,6 +75,27 @@ def random_table_pose(rng: np.random.Generator, length: float) -> tuple[float, f
             return float(x), float(y), float(yaw)
 
 
+def misstate_gripper(spec, mass_error: float, com_error: float) -> None:
+    """Make the simulated gripper ``mass_error`` (relative) heavier than the robot's model
+    says and move its CoM ``com_error`` (m) along (1, 1, 1) / sqrt(3) of its frame: the
+    model error of ``SensorConfig`` (the robot's ``RobotModel`` keeps the URDF's values)."""
+    body = spec.body("gripper_base")
+    body.mass = body.mass * (1.0 + mass_error)
+    body.ipos = np.asarray(body.ipos) + com_error * np.ones(3) / np.sqrt(3.0)
+
+
+def depth_noises(sensors: SensorConfig, seed: int) -> dict[str, DepthNoise]:
+    """Each camera's depth errors of ``sensors`` (none in the ideal preset), seeded from
+    the episode's ``seed``."""
+    noises = {}
+    for k, (camera, config) in enumerate(
+        ((TOP_CAMERA, sensors.top_depth), (SIDE_CAMERA, sensors.side_depth))
+    ):
+        if config.enabled:
+            noises[camera] = DepthNoise(config, (int(seed), 21 + k))
+    return noises
+
+
 class World:
     """The simulated world of one trial: simulation, cameras, robot model and the rod."""
 
@@ -86,9 +108,14 @@ class World:
         self.scene = scene
         self.config = config
         self.robot = RobotModel.ur5()
-        model = build_model(config.world, extras=[place_rod])
-        self.sim = Simulation(model, config.world, config.sensors.torque, seed=seed)
-        self.rig = CameraRig(model)
+        sensors = config.sensors
+        extras = [place_rod]
+        if sensors.gripper_mass_error or sensors.gripper_com_error:
+            extras.append(lambda spec: misstate_gripper(spec, sensors.gripper_mass_error,
+                                                        sensors.gripper_com_error))  # fmt: skip
+        model = build_model(config.world, extras=extras)
+        self.sim = Simulation(model, config.world, sensors.torque, seed=seed)
+        self.rig = CameraRig(model, noise=depth_noises(sensors, seed))
         self.sim.reset_arm(Q_PARK)
         self.sim.hold(config.world.settle_time)  # the rod settles on the table
 

@@ -12,7 +12,7 @@ from comgrasp_pin.config import TorqueSensorConfig, WorldConfig
 from comgrasp_pin.errors import UnstablePhysicsError
 from comgrasp_pin.procedures.cell import TorqueMeasurement
 from comgrasp_pin.simulation.servo import ArmServo
-from comgrasp_pin.simulation.torque_sensor import JointTorqueSensor
+from comgrasp_pin.simulation.torque_sensor import make_torque_sensor
 from comgrasp_pin.simulation.world import ARM_JOINTS, EE_SITE, FINGER_JOINTS, build_model
 
 _W = mujoco.mjtWarning
@@ -65,7 +65,7 @@ class Simulation:
         )
         self.q_des = np.zeros(len(ARM_JOINTS))
         self.grip_force = 0.0
-        self.sensor = JointTorqueSensor(len(ARM_JOINTS), sensor or TorqueSensorConfig(), seed)
+        self.sensor = make_torque_sensor(len(ARM_JOINTS), sensor or TorqueSensorConfig(), seed)
         mujoco.mj_forward(m, self.data)
         self.tau_measured = self.joint_torques()
         self.observers: list[Callable[[Simulation], None]] = []
@@ -126,7 +126,7 @@ class Simulation:
         for _ in range(n):
             d.ctrl[act] = ctrl(d.qpos[qadr], self.q_des, d.qfrc_bias[vadr], dt)
             mujoco.mj_step(m, d)
-            self.tau_measured = read(d.sensordata[tau_adr], dt)
+            self.tau_measured = read(d.sensordata[tau_adr], dt, d.qvel[vadr])
             for observer in observers:
                 observer(self)
         if self._unstable_counts.any():

@@ -1,6 +1,15 @@
-"""A joint-torque sensor as a real one behaves: white noise, a constant bias and slow drift.
+"""Joint-torque readings as real arms report them, from the drives' true torques.
 
-Sampled at every control step. The default noise (0.05 N m per sample) is that of a
+Two classes (``TorqueSensorConfig.kind``; ``make_torque_sensor`` picks one):
+
+- ``JointTorqueSensor`` ("link"): a torque sensor on the link side of the gear (Franka,
+  KUKA iiwa): white noise, a constant bias, an offset per joint drawn once per episode, and
+  slow drift (a random walk). The drives' friction does not reach it.
+- ``CurrentTorqueSensor`` ("current"): the torque a UR CB3 infers from its motor currents:
+  all of the above plus the drives' friction, Coulomb and viscous. At rest, the friction
+  holds what it held when the joint stopped: the reading keeps the sign of the last motion.
+
+Sampled at every control step. The default (0.05 N m white noise per sample) is that of a
 joint-torque-sensor class arm; the experiments never use a noise-free sensor.
 """
 
@@ -9,6 +18,13 @@ from __future__ import annotations
 import numpy as np
 
 from comgrasp_pin.config import TorqueSensorConfig
+from comgrasp_pin.errors import InvalidInputError
+
+
+def _offset_rng(seed: int | None) -> np.random.Generator:
+    """The generator of the per-episode errors: apart from the noise's, so that the noise
+    of a given seed is the same with and without them."""
+    return np.random.default_rng(None if seed is None else (int(seed), 13))
 
 
 class JointTorqueSensor:
@@ -16,6 +32,9 @@ class JointTorqueSensor:
 
     Noise is drawn in blocks of about ``_BLOCK_VALUES`` numbers (one draw per control step
     would cost more than the physics step itself).
+
+    Attributes:
+        offsets: (n,) each joint's offset in this episode (N m), from ``config.offset_std``.
     """
 
     _BLOCK_VALUES = 24_576
@@ -27,9 +46,14 @@ class JointTorqueSensor:
         self._n = n
         self._noise = np.empty((0, 2 * n))
         self._next = 0
+        self._episode_rng = _offset_rng(seed)
+        self.offsets = np.zeros(n)
+        if config.offset_std > 0:
+            self.offsets = config.offset_std * self._episode_rng.standard_normal(n)
 
-    def read(self, tau_true: np.ndarray, dt: float) -> np.ndarray:
-        """One sample (N m) of the (n,) true torques, ``dt`` seconds after the last one."""
+    def read(self, tau_true: np.ndarray, dt: float, qd: np.ndarray | None = None) -> np.ndarray:
+        """One sample (N m) of the (n,) true torques, ``dt`` seconds after the last one;
+        ``qd`` (n,) the joint velocities (rad/s), which only a current-based reading uses."""
         c = self.config
         if self._next >= len(self._noise):
             rows = max(1, self._BLOCK_VALUES // (2 * self._n))
@@ -38,9 +62,49 @@ class JointTorqueSensor:
         draw = self._noise[self._next]
         self._next += 1
         reading = tau_true + c.bias
+        if c.offset_std > 0:
+            reading = reading + self.offsets
         if c.drift_std > 0:
             self._drift += c.drift_std * np.sqrt(dt) * draw[self._n :]
             reading += self._drift
         if c.noise_std > 0:
             reading += c.noise_std * draw[: self._n]
         return reading
+
+
+class CurrentTorqueSensor(JointTorqueSensor):
+    """A current-based reading (UR CB3 style): the link-side errors plus the drives' friction.
+
+    Attributes:
+        friction_sign: (n,) +-1, the direction each joint last moved in (at first, drawn
+            per episode: how it came to rest is not known).
+    """
+
+    def __init__(self, n: int, config: TorqueSensorConfig, seed: int | None = None):
+        super().__init__(n, config, seed)
+        self._coulomb = _per_joint(config.coulomb, n, "coulomb")
+        self._viscous = _per_joint(config.viscous, n, "viscous")
+        self.friction_sign = self._episode_rng.choice([-1.0, 1.0], size=n)
+
+    def read(self, tau_true: np.ndarray, dt: float, qd: np.ndarray | None = None) -> np.ndarray:
+        reading = super().read(tau_true, dt)
+        if qd is None:
+            qd = np.zeros(self._n)
+        moving = np.abs(qd) > self.config.moving_speed
+        self.friction_sign = np.where(moving, np.sign(qd), self.friction_sign)
+        return reading + self._coulomb * self.friction_sign + self._viscous * qd
+
+
+def _per_joint(values: tuple[float, ...], n: int, name: str) -> np.ndarray:
+    """(n,) from a per-joint tuple (empty: zeros)."""
+    if not values:
+        return np.zeros(n)
+    if len(values) != n:
+        raise InvalidInputError(f"{name} has {len(values)} values; the arm has {n} joints")
+    return np.asarray(values, dtype=float)
+
+
+def make_torque_sensor(n: int, config: TorqueSensorConfig, seed: int | None = None):
+    """The sensor of ``config.kind`` ("link" or "current") for an arm of ``n`` joints."""
+    cls = CurrentTorqueSensor if config.kind == "current" else JointTorqueSensor
+    return cls(n, config, seed)

@@ -1,0 +1,146 @@
+"""Is what the top view found one rod? Refuse, rather than measure, two objects as one.
+
+Two rods apart are two blobs; two rods side by side merge into one blob whose slices across
+the axis cut two pieces (the handles, apart where the heads touch) or show two humps with a
+valley between them (round handles touching). A single rod, with or without a head, is one
+piece per slice with one top. World frame, m.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from comgrasp_pin.errors import AmbiguousObjectError
+
+SECOND_OBJECT = 0.05  # another blob of this share of the rod's pixels is another object
+END_REACH, END_BAND = 0.05, 0.003  # pixels this far beyond an end, on the axis (m) ...
+END_PIXELS = 3  # ... this many: the rod may go on
+SLICE = 0.01  # slices across the rod (m)
+ACROSS_BIN = 0.002  # the across profile's resolution (m): about one pixel on the table
+GAP_BINS = 2  # this many empty bins in a row between two pieces split a slice
+MIN_VALLEY = 0.002  # a valley between two tops this deep (m) ...
+VALLEY_SHARE = 0.3  # ... or this share of the lower top's height splits a slice
+VALLEY_SIGMAS = 4.0  # ... and this many noise stds
+SPLIT_SLICES = 0.2  # a blob with this share of its slices split is two objects
+MIN_SPLIT_SLICES = 3
+_KERNEL3, _KERNEL5 = np.ones((3, 3), np.uint8), np.ones((5, 5), np.uint8)
+
+
+def check_one_object(standing: np.ndarray, blob: np.ndarray, min_pixels: int = 40) -> None:
+    """AmbiguousObjectError when a second object lies in the pick area.
+
+    That is: besides ``blob``, another blob of ``standing`` (both (H, W) bool) is at least
+    SECOND_OBJECT of its size: a second object lies in the pick area.
+    """
+    mask = cv2.morphologyEx(standing.astype(np.uint8), cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    area = int(blob.sum())
+    own = set(np.unique(labels[blob & (labels > 0)]).tolist())
+    others = [int(stats[k, cv2.CC_STAT_AREA]) for k in range(1, count) if k not in own]
+    big = [a for a in others if a >= max(min_pixels, SECOND_OBJECT * area)]
+    if big:
+        raise AmbiguousObjectError(
+            f"{1 + len(big)} objects lie in the pick area ({area} px and {max(big)} px seen "
+            "from above); the top view measures one rod alone on the table: clear the others"
+        )
+
+
+def check_ends_seen(
+    points: np.ndarray,
+    standing: np.ndarray,
+    blob: np.ndarray,
+    centroid: np.ndarray,
+    direction: np.ndarray,
+    ends: tuple[float, float],
+    p: np.ndarray,
+) -> None:
+    """AmbiguousObjectError when the rod may go on beyond an end it seems to have.
+
+    That is: blobs standing on the table apart from the rod's ``blob`` (``standing``, both
+    (H, W) bool; ``points`` (H, W, 3)), after the same opening and more than 2 px from it,
+    lie on its axis (``direction`` (2,) through ``centroid`` (2,)) within END_REACH beyond
+    one of its ``ends`` (coordinates along the axis, m): parts of the rod lost in the image's
+    holes and noise. ``p``: the rod's points (N, 3), whose spread across the axis sets the
+    band.
+    """
+    opened = cv2.morphologyEx(standing.astype(np.uint8), cv2.MORPH_OPEN, _KERNEL3) > 0
+    others = opened & ~(cv2.dilate(blob.astype(np.uint8), _KERNEL5) > 0)
+    if not others.any():
+        return
+    normal = np.array([-direction[1], direction[0]])
+    half_width = np.percentile(np.abs((p[:, :2] - centroid) @ normal), 95) + END_BAND
+    rel = points[others][:, :2] - centroid
+    along, across = rel @ direction, np.abs(rel @ normal)
+    lo, hi = ends
+    beyond = ((along < lo) & (along > lo - END_REACH)) | ((along > hi) & (along < hi + END_REACH))
+    count = int(np.count_nonzero(beyond & (across < half_width)))
+    if count >= END_PIXELS:
+        raise AmbiguousObjectError(
+            f"{count} px stand on the table on the rod's axis beyond the end seen: the rod "
+            "may go on there, lost in the depth image's holes and noise; its length and centre "
+            "are not known (a closer view or a less noisy camera is needed)"
+        )
+
+
+def check_one_rod(
+    p: np.ndarray, centroid: np.ndarray, direction: np.ndarray, table_z: float, noise: float
+) -> None:
+    """AmbiguousObjectError when the blob is not one rod.
+
+    That is: the blob's points ``p`` (N, 3), which should lie along ``direction`` (2,)
+    through ``centroid`` (2,): too many of its slices across the axis are split in two
+    pieces or two tops (``split_slices``).
+    """
+    split, total = split_slices(p, centroid, direction, table_z, noise)
+    if total and split >= max(MIN_SPLIT_SLICES, SPLIT_SLICES * total):
+        raise AmbiguousObjectError(
+            f"what lies on the table is not one rod: {split} of its {total} slices across "
+            "its axis show two pieces or two tops (rods side by side?); the top view "
+            "measures one rod alone on the table: move the others away"
+        )
+
+
+def split_slices(
+    p: np.ndarray, centroid: np.ndarray, direction: np.ndarray, table_z: float, noise: float
+) -> tuple[int, int]:
+    """(slices split in two, slices) of the blob's points ``p`` (N, 3).
+
+    The slices are SLICE wide, across ``direction``: a slice is split when its profile
+    across the axis (the highest point per ACROSS_BIN) has an empty bin between occupied
+    ones, or a valley between two tops deeper than MIN_VALLEY, VALLEY_SHARE of the lower top
+    and VALLEY_SIGMAS noise stds.
+    """
+    rel = p[:, :2] - centroid
+    along = rel @ direction
+    across = rel @ np.array([-direction[1], direction[0]])
+    height = p[:, 2] - table_z
+    slices = np.floor(along / SLICE).astype(int)
+    split = total = 0
+    for s in np.unique(slices):
+        sel = slices == s
+        if np.count_nonzero(sel) < 10:
+            continue
+        total += 1
+        bins = np.floor((across[sel] - across[sel].min()) / ACROSS_BIN).astype(int)
+        top = np.full(bins.max() + 1, -np.inf)
+        np.maximum.at(top, bins, height[sel])
+        split += int(_two_pieces(top) or _two_tops(top, noise))
+    return split, total
+
+
+def _two_pieces(top: np.ndarray) -> bool:
+    """Whether the profile has GAP_BINS empty bins in a row between occupied ones."""
+    empty = (~np.isfinite(top)).astype(int)
+    run = np.convolve(empty, np.ones(GAP_BINS, int), mode="valid")
+    return bool(np.any(run >= GAP_BINS))
+
+
+def _two_tops(top: np.ndarray, noise: float) -> bool:
+    """Whether the profile rises to a top on both sides of some valley deep enough."""
+    left = np.maximum.accumulate(top)
+    right = np.maximum.accumulate(top[::-1])[::-1]
+    lower_top = np.minimum(left, right)
+    depth = lower_top - top
+    need = np.maximum(np.maximum(MIN_VALLEY, VALLEY_SHARE * lower_top), VALLEY_SIGMAS * noise)
+    return bool(np.any(depth[1:-1] > need[1:-1]))

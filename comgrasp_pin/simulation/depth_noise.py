@@ -1,0 +1,87 @@
+"""A rendered depth image as an active-stereo RGBD camera (RealSense class) gives it.
+
+``DepthNoise`` applies ``DepthNoiseConfig`` to each render: axial noise growing with the
+square of the depth (patchy, as stereo matching windows make it), a depth-scale error,
+holes and flying pixels at depth edges, scattered dropouts (0 or inf), and 1 mm steps. It
+also holds the camera's extrinsic calibration error, fixed for the episode. Only the
+simulation uses it (``CameraRig.depth``); perception sees the corrupted images and the
+calibrated, slightly wrong, camera pose, never the truth.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from comgrasp_pin.config import DepthNoiseConfig
+
+_FAR = 100.0  # stands in for "no return" in the edge filters (m)
+_KERNEL = np.ones((3, 3), np.uint8)
+
+
+def _rotation_about(axis: np.ndarray, angle: float) -> np.ndarray:
+    rvec = (angle * axis / np.linalg.norm(axis)).reshape(3, 1)
+    return cv2.Rodrigues(rvec)[0]
+
+
+class DepthNoise:
+    """One camera's depth errors, seeded once per episode.
+
+    Attributes:
+        config: the error model.
+        scale: the depth's scale factor in this episode (1 + N(0, scale_std)).
+        T_cam_calibrated: (4, 4) the camera frame the robot's calibration gives, in the true
+            camera frame: ``T_world_cam_true @ T_cam_calibrated`` is what the robot believes.
+    """
+
+    def __init__(self, config: DepthNoiseConfig, seed: int | tuple[int, ...] | None = None):
+        self.config = config
+        self._rng = np.random.default_rng(seed)
+        c, rng = config, self._rng
+        self.scale = 1.0 + c.scale_std * float(rng.standard_normal())
+        self.T_cam_calibrated = np.eye(4)
+        if c.extrinsic_turn_deg > 0:
+            R = _rotation_about(rng.standard_normal(3), np.radians(c.extrinsic_turn_deg))
+            self.T_cam_calibrated[:3, :3] = R
+        if c.extrinsic_shift > 0:
+            direction = rng.standard_normal(3)
+            self.T_cam_calibrated[:3, 3] = c.extrinsic_shift * direction / np.linalg.norm(direction)
+
+    def apply(self, depth: np.ndarray) -> np.ndarray:
+        """(H, W) corrupted copy of the rendered z-depth (m, inf = no return); lost pixels
+        are 0 or inf."""
+        c, rng = self.config, self._rng
+        finite = np.isfinite(depth) & (depth > 0)
+        far = np.where(finite, depth, _FAR).astype(np.float32)
+        near_side = cv2.erode(far, _KERNEL).astype(float)
+        far_side = cv2.dilate(far, _KERNEL).astype(float)
+        edge = (far_side - near_side) > c.edge_jump
+        if c.edge_band_px > 1:
+            size = 2 * c.edge_band_px - 1
+            edge = cv2.dilate(edge.astype(np.uint8), np.ones((size, size), np.uint8)) > 0
+        out = np.where(finite, depth * self.scale, np.inf)
+        out = out + self._axial_noise(np.where(finite, depth, 0.0))
+        u = rng.random(depth.shape)
+        lost = edge & (u < c.edge_hole_prob)
+        flying = edge & ~lost & (u < c.edge_hole_prob + c.flying_prob) & (far_side < _FAR)
+        mix = rng.random(depth.shape)
+        out[flying] = self.scale * (near_side + mix * (far_side - near_side))[flying]
+        dropped = ~edge & (rng.random(depth.shape) < c.dropout_prob)
+        out[lost | (dropped & (mix < 0.5))] = 0.0
+        out[dropped & (mix >= 0.5)] = np.inf
+        if c.quantum > 0:
+            valid = np.isfinite(out) & (out > 0)
+            out[valid] = np.round(out[valid] / c.quantum) * c.quantum
+        return out
+
+    def _axial_noise(self, depth: np.ndarray) -> np.ndarray:
+        """(H, W) noise of RMS depth^2 * subpixel / (focal_px * baseline) (m), correlated
+        over ``noise_corr_px`` pixels."""
+        c = self.config
+        if c.focal_px <= 0 or c.baseline <= 0:
+            return np.zeros_like(depth)
+        white: np.ndarray = self._rng.standard_normal(depth.shape).astype(np.float32)
+        if c.noise_corr_px > 0:
+            blurred = cv2.GaussianBlur(white, (0, 0), c.noise_corr_px)
+            white = blurred / max(float(blurred.std()), 1e-12)
+        return white.astype(float) * c.axial_std(1.0) * depth * depth
