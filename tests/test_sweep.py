@@ -67,7 +67,7 @@ def test_an_unknown_path_lists_the_valid_ones():
     ("param", "message"),
     [("motion.grip=1", "motion.grip_force"),  # the valid paths are listed
      ("noise=", "needs a comma-separated list"),
-     ("noise=-0.1,0.1", "noise_std, drift_std, offset_std, moving_speed, coulomb and viscous must be >= 0"),
+     ("noise=-0.1,0.1", "coulomb and viscous must be >= 0"),
      ("world.noslip_iterations=2.5", "world.noslip_iterations takes an integer")],
 )  # fmt: skip
 def test_the_cli_refuses_bad_params_with_exit_2(tmp_path, capsys, param, message):
