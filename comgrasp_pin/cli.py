@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from comgrasp_pin import cli_args
+from comgrasp_pin import __version__, cli_args
 from comgrasp_pin.errors import ComGraspError, InvalidInputError
 from comgrasp_pin.experiments.trials import MAX_TRIALS
 
@@ -173,15 +173,20 @@ def _add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
     p.set_defaults(func=_cmd_experiment)
 
 
+def _sentence(text: str) -> str:
+    """``text`` with a capital first letter: a subcommand's help as its help page's line."""
+    return text[0].upper() + text[1:]
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="comgrasp",
         description="Centre-of-mass-based grasp adaptation (UR5 + parallel gripper in MuJoCo).",
     )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
-    check = sub.add_parser(
-        "check", help="render the scene from every camera and check Pinocchio against MuJoCo"
-    )
+    check_help = "render the scene from every camera and check Pinocchio against MuJoCo"
+    check = sub.add_parser("check", help=check_help, description=_sentence(check_help))
     check.add_argument(
         "--out", type=cli_args.out_dir, default="results/check", help="output folder (%(default)s)"
     )
@@ -192,7 +197,7 @@ def build_parser() -> argparse.ArgumentParser:
         ("regrasp", "experiment 2: pick-and-place success, baseline vs regrasp (regrasp.csv)"),
         ("reproduce", "both experiments and report.md (paper's sizes; --quick for minutes)"),
     ):
-        p = sub.add_parser(name, help=help_text)
+        p = sub.add_parser(name, help=help_text, description=_sentence(help_text))
         _add_experiment_args(p, f"results/{name}")
         if name == "reproduce":
             p.add_argument(
@@ -203,10 +208,16 @@ def build_parser() -> argparse.ArgumentParser:
                 "report its calibration beside the first's",
             )
 
-    demo = sub.add_parser("demo", help="one episode with a video and the estimate vs the truth")
-    demo.add_argument("--object", default="obj1", choices=OBJECTS)
-    demo.add_argument("--seed", type=SEED, default=0)
-    demo.add_argument("--method", default="regrasp", choices=("baseline", "regrasp"))
+    demo_help = "one episode with a video and the estimate vs the truth"
+    demo = sub.add_parser("demo", help=demo_help, description=_sentence(demo_help))
+    demo.add_argument("--object", default="obj1", choices=OBJECTS, help="the rod (%(default)s)")
+    demo.add_argument("--seed", type=SEED, default=0, help="scene seed, >= 0 (%(default)s)")
+    demo.add_argument(
+        "--method",
+        default="regrasp",
+        choices=("baseline", "regrasp"),
+        help="regrasp planner or the geometric-centre grasp (%(default)s)",
+    )
     demo.add_argument(
         "--out", type=cli_args.out_dir, default="results/demo", help="output folder (%(default)s)"
     )
@@ -214,9 +225,10 @@ def build_parser() -> argparse.ArgumentParser:
     _add_sensors_arg(demo)
     demo.set_defaults(func=_cmd_demo)
 
-    views = sub.add_parser("views", help="both camera views with mask, rectangle, axis, grasp")
-    views.add_argument("--object", default="obj2", choices=OBJECTS)
-    views.add_argument("--seed", type=SEED, default=0)
+    views_help = "both camera views with mask, rectangle, axis, grasp"
+    views = sub.add_parser("views", help=views_help, description=_sentence(views_help))
+    views.add_argument("--object", default="obj2", choices=OBJECTS, help="the rod (%(default)s)")
+    views.add_argument("--seed", type=SEED, default=0, help="scene seed, >= 0 (%(default)s)")
     views.add_argument(
         "--out", type=cli_args.out_dir, default="results/views", help="output folder (%(default)s)"
     )

@@ -147,6 +147,10 @@ def add_subcommands(sub: argparse._SubParsersAction) -> None:
     est = sub.add_parser(
         "estimate",
         help="payload mass and CoM from a robot log (ROS 2 bag or CSV) before/after a grasp",
+        description="Estimate the held payload's mass and centre of mass from a robot log (a "
+        "ROS 2 bag or a CSV of joint positions and efforts): static windows before and after "
+        "the grasp, paired per pose; RESULT.json, a summary, and payload files for UR, Franka "
+        "and ROS 2 in the flange frame.",
         formatter_class=_DEFAULTS,
     )
     _add_robot_args(est)
@@ -180,6 +184,10 @@ def add_subcommands(sub: argparse._SubParsersAction) -> None:
     plan = sub.add_parser(
         "plan-poses",
         help="K static poses (limits, no self-collision) that best determine mass and 3-D CoM",
+        description="Plan K static measurement poses for any arm from its URDF: within the "
+        "joint limits, free of self-collision (Pinocchio with coal), chosen D-optimally so that "
+        "mass and the full 3-D CoM are best determined; JSON, and a URScript movej program for "
+        "a UR arm, with the CoM std they predict.",
         formatter_class=_DEFAULTS,
     )
     _add_robot_args(plan)
