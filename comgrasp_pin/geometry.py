@@ -57,6 +57,11 @@ def invert_transform(T_a_b: np.ndarray) -> np.ndarray:
     return T_b_a
 
 
+def rotation_angle(T: np.ndarray) -> float:
+    """Angle (rad, in [0, pi]) of the rotation of the rigid transform ``T`` (4, 4)."""
+    return float(np.arccos(np.clip(0.5 * (np.trace(T[:3, :3]) - 1.0), -1.0, 1.0)))
+
+
 def closest_point_on_line(
     p_line: np.ndarray, d_line: np.ndarray, p_other: np.ndarray, d_other: np.ndarray
 ) -> float:

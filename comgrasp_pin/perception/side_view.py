@@ -276,20 +276,8 @@ def _depth_line(along: np.ndarray, y: np.ndarray) -> tuple:
         y_mid = float(np.median(y)) if len(y) else 0.0
         return y_mid, 0.0, float("inf"), float("inf"), None
     c = np.array([(b, np.median(along[bins == b]), np.median(y[bins == b])) for b in labels])
-    coef, std = fit_line_with_errors(c[:, 1], c[:, 2])
-    return float(coef[0]), float(coef[1]), float(std[0]), float(std[1]), c
-
-
-def fit_line_with_errors(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Least-squares line y = a + b x through k >= 3 points, and the std of (a, b).
-
-    The standard errors come from the points' scatter about the line.
-    """
-    A = np.c_[np.ones(len(x)), x]
-    coef, *_ = np.linalg.lstsq(A, y, rcond=None)
-    res = y - A @ coef
-    cov = np.linalg.inv(A.T @ A) * float(res @ res) / max(len(x) - 2, 1)
-    return coef, np.sqrt(np.diag(cov))
+    (slope, y0), cov = np.polyfit(c[:, 1], c[:, 2], 1, cov=True)  # scaled by the residuals
+    return float(y0), float(slope), float(np.sqrt(cov[1, 1])), float(np.sqrt(cov[0, 0])), c
 
 
 def _in_capsule(p: np.ndarray, p0: np.ndarray, p1: np.ndarray, radius: float) -> np.ndarray:

@@ -7,7 +7,6 @@ from dataclasses import replace
 import numpy as np
 
 from comgrasp_pin.perception import SideView
-from comgrasp_pin.perception.side_view import fit_line_with_errors
 
 
 def _same_direction(T: np.ndarray, T_ref: np.ndarray) -> np.ndarray:
@@ -34,8 +33,8 @@ def depth_change_std(first: SideView, second: SideView) -> tuple[float, float]:
     if len(common) < 4:
         return unpaired
     along = 0.5 * (a[ia, 1] + b[ib, 1])
-    _, std = fit_line_with_errors(along, b[ib, 2] - a[ia, 2])
-    return float(std[0]), float(std[1])
+    _, cov = np.polyfit(along, b[ib, 2] - a[ia, 2], 1, cov=True)  # scaled by the residuals
+    return float(np.sqrt(cov[1, 1])), float(np.sqrt(cov[0, 0]))
 
 
 def depth_agrees(first: SideView, second: SideView, max_shift: float, max_turn: float) -> bool:

@@ -26,7 +26,7 @@ from comgrasp_pin.errors import (
     RodSlippedError,
 )
 from comgrasp_pin.estimation.pose_planning import best_next_pose
-from comgrasp_pin.geometry import GraspPose
+from comgrasp_pin.geometry import GraspPose, rotation_angle
 from comgrasp_pin.motion.ik import grasp_frame, solve_ik, solve_top_down
 from comgrasp_pin.perception import RodDetection
 from comgrasp_pin.perception.top_down import nearest_on_handle
@@ -146,14 +146,9 @@ def _measure_window(cell: Cell, plan: _Plan, config: EpisodeConfig):
             view = mid_window_view(start, cell.look_from_side(torques.q, length, hint))
         except PerceptionError as exc:
             return torques, None, exc
-        if view.creep is None or _turn(view.creep) <= np.radians(trial.still_turn_deg):
+        if view.creep is None or rotation_angle(view.creep) <= np.radians(trial.still_turn_deg):
             break
     return torques, view, None
-
-
-def _turn(M: np.ndarray) -> float:
-    """Rotation angle of the rigid motion ``M`` (4, 4) (rad)."""
-    return float(np.arccos(np.clip(0.5 * (np.trace(M[:3, :3]) - 1.0), -1.0, 1.0)))
 
 
 def measure_held(
