@@ -79,9 +79,9 @@ def table_scene(rods: list[tuple[str, float, float, float]]):
 
 
 def top_inputs(sim, rig):
-    """(clean depth, camera intrinsics, true T_world_cam) of the top camera."""
+    """(clean depth, camera intrinsics, true T_world_cam, colour image) of the top camera."""
     return (rig.depth(sim.data, TOP_CAMERA), rig.intrinsics(TOP_CAMERA),
-            rig.T_world_cam(sim.data, TOP_CAMERA))  # fmt: skip
+            rig.T_world_cam(sim.data, TOP_CAMERA), rig.rgb(sim.data, TOP_CAMERA))  # fmt: skip
 
 
 def wrap_half_turn(angle: float) -> float:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from comgrasp_pin.camera import PinholeCamera
@@ -23,6 +24,10 @@ from comgrasp_pin.perception._points import (
     points_in,
 )
 
+COLOUR_DE = 20.0  # a pixel this far from the table's colour (CIELAB, OpenCV's 8-bit scale:
+# 2.55 per unit of L*) belongs to an object; the table's own spread in a render is about 2
+SHADOW_CHROMA = 6.0  # ... unless its chroma (a*, b*) is this close to the table's and it
+# is darker: the table in a shadow
 CLEAN_NOISE = 3e-4  # table heights noisier than this (m, robust std) are filtered first
 FLYING_MIN, FLYING_SIGMAS = 0.005, 4.0  # a pixel this far (m, noise stds) from all its
 # neighbours flies
@@ -90,3 +95,20 @@ def _table(points: np.ndarray, pick_area, margin: float) -> tuple[float, float]:
         raise ObjectNotFoundError("the pick area is not in view of the camera")
     table_z = float(np.median(z[inside]))  # the rod covers a small part of it
     return table_z, noise_level(z[inside] - table_z)
+
+
+def differs_in_colour(rgb: np.ndarray, area: np.ndarray) -> np.ndarray:
+    """(H, W) bool: pixels whose colour is not the table's, nor the table's in a shadow.
+
+    ``rgb``: (H, W, 3) uint8 colour image registered to the depth image; ``area``: (H, W)
+    bool, the pixels that see the table's pick area (its colour is their median: the rod
+    covers a small part of them). A colour camera has no stereo noise, holes or flying
+    pixels: where the depth cannot tell a low rod's ends from the table, the colour can.
+    """
+    lab = cv2.cvtColor(np.ascontiguousarray(rgb, dtype=np.uint8), cv2.COLOR_RGB2LAB)
+    lab = lab.astype(float)
+    table = np.median(lab[area], axis=0)
+    distance = np.linalg.norm(lab - table, axis=2)
+    chroma = np.linalg.norm(lab[..., 1:] - table[1:], axis=2)
+    shadow = (chroma < SHADOW_CHROMA) & (lab[..., 0] < table[0])
+    return (distance > COLOUR_DE) & ~shadow

@@ -1,8 +1,10 @@
 """The rod on the table from the top-down RGBD camera: a grasp pose at its geometric centre.
 
 Segmentation uses depth first: the rod is what stands above the table plane inside the pick
-area, whatever its colour and whatever shadows fall on it; the RGB image only shows the
-result. As in the paper, the mask's smallest enclosing rectangle (OpenCV ``minAreaRect``)
+area, whatever its colour and whatever shadows fall on it. A real camera's depth (noise,
+holes, flying pixels: ``view.cleaned``) cannot tell a rod 1 cm thick from the table at its
+ends; there, given the colour image, the rod is what differs from the table in colour
+(``table_view.differs_in_colour``) and the depth measures its height and its points. As in the paper, the mask's smallest enclosing rectangle (OpenCV ``minAreaRect``)
 represents the rod; for metric accuracy the rod's direction and extent are then taken from
 the mask's pixels lifted to 3-D (perspective makes the 2-D rectangle's centre drift by
 millimetres towards the image edges).
@@ -10,17 +12,22 @@ millimetres towards the image edges).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
 
 from comgrasp_pin.camera import PinholeCamera
-from comgrasp_pin.errors import ObjectCutByBorderError, ObjectNotFoundError
+from comgrasp_pin.errors import (
+    AmbiguousObjectError,
+    ObjectCutByBorderError,
+    ObjectNotFoundError,
+    PerceptionError,
+)
 from comgrasp_pin.geometry import GraspPose
 from comgrasp_pin.perception._points import check_images, largest_component
 from comgrasp_pin.perception.rod_shape import check_ends_seen, check_one_object, check_one_rod
-from comgrasp_pin.perception.table_view import TableView, in_area, view_table
+from comgrasp_pin.perception.table_view import TableView, differs_in_colour, in_area, view_table
 
 PICK_AREA = (0.30, 0.80, -0.35, 0.35)  # x_min, x_max, y_min, y_max of the table (m, world)
 MIN_HEIGHT = 0.003  # a pixel counts as object if it stands this far above the table (m)
@@ -78,10 +85,31 @@ def detect_rod_top_down(
         AmbiguousObjectError: two objects, or two rods side by side, where one rod should be,
             or parts of the rod lost in a noisy image beyond the end seen.
         InvalidDepthError: unusable depth.
+
+    The depth alone is measured first. When a real camera's depth (``view.cleaned``) cannot
+    measure the rod (a 1 cm rod's ends lost in the noise, its handle broken in two) and the
+    colour image ``rgb`` (H, W, 3 uint8, registered to the depth) is given, the rod is
+    measured again with the colour's help (``_segment``); if that fails too, its error is
+    raised.
     """
     depth = check_images(rgb, depth, camera)
     view = view_table(depth, camera, T_world_cam, pick_area, EDGE_BAND)
-    mask, standing = _segment(view, pick_area)
+    try:
+        return _detect(view, None, depth, camera, T_world_cam, pick_area)
+    except (ObjectNotFoundError, AmbiguousObjectError) as exc:
+        if rgb is None or not view.cleaned or isinstance(exc, ObjectCutByBorderError):
+            raise
+        try:
+            return _detect(view, rgb, depth, camera, T_world_cam, pick_area)
+        except PerceptionError as again:
+            raise again from exc
+
+
+def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area) -> RodDetection:
+    """``detect_rod_top_down`` in ``view``, with the colour's help when ``rgb`` is given."""
+    mask, standing, colour_only = _segment(view, pick_area, rgb)
+    if colour_only.any():
+        view = _on_the_rods_top(view, mask, colour_only, camera, T_world_cam)
     pixel = float(np.median(depth[mask & np.isfinite(depth)])) / camera.fx  # at the rod (m)
     core, eroded_px = _core(view, mask) if view.cleaned else (mask, 0)
     p = view.points[core]
@@ -97,7 +125,7 @@ def detect_rod_top_down(
     near_centre = np.abs(along - 0.5 * (lo + hi)) < 0.01
     heights = p[near_centre, 2] - view.table_z if near_centre.any() else p[:, 2] - view.table_z
     handle_height = float(np.median(heights))
-    if view.cleaned and handle_height < END_SNR * view.points_noise:
+    if view.cleaned and rgb is None and handle_height < END_SNR * view.points_noise:
         raise ObjectNotFoundError(
             f"the rod stands {1e3 * handle_height:.0f} mm above the table, less than "
             f"{END_SNR:g} times the filtered depth noise ({1e3 * view.points_noise:.1f} mm): "
@@ -141,27 +169,56 @@ def _core(view: TableView, mask: np.ndarray) -> tuple[np.ndarray, int]:
     return mask, 0
 
 
-def _segment(view: TableView, pick_area) -> tuple[np.ndarray, np.ndarray]:
-    """(the rod's mask, every pixel standing on the table), both (H, W) bool.
+def _on_the_rods_top(view: TableView, mask, colour_only, camera, T_world_cam) -> TableView:
+    """``view`` with the rod's pixels that only the colour found (``colour_only`` within
+    ``mask``) lifted to the rod's top: where the pixel's ray meets the horizontal plane at the
+    rod's median height. Their depth is the table's or noise; taken as it is, a pixel on a
+    rod's edge seen at an angle would land a height x tan(angle) beside it (2 mm for 1 cm)."""
+    lift = mask & colour_only
+    z_top = float(np.median(view.points[mask][:, 2]))
+    rays = camera.depth_to_points(np.ones((camera.height, camera.width)))[lift]
+    rays = rays @ T_world_cam[:3, :3].T
+    origin = T_world_cam[:3, 3]
+    points = view.points.copy()
+    points[lift] = origin + ((z_top - origin[2]) / rays[:, 2])[:, None] * rays
+    return replace(view, points=points)
+
+
+def _segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(the rod's mask, every pixel standing on the table, the standing pixels only the
+    colour found), all (H, W) bool.
 
     The threshold follows the camera's own noise (the median's heights beside a tall head
     are biased by the noise before it); in a cleaned image gaps of a few pixels close (a
-    thin rod broken by holes at its edges is one rod). Raises ObjectNotFoundError,
-    ObjectCutByBorderError, AmbiguousObjectError (a second object).
+    thin rod broken by holes at its edges is one rod), and with a colour image ``rgb`` the
+    pixels that differ from the table in colour stand too (a lit top may look like the
+    table, a thin rod's ends are lost in the noise), in a blob whose median height stands
+    above the table (a mark or a shadow does not). Raises
+    ObjectNotFoundError, ObjectCutByBorderError, AmbiguousObjectError (a second object).
     """
     z = view.points[..., 2]
     inside = in_area(view.points, pick_area, EDGE_BAND) & np.isfinite(z)
     min_height = max(MIN_HEIGHT, HEIGHT_SIGMAS * view.noise)
     standing = (z > view.table_z + min_height) & (z < view.table_z + MAX_HEIGHT)
+    in_depth = standing
+    if view.cleaned and rgb is not None:
+        standing = standing | (differs_in_colour(rgb, inside) & (z < view.table_z + MAX_HEIGHT))
     if view.cleaned:
         standing = cv2.morphologyEx(standing.astype(np.uint8), cv2.MORPH_CLOSE, CLOSE_KERNEL) > 0
     mask = largest_component(inside & standing, MIN_PIXELS, "top-down image")
+    if view.cleaned and rgb is not None:
+        height = float(np.median(z[mask])) - view.table_z
+        if height < min_height:
+            raise ObjectNotFoundError(
+                f"what differs from the table in colour stands {1e3 * height:.1f} mm above it "
+                f"(less than {1e3 * min_height:.1f} mm): a mark or a shadow, not an object"
+            )
     check_one_object(inside & standing, mask)
     grown = cv2.dilate(mask.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
     near_edge = ~in_area(view.points, pick_area, 2 * EDGE_BAND)
     if np.any(grown & standing & near_edge & np.isfinite(z)):
         raise ObjectCutByBorderError("the object reaches the edge of the pick area")
-    return mask, inside & standing
+    return mask, inside & standing, standing & ~in_depth
 
 
 def _widths(p, centroid, direction, s_rel, yaw) -> np.ndarray:
