@@ -4,8 +4,9 @@ Segmentation uses depth first: the rod is what stands above the table plane insi
 area, whatever its colour and whatever shadows fall on it. A real camera's depth (noise,
 holes, flying pixels: ``view.cleaned``) cannot tell a rod 1 cm thick from the table at its
 ends; there, given the colour image, the rod is what differs from the table in colour
-(``table_view.differs_in_colour``) and the depth measures its height and its points. As in the paper, the mask's smallest enclosing rectangle (OpenCV ``minAreaRect``)
-represents the rod; for metric accuracy the rod's direction and extent are then taken from
+(``table_view.differs_in_colour``) and the depth measures its height and its points. As in
+the paper, the mask's smallest enclosing rectangle (OpenCV ``minAreaRect``) represents the
+rod; for metric accuracy the rod's direction and extent are then taken from
 the mask's pixels lifted to 3-D (perspective makes the 2-D rectangle's centre drift by
 millimetres towards the image edges).
 """
@@ -170,10 +171,13 @@ def _core(view: TableView, mask: np.ndarray) -> tuple[np.ndarray, int]:
 
 
 def _on_the_rods_top(view: TableView, mask, colour_only, camera, T_world_cam) -> TableView:
-    """``view`` with the rod's pixels that only the colour found (``colour_only`` within
-    ``mask``) lifted to the rod's top: where the pixel's ray meets the horizontal plane at the
-    rod's median height. Their depth is the table's or noise; taken as it is, a pixel on a
-    rod's edge seen at an angle would land a height x tan(angle) beside it (2 mm for 1 cm)."""
+    """``view`` with the rod's pixels that only the colour found lifted to the rod's top.
+
+    Those are ``colour_only`` within ``mask``; each goes where its ray meets the horizontal
+    plane at the rod's median height. Their depth is the table's or noise; taken as it is, a
+    pixel on a rod's edge seen at an angle would land a height x tan(angle) beside it (2 mm
+    for 1 cm).
+    """
     lift = mask & colour_only
     z_top = float(np.median(view.points[mask][:, 2]))
     rays = camera.depth_to_points(np.ones((camera.height, camera.width)))[lift]
@@ -185,8 +189,9 @@ def _on_the_rods_top(view: TableView, mask, colour_only, camera, T_world_cam) ->
 
 
 def _segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(the rod's mask, every pixel standing on the table, the standing pixels only the
-    colour found), all (H, W) bool.
+    """(the rod's mask, the pixels standing on the table, those only the colour found).
+
+    All three (H, W) bool.
 
     The threshold follows the camera's own noise (the median's heights beside a tall head
     are biased by the noise before it); in a cleaned image gaps of a few pixels close (a
