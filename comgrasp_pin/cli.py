@@ -34,6 +34,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
 
 
 def _options(args: argparse.Namespace):
+    from comgrasp_pin.config import sensor_preset
     from comgrasp_pin.experiments.ray_backend import check_backend
     from comgrasp_pin.experiments.reproduce import PAPER_TRIALS, QUICK_TRIALS, RunOptions
 
@@ -47,8 +48,11 @@ def _options(args: argparse.Namespace):
     workers = args.workers
     if workers is None:  # 0: as many as the Ray cluster has CPUs
         workers = 0 if args.ray_address else os.cpu_count() or 1
+    noise = args.noise
+    if noise is None:
+        noise = sensor_preset(args.sensors).torque.noise_std
     return RunOptions(args.out, args.objects, trials, args.seed, workers,
-                      args.resume or args.retry_failed, args.overwrite, args.noise,
+                      args.resume or args.retry_failed, args.overwrite, noise,
                       args.estimator, args.retry_failed, args.backend,
                       args.ray_address, getattr(args, "second_seed", None),
                       args.sensors)  # fmt: skip
@@ -152,8 +156,9 @@ def _add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
         default=None,
         help="an existing Ray cluster to run on (e.g. auto, ray://head:10001)",
     )
-    p.add_argument("--noise", type=cli_args.float_at_least(0.0), default=0.05,
-                   help="torque sensor noise per sample, N m, >= 0 (%(default)s)")  # fmt: skip
+    p.add_argument("--noise", type=cli_args.float_at_least(0.0), default=None,
+                   help="torque sensor noise per sample, N m, >= 0 (default: the sensor "
+                   "preset's, 0.05; 0.1 for realistic_current)")  # fmt: skip
     p.add_argument("--estimator", default="ipopt", choices=("ipopt", "lstsq"),
                    help="the trial grasp's estimator: IPOPT with the side view's prior on the "
                    "CoM's distance from the rod's axis, or the closed-form least squares "

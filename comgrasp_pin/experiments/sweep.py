@@ -138,13 +138,14 @@ def sweep_tasks(opts: SweepOptions) -> list[dict]:
         point = {p: _point_value(p, v) for p, v in point.items()}
         for task in base:
             tasks.append({**point, **task, "noise": opts.run.noise,
-                          "estimator": opts.run.estimator, "overrides": point})  # fmt: skip
+                          "estimator": opts.run.estimator, "sensors": opts.run.sensors,
+                          "overrides": point})  # fmt: skip
     return tasks
 
 
 def sweep_settings(opts: SweepOptions) -> dict:
     """Every setting of the sweep: the run's, the grid, and each point's whole config tree."""
-    base = episode_config(opts.run.noise, opts.run.estimator)
+    base = episode_config(opts.run.noise, opts.run.estimator, opts.run.sensors)
     points = [
         {"values": point, "config": asdict(config_paths.with_values(base, point))}
         for point in grid(opts.params)

@@ -29,6 +29,7 @@ class TorqueMeasurement:
         q: (n,) arm configuration during the window (rad), its mean.
         n_samples: number of samples averaged.
         duration: length of the window (s).
+        time: the robot's clock when the window began (s; NaN: not known).
     """
 
     tau: np.ndarray
@@ -36,6 +37,7 @@ class TorqueMeasurement:
     q: np.ndarray
     n_samples: int
     duration: float
+    time: float = float("nan")
 
 
 class SlipWatch(Protocol):

@@ -14,7 +14,7 @@ import numpy as np
 from comgrasp_pin.config import EpisodeConfig
 from comgrasp_pin.estimation import AxisPrior, ComEstimate, com_along_axis, estimate_com
 from comgrasp_pin.perception import SideView
-from comgrasp_pin.procedures import uncertainty
+from comgrasp_pin.procedures import torques, uncertainty
 from comgrasp_pin.procedures.rod_motion import depth_agrees, rod_motion
 from comgrasp_pin.robot import RobotModel
 
@@ -79,6 +79,7 @@ class HeldReadings:
     Attributes:
         after: the averaged torques per pose (``TorqueMeasurement``).
         tau_before: (n,) the empty arm's torques per pose (N m).
+        before: their measurements (``TorqueMeasurement``), None where the model gave them.
         views: the side view per pose, None where the camera saw nothing usable.
         moved: the rod turned in the jaws by more than ``roll_slip_deg`` at a later pose.
         dropped: the camera found nothing in the jaws at a later pose.
@@ -87,6 +88,7 @@ class HeldReadings:
 
     after: list
     tau_before: list
+    before: list
     views: list
     moved: bool
     dropped: bool
@@ -100,7 +102,8 @@ class HeldReadings:
     def with_pose(self, after, tau_before: np.ndarray, view: SideView | None) -> HeldReadings:
         """These readings and one more pose's."""
         return replace(self, after=[*self.after, after], tau_before=[*self.tau_before,
-                       tau_before], views=[*self.views, view])  # fmt: skip
+                       tau_before], before=[*self.before, None],
+                       views=[*self.views, view])  # fmt: skip
 
 
 def axis_prior(side: SideView) -> AxisPrior:
@@ -145,10 +148,9 @@ def locate_com(robot: RobotModel, held: HeldReadings, config: EpisodeConfig) -> 
     EmptyGripperError.
     """
     trial, after = config.trial, held.after
-    n_std = config.sensors.torque.noise_std / np.sqrt(after[0].n_samples)
-    pair_std = max(n_std * (1.0 if trial.tau_before == "measured" else np.sqrt(0.5)), 1e-6)
     side, T_obj = held.side, held.side.T_ee_obj
     use = [i for i, view in enumerate(held.views) if view is not None]
+    pair_std = torques.pair_std([held.before[i] for i in use], [after[i] for i in use], config)
     q = np.array([after[i].q for i in use])
     tau_a = np.array([after[i].tau for i in use])
     tau_b = np.array([held.tau_before[i] for i in use])

@@ -33,6 +33,7 @@ from comgrasp_pin.perception.top_down import nearest_on_handle
 from comgrasp_pin.planning import retry
 from comgrasp_pin.planning.regrasp import needs_another_pose
 from comgrasp_pin.planning.retry import heavy_side_from_tilt
+from comgrasp_pin.procedures import torques
 from comgrasp_pin.procedures.cell import Cell, SlipWatch, TorqueMeasurement
 from comgrasp_pin.procedures.measurement import HeldReadings, TrialMeasurement, locate_com
 from comgrasp_pin.procedures.rod_motion import mid_window_view
@@ -79,15 +80,14 @@ def plan_trial(cell: Cell, detection: RodDetection, offset: float, config: Episo
     return _Plan(grasp, poses, centre_hint, T_meas, detection)
 
 
-def measure_empty(cell: Cell, plan: _Plan, config: EpisodeConfig) -> list[np.ndarray]:
-    """tau_before at each measurement pose: measured with the jaws empty, or the model's."""
+def measure_empty(cell: Cell, plan: _Plan, config: EpisodeConfig) -> list:
+    """At each measurement pose the empty arm's TorqueMeasurement, or None where
+    ``tau_before`` is the model's."""
     trial, out = config.trial, []
     for q in plan.poses:
-        cell.move_to(q, settle=trial.empty_settle)
-        if trial.tau_before == "measured":
-            out.append(cell.measure_torques(trial.settle, trial.window).tau)
-        else:
-            out.append(cell.robot.gravity_torques(q))
+        torques.arrive(cell, q, trial, settle=trial.empty_settle)
+        measured = trial.tau_before == "measured"
+        out.append(torques.measure(cell, trial.settle, trial) if measured else None)
     return out
 
 
@@ -141,24 +141,25 @@ def _measure_window(cell: Cell, plan: _Plan, config: EpisodeConfig):
             start = cell.look_from_side(cell.q_des, length, hint)
         except PerceptionError:
             start = None
-        torques = cell.measure_torques(0.0, trial.window)
+        measured = torques.measure(cell, 0.0, trial)
         try:
-            view = mid_window_view(start, cell.look_from_side(torques.q, length, hint))
+            view = mid_window_view(start, cell.look_from_side(measured.q, length, hint))
         except PerceptionError as exc:
-            return torques, None, exc
+            return measured, None, exc
         if view.creep is None or rotation_angle(view.creep) <= np.radians(trial.still_turn_deg):
             break
-    return torques, view, None
+    return measured, view, None
 
 
 def measure_held(
-    cell: Cell, plan: _Plan, watch: SlipWatch, tau_before: list, config: EpisodeConfig
+    cell: Cell, plan: _Plan, watch: SlipWatch, before: list, config: EpisodeConfig
 ) -> HeldReadings:
     """Back at the first measurement pose: watch, measure the torques and look; then the
-    same at the rolled pose (unwatched: the roll is slow), and back."""
+    same at the rolled pose (unwatched: the roll is slow), and back. ``before``: the
+    empty arm's measurements (``measure_empty``)."""
     trial = config.trial
     with cell.watching(watch):
-        cell.move_to(plan.poses[0], duration=trial.return_time)
+        torques.arrive(cell, plan.poses[0], trial, duration=trial.return_time)
         cell.hold(trial.hold_before_measuring)
         watch.sample_now()
     first, side, failure = _measure_window(cell, plan, config)
@@ -171,7 +172,7 @@ def measure_held(
     slip_seen = watch.slipping_or_tilted()
     moved, side_rolled, dropped = False, None, False
     if len(plan.poses) > 1:
-        cell.move_to(plan.poses[1], duration=trial.roll_time)
+        torques.arrive(cell, plan.poses[1], trial, duration=trial.roll_time)
         rolled, side_rolled, failure = _measure_window(cell, plan, config)
         after.append(rolled)
         dropped = isinstance(failure, ObjectNotFoundError)
@@ -180,7 +181,9 @@ def measure_held(
         )
         cell.move_to(plan.poses[0], duration=trial.roll_time)
     views = [side] if len(plan.poses) == 1 else [side, side_rolled]
-    return HeldReadings(after, list(tau_before), views, moved, dropped, slip_seen)
+    tau_before = [cell.robot.gravity_torques(q) if b is None else b.tau
+                  for q, b in zip(plan.poses, before, strict=True)]  # fmt: skip
+    return HeldReadings(after, tau_before, list(before), views, moved, dropped, slip_seen)
 
 
 def measure_another_pose(
@@ -204,8 +207,8 @@ def measure_another_pose(
     q = candidates[best_next_pose(robot, measured_q, np.array(candidates))]
     bias = np.mean([tb - robot.gravity_torques(m.q) for tb, m in zip(held.tau_before,
                     held.after, strict=True)], axis=0)  # fmt: skip
-    cell.move_to(q, duration=trial.roll_time)
-    after = cell.measure_torques(trial.settle, trial.window)
+    torques.arrive(cell, q, trial, duration=trial.roll_time)
+    after = torques.measure(cell, trial.settle, trial)
     try:
         view = cell.look_from_side(after.q, plan.detection.length, plan.centre_hint)
     except PerceptionError:
@@ -228,11 +231,11 @@ def trial_grasp(
     if detection is None:
         detection = cell.look_from_above()
     plan = plan_trial(cell, detection, offset, config)
-    tau_before = measure_empty(cell, plan, config)
+    before = measure_empty(cell, plan, config)
     watch = cell.slip_watch(config.sensors.watch_dt, config.motion.grip_force, detection.length,
                             plan.centre_hint)  # fmt: skip
     grasp_and_lift(cell, plan, watch, careful, config)
-    held = measure_held(cell, plan, watch, tau_before, config)
+    held = measure_held(cell, plan, watch, before, config)
     try:
         loc = locate_com(cell.robot, held, config)
         extra = needs_another_pose(loc.std, loc.estimate.mass, config.motion.grip_force,

@@ -156,6 +156,7 @@ class Simulation:
     def measure_torques(self, settle: float, window: float) -> TorqueMeasurement:
         """Hold still for ``settle`` s, then average the sensor over ``window`` s."""
         self.hold(settle)
+        start = self.time
         n = max(1, int(round(window / self.model.opt.timestep)))
         taus = np.empty((n, len(ARM_JOINTS)))
         qs = np.empty((n, len(ARM_JOINTS)))
@@ -165,7 +166,7 @@ class Simulation:
             qs[k] = self.data.qpos[self._arm_qadr]
         std_error = taus.std(axis=0, ddof=1) / np.sqrt(n) if n > 1 else np.full(6, np.inf)
         return TorqueMeasurement(
-            taus.mean(axis=0), std_error, qs.mean(axis=0), n, n * self.model.opt.timestep
+            taus.mean(axis=0), std_error, qs.mean(axis=0), n, n * self.model.opt.timestep, start
         )
 
 
