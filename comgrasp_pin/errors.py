@@ -48,6 +48,12 @@ class AmbiguousObjectError(PerceptionError):
     one blob. Measuring it would give a pose that belongs to neither."""
 
 
+class UntrustedImageError(PerceptionError):
+    """The object is in view, but this image cannot measure it to the accuracy asked (a
+    real camera's holes and noise where the method needs a clean surface): refused rather
+    than measured with a known bias."""
+
+
 class InvalidDepthError(PerceptionError):
     """The depth image is missing, of the wrong shape, or has no valid values where needed."""
 

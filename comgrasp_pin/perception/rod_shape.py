@@ -84,15 +84,20 @@ def check_ends_seen(
 
 
 def check_one_rod(
-    p: np.ndarray, centroid: np.ndarray, direction: np.ndarray, table_z: float, noise: float
+    p: np.ndarray,
+    centroid: np.ndarray,
+    direction: np.ndarray,
+    table_z: float,
+    noise: float,
+    measured: np.ndarray | None = None,
 ) -> None:
     """AmbiguousObjectError when the blob is not one rod.
 
     That is: the blob's points ``p`` (N, 3), which should lie along ``direction`` (2,)
     through ``centroid`` (2,): too many of its slices across the axis are split in two
-    pieces or two tops (``split_slices``).
+    pieces or two tops (``split_slices``; ``measured``: see there).
     """
-    split, total = split_slices(p, centroid, direction, table_z, noise)
+    split, total = split_slices(p, centroid, direction, table_z, noise, measured)
     if total and split >= max(MIN_SPLIT_SLICES, SPLIT_SLICES * total):
         raise AmbiguousObjectError(
             f"what lies on the table is not one rod: {split} of its {total} slices across "
@@ -102,15 +107,23 @@ def check_one_rod(
 
 
 def split_slices(
-    p: np.ndarray, centroid: np.ndarray, direction: np.ndarray, table_z: float, noise: float
+    p: np.ndarray,
+    centroid: np.ndarray,
+    direction: np.ndarray,
+    table_z: float,
+    noise: float,
+    measured: np.ndarray | None = None,
 ) -> tuple[int, int]:
     """(slices split in two, slices) of the blob's points ``p`` (N, 3).
 
     The slices are SLICE wide, across ``direction``: a slice is split when its profile
     across the axis (the highest point per ACROSS_BIN) has an empty bin between occupied
     ones, or a valley between two tops deeper than MIN_VALLEY, VALLEY_SHARE of the lower top
-    and VALLEY_SIGMAS noise stds.
+    and VALLEY_SIGMAS noise stds. ``measured`` (N,) bool: the points whose height the depth
+    measured (the others, found by colour, count for the gaps but not for the tops).
     """
+    if measured is None:
+        measured = np.ones(len(p), bool)
     rel = p[:, :2] - centroid
     along = rel @ direction
     across = rel @ np.array([-direction[1], direction[0]])
@@ -124,8 +137,11 @@ def split_slices(
         total += 1
         bins = np.floor((across[sel] - across[sel].min()) / ACROSS_BIN).astype(int)
         top = np.full(bins.max() + 1, -np.inf)
-        np.maximum.at(top, bins, height[sel])
-        split += int(_two_pieces(top) or _two_tops(top, noise))
+        np.maximum.at(top, bins, np.where(measured[sel], height[sel], 0.0))
+        heights = np.full(bins.max() + 1, -np.inf)
+        np.maximum.at(heights, bins[measured[sel]], height[sel][measured[sel]])
+        measured_top = heights[np.isfinite(heights)] if not measured[sel].all() else heights
+        split += int(_two_pieces(top) or _two_tops(measured_top, noise))
     return split, total
 
 

@@ -18,7 +18,7 @@ import numpy as np
 
 from comgrasp_pin import validate
 from comgrasp_pin.camera import PinholeCamera
-from comgrasp_pin.errors import ObjectNotFoundError
+from comgrasp_pin.errors import ObjectNotFoundError, UntrustedImageError
 from comgrasp_pin.geometry import check_transform
 from comgrasp_pin.perception._points import (
     blobs,
@@ -167,7 +167,8 @@ def observe_held_rod(
             fingers' joint reading; fixes the radius of the fitted cylinder.
 
     Raises:
-        ObjectNotFoundError, ObjectCutByBorderError, InvalidDepthError; InvalidInputError for
+        ObjectNotFoundError, ObjectCutByBorderError, InvalidDepthError, UntrustedImageError
+        (a noisy image of a handle no cylinder fits); InvalidInputError for
         a transform that is not a (4, 4) rigid one, or a length, radius, hint or table
         height that is not finite (or, for length and radius, not positive).
     """
@@ -207,7 +208,7 @@ def observe_held_rod(
         refined = refine_axis(points[handle], x_axis, offset_xz, handle_radius, noise)
         unrefined = refined[0] is x_axis  # refine_axis hands the slice line back as it was
         if cleaned and unrefined:
-            raise ObjectNotFoundError(
+            raise UntrustedImageError(
                 "no cylinder fits the held handle's points in this image with holes or noise, "
                 "and the slice centres alone bias the tilt by up to 1-3 deg (measured): a "
                 "round handle, seen with fewer holes or less noise, is needed"

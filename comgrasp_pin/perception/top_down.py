@@ -108,16 +108,18 @@ def detect_rod_top_down(
 
 def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area) -> RodDetection:
     """``detect_rod_top_down`` in ``view``, with the colour's help when ``rgb`` is given."""
-    mask, standing, colour_only = _segment(view, pick_area, rgb)
-    if colour_only.any():
-        view = _on_the_rods_top(view, mask, colour_only, camera, T_world_cam)
+    mask, standing, unmeasured = _segment(view, pick_area, rgb)
+    if unmeasured.any():
+        view = _on_the_rods_axis(view, mask, unmeasured, camera, T_world_cam)
+    measured = ~unmeasured[mask]
     pixel = float(np.median(depth[mask & np.isfinite(depth)])) / camera.fx  # at the rod (m)
     core, eroded_px = _core(view, mask) if view.cleaned else (mask, 0)
     p = view.points[core]
     centroid = p[:, :2].mean(axis=0)
     _, _, vt = np.linalg.svd(p[:, :2] - centroid, full_matrices=False)
     direction = vt[0]
-    check_one_rod(view.points[mask], centroid, direction, view.table_z, view.points_noise)
+    check_one_rod(view.points[mask], centroid, direction, view.table_z, view.points_noise,
+                  measured)  # fmt: skip
     along = (p[:, :2] - centroid) @ direction
     lo, hi = np.percentile(along, [0.02, 99.98])
     if view.cleaned:
@@ -170,16 +172,17 @@ def _core(view: TableView, mask: np.ndarray) -> tuple[np.ndarray, int]:
     return mask, 0
 
 
-def _on_the_rods_top(view: TableView, mask, colour_only, camera, T_world_cam) -> TableView:
-    """``view`` with the rod's pixels that only the colour found lifted to the rod's top.
+def _on_the_rods_axis(view: TableView, mask, unmeasured, camera, T_world_cam) -> TableView:
+    """``view`` with the rod's pixels whose depth does not stand lifted to its axis.
 
-    Those are ``colour_only`` within ``mask``; each goes where its ray meets the horizontal
-    plane at the rod's median height. Their depth is the table's or noise; taken as it is, a
-    pixel on a rod's edge seen at an angle would land a height x tan(angle) beside it (2 mm
-    for 1 cm).
+    Those are ``unmeasured`` within ``mask`` (found by the colour or filled in by the
+    closing); each goes where its ray meets the horizontal
+    plane at half the rod's median height (a round rod's axis, where its outline lies seen
+    from above). Their depth is the table's or noise; taken as it is, a pixel on a rod's
+    edge seen at an angle would land a height x tan(angle) beside it (1 mm for 1 cm).
     """
-    lift = mask & colour_only
-    z_top = float(np.median(view.points[mask][:, 2]))
+    lift = mask & unmeasured
+    z_top = 0.5 * (view.table_z + float(np.median(view.points[mask][:, 2])))
     rays = camera.depth_to_points(np.ones((camera.height, camera.width)))[lift]
     rays = rays @ T_world_cam[:3, :3].T
     origin = T_world_cam[:3, 3]
@@ -189,9 +192,10 @@ def _on_the_rods_top(view: TableView, mask, colour_only, camera, T_world_cam) ->
 
 
 def _segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(the rod's mask, the pixels standing on the table, those only the colour found).
+    """(the rod's mask, the pixels standing on the table, those whose depth does not).
 
-    All three (H, W) bool.
+    All three (H, W) bool; the last are the standing pixels that the colour found or the
+    closing filled in: their depth does not measure their height.
 
     The threshold follows the camera's own noise (the median's heights beside a tall head
     are biased by the noise before it); in a cleaned image gaps of a few pixels close (a

@@ -11,7 +11,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from comgrasp_pin.errors import PerceptionError
+from comgrasp_pin.errors import ObjectNotFoundError, PerceptionError
 from comgrasp_pin.geometry import invert_transform
 from comgrasp_pin.perception import (
     RodDetection,
@@ -62,13 +62,16 @@ def look_from_side(
     reading (m), which gives the held handle's radius. ``stride`` > 1 measures on every
     stride-th pixel of each row and column (stride^2 times fewer points: the slip monitor's
     frames, which need the tilt only)."""
+    radius = None if finger_q is None else handle_radius(finger_q)
+    if radius is not None and radius <= 0:
+        raise ObjectNotFoundError("the jaws are closed on nothing: no rod is held")
     T_world_ee, T_ee_cam = side_camera_pose(robot, q)
     T_ee_cam = T_ee_cam @ rig.calibration_error(SIDE_CAMERA)
     camera = rig.intrinsics(SIDE_CAMERA).subsampled(stride)
     depth = rig.depth(data, SIDE_CAMERA)[::stride, ::stride]
     return observe_held_rod(None, depth, camera, T_ee_cam, T_world_ee,
                             TABLE_Z, rod_length, arm_capsules(robot, q), centre_hint,
-                            None if finger_q is None else handle_radius(finger_q))  # fmt: skip
+                            radius)  # fmt: skip
 
 
 def handle_radius(finger_q: float) -> float:
