@@ -402,5 +402,5 @@ def test_reproduce_with_a_second_seed_runs_accuracy_again_and_reports_it(tmp_pat
     assert [c.seed for c in calls] == [0, 7]
     assert calls[1].out == tmp_path / "seed7" and calls[1].second_seed is None
     section = text.split("## A second seed: the accuracy experiment with seed 7")[1]
-    assert "| θ bin (deg) | n | coverage ±1σ (68 %)" in section.split("## Experiment 2")[0]
+    assert "| tilt bin (deg) | n | coverage ±1σ (68 %)" in section.split("## Experiment 2")[0]
     assert "rms z" in section
