@@ -139,8 +139,10 @@ def _add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
         "--trials",
         type=cli_args.int_at_least(1, MAX_TRIALS),
         default=None,
-        help=f"per object and method, 1 to {MAX_TRIALS} (default 50, the paper's, 10 for a "
-        "sweep; 3 with --quick)",
+        help=f"trials per object, 1 to {MAX_TRIALS}: accuracy, grasps (each scored with ours "
+        "and the paper's one-pose estimate); regrasp, scenes (each run by both methods, "
+        "baseline and regrasp); a sweep runs them at every grid point (default 50, the "
+        "paper's, 10 for a sweep; 3 with --quick)",
     )
     p.add_argument("--seed", type=SEED, default=0,
                    help="run seed, >= 0 (%(default)s)")  # fmt: skip

@@ -1,11 +1,22 @@
-"""The README's "Use it on your robot" section runs: its python blocks, exec'd in order."""
+"""The README: its "Use it on your robot" section runs (its python blocks, exec'd in order),
+and its tables agree with the code (the objects) and with docs/results (the accuracy)."""
 
+import csv
+import inspect
+import json
 import re
 from pathlib import Path
 
 import numpy as np
+import pytest
+
+from comgrasp_pin._paths import sim_path
+from comgrasp_pin.experiments.trials import ACCURACY_COM_RANGE
+from comgrasp_pin.simulation.objects import OBJECTS, PAPER_OBJECTS, get_object
+from comgrasp_pin.simulation.scene import Scene
 
 README = Path(__file__).resolve().parents[1] / "README.md"
+RESULTS = README.parent / "docs" / "results"
 HEADING = "## Use it on your robot"
 
 
@@ -35,3 +46,86 @@ def test_python_blocks_run(tmp_path, monkeypatch, capsys):
         assert np.all(np.abs(np.r_[e.mass, e.com_ee] - truth) < 4 * e.std)
     assert (tmp_path / "payload.yaml").is_file() and (tmp_path / "log.csv").is_file()
     assert "mass" in capsys.readouterr().out
+
+
+def _table(heading: str, first_cell: str) -> list[list[str]]:
+    """The Markdown table under ``heading`` whose header row starts with ``first_cell``, as
+    rows of stripped cells (header and separator dropped)."""
+    text = README.read_text()
+    start = text.index(heading)
+    lines = text[start:].splitlines()
+    top = next(i for i, line in enumerate(lines) if line.startswith(f"| {first_cell} |"))
+    rows = []
+    for line in lines[top + 2 :]:
+        if not line.startswith("|"):
+            break
+        rows.append([c.strip() for c in line.strip().strip("|").split("|")])
+    return rows
+
+
+def _holds_level_mm(name: str) -> float:
+    """From sim/tilt_calibration.json: the largest grasp-to-CoM distance (mm) the
+    calibration tried below the first that tilted the rod by more than 1 deg, the lower side."""
+    cal = json.loads(sim_path("tilt_calibration.json").read_text())["objects"][name]
+    levers = []
+    for side in ("+x", "-x"):
+        ratio, tilt = np.array(cal[side]["lever_ratio"]), np.array(cal[side]["tilt_deg"])
+        first = int(np.argmax(tilt > 1.0))
+        assert first > 0 and tilt[first] > 1.0, (name, side)
+        levers.append(ratio[first - 1] * cal["holding_lever_m"])
+    return 1e3 * min(levers)
+
+
+def test_the_objects_table_matches_the_code():
+    rows = _table("### The objects", "object")
+    assert [r[0].split()[0] for r in rows] == list(OBJECTS)
+    com_regrasp = inspect.signature(Scene.sample).parameters["com_range"].default
+    for cells in rows:
+        name = cells[0].split()[0]
+        o = get_object(name)
+        assert ("(extra)" in cells[0]) == (not o.paper)
+        assert cells[1] == o.description
+        length, mass, handle_mm = float(cells[2]), float(cells[3]), float(cells[4])
+        assert abs(length - o.length) <= 0.005 and abs(mass - o.mass) <= 0.005
+        assert abs(handle_mm - 1e3 * o.thickness) <= 0.5
+        for cell, (lo, hi) in ((cells[5], ACCURACY_COM_RANGE), (cells[6], com_regrasp)):
+            shown = [float(v) for v in cell.split("–")]
+            assert np.allclose(shown, [1e3 * lo * o.length, 1e3 * hi * o.length], atol=0.5)
+        holds = _holds_level_mm(name)
+        assert abs(float(cells[7]) - holds) <= 0.5, (name, holds)
+        assert abs(float(cells[8]) - 100 * (1 - 5 * holds / (1e3 * o.length))) <= 0.5
+
+
+def test_the_accuracy_table_matches_docs_results():
+    """The README's per-bin numbers against docs/results/accuracy.csv, recomputed here."""
+    rows = _table("### Results at the paper's size", "tilt in the jaws, 0–90° from level")
+    by_name = {r[0]: r[1:] for r in rows}
+    with open(RESULTS / "accuracy.csv", newline="") as f:
+        csv_rows = [r for r in csv.DictReader(f) if r["object"] in PAPER_OBJECTS]
+    good = [r for r in csv_rows if not r["error"]]
+    tilt = np.abs([float(r["theta_deg"]) for r in good])
+    ours = 100 * np.array([float(r["accuracy"]) for r in good])
+    line = 100 * np.array([float(r["accuracy_line"]) for r in good])
+    edges = [0, 5, 10, 15, 20, 25, 30, 60, 90]
+    for k, (lo, hi) in enumerate(zip(edges[:-1], edges[1:])):
+        sel = (tilt >= lo) & (tilt < hi)
+        assert int(by_name["grasps"][k]) == sel.sum()
+        assert float(by_name["ours (%)"][k]) == pytest.approx(ours[sel].mean(), abs=0.05)
+        assert float(by_name["paper's method, our world (%)"][k]) == pytest.approx(
+            line[sel].mean(), abs=0.05
+        )
+        assert float(by_name["worst grasp, ours (%)"][k]) == pytest.approx(
+            ours[sel].min(), abs=0.05
+        )
+
+
+def test_the_notebooks_extra_and_the_license_are_stated():
+    tomllib = pytest.importorskip("tomllib", reason="Python >= 3.11 reads TOML")
+    text = README.read_text()
+    assert 'pip install ".[notebooks]" && jupyter lab notebooks/' in text
+    pyproject = tomllib.loads((README.parent / "pyproject.toml").read_text())
+    assert "notebooks" in pyproject["project"]["optional-dependencies"]
+    assert pyproject["project"]["license"]["text"] == "BSD-3-Clause"
+    assert (README.parent / "LICENSE").read_text().startswith("BSD 3-Clause License")
+    assert "BSD 3-Clause" in text.split("## License", 1)[1]
+    assert "https://arxiv.org/abs/2205.01048" in text.split("## Citation", 1)[1]

@@ -33,6 +33,22 @@ def _regrasp_rows():
     return rows
 
 
+def test_figures_leave_the_callers_backend_alone(tmp_path):
+    """A notebook's inline backend stays on after a report figure is written (it used to be
+    switched to Agg, and the notebook's later figures never showed)."""
+    import matplotlib
+    import matplotlib.pyplot as plt
+
+    before = matplotlib.get_backend()
+    plt.switch_backend("svg")
+    try:
+        regrasp_figure(_regrasp_rows(), tmp_path / "r.png")
+        assert matplotlib.get_backend() == "svg"
+        assert (tmp_path / "r.png").stat().st_size > 10_000
+    finally:
+        plt.switch_backend(before)
+
+
 def test_success_rates_count_errors_as_failures():
     rates = success_rates(_regrasp_rows())
     assert rates[("obj1", "baseline")] == (7, 10)
@@ -386,5 +402,5 @@ def test_reproduce_with_a_second_seed_runs_accuracy_again_and_reports_it(tmp_pat
     assert [c.seed for c in calls] == [0, 7]
     assert calls[1].out == tmp_path / "seed7" and calls[1].second_seed is None
     section = text.split("## A second seed: the accuracy experiment with seed 7")[1]
-    assert "| θ bin (deg) | n | coverage ±1σ (68 %)" in section.split("## Experiment 2")[0]
+    assert "| tilt bin (deg) | n | coverage ±1σ (68 %)" in section.split("## Experiment 2")[0]
     assert "rms z" in section

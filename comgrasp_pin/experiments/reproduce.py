@@ -170,9 +170,10 @@ geometric centre). Every grasp is estimated twice from the same measurement: our
 `{trial["estimator"]}`, a second pose rolled by {trial["roll_deg"]}°) and the paper's method
 ({report.paper.METHOD}: the vertical line through the CoM from one static pose, met with the
 rod's axis), so the two meet grasp by grasp in our world. The paper's published values (read
-off its figure; obj1 and obj6 only) stand beside. Rows: bins of |θ|. Figure: one panel per
-object; lines are bin means with the 95 % t interval of the mean (Student's t, n − 1 degrees
-of freedom; none for a bin of one grasp), broken where a bin is empty.
+off its figure; obj1 and obj6 only) stand beside. Rows: bins of the tilt in the jaws, 0–90°
+from level. Figure: one panel per object; lines are bin means with the 95 % t interval of the
+mean (Student's t, n − 1 degrees of freedom; none for a bin of one grasp), broken where a bin
+is empty.
 
 ![accuracy](accuracy.png)
 

@@ -207,7 +207,7 @@ def _accuracy_plot(rows: Sequence[dict]):
             if k % ncols == 0:
                 ax.set_ylabel("CoM accuracy (%)", fontsize=9)
             if k >= len(objs) - ncols:
-                ax.set_xlabel("tilt in the jaws |θ| (deg)", fontsize=8.5)
+                ax.set_xlabel("tilt in the jaws, 0–90° from level (deg)", fontsize=8.5)
                 ax.tick_params(labelbottom=True)
 
     handles = [
@@ -235,7 +235,7 @@ def _accuracy_plot(rows: Sequence[dict]):
         Line2D([], [], ls="none", marker="v", color="0.4", label="a grasp below the axis")
     )
     note = (
-        "Lines: mean per |θ| bin with its 95 % t interval (a gap where a bin has no grasp); "
+        "Lines: mean per tilt bin with its 95 % t interval (a gap where a bin has no grasp); "
         "faint dots: single grasps. Accuracy = 1 − 5·|Δx|/l."
     )
     fig.legend(

@@ -67,7 +67,7 @@ def _accuracy_table(rows: Sequence[dict], objects: Sequence[str], edges) -> str:
     lines = [
         caption,
         "",
-        "| θ bin (deg) | " + " | ".join(objects) + " |",
+        "| tilt bin (deg) | " + " | ".join(objects) + " |",
         "|" + "---|" * (len(objects) + 1),
     ]
     per_object = {}
@@ -115,7 +115,7 @@ def method_comparison(
         f"paper's method in accuracy points, mean over the grasps with its 95 % t interval; "
         f"a tie is within {TIE_POINTS:g} points.",
         "",
-        "| θ range (deg) | grasps | ours (%) | paper's method (%) | ours − paper's (points, "
+        "| tilt range (deg) | grasps | ours (%) | paper's method (%) | ours − paper's (points, "
         "95 % CI) | ours better | paper's better | tie |",
         "|---|---|---|---|---|---|---|---|",
     ]
@@ -175,7 +175,7 @@ def _why(rows: Sequence[dict], objects: Sequence[str]) -> str:
         "a weight to one side), the two meet h·tan θ along the axis from the CoM, so that "
         "estimate's miss grows with the tilt. Ours measures a second, rolled pose, which "
         "makes the CoM's height in the jaws observable. Fitted per object over the grasps "
-        "at |θ| ≥ 10°, |miss| ≈ k·|tan θ|:",
+        "at tilts ≥ 10°, |miss| ≈ k·|tan θ| (θ the tilt):",
         "",
         "| object | CoM off the axis, model h (mm) | grasps ≥ 10° | paper's method k (mm) "
         "| ours k (mm) |",

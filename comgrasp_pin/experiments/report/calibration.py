@@ -82,7 +82,7 @@ def calibration_table(
         f"{100 * N01_COV68:.1f} % inside ±1σ, 95 % inside ±1.96σ and rms 1. In brackets: "
         "95 % Wilson interval of the coverage.",
         "",
-        "| θ bin (deg) | n | coverage ±1σ (68 %) | coverage ±1.96σ (95 %) | rms z | mean z "
+        "| tilt bin (deg) | n | coverage ±1σ (68 %) | coverage ±1.96σ (95 %) | rms z | mean z "
         "| target |",
         "|---|---|---|---|---|---|---|",
     ]

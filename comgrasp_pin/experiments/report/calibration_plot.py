@@ -132,7 +132,7 @@ def _calibration_row(axes, rows, objects, edges, colours, markers, extra: bool):
     ax_c.axhline(100 * N01_COV68, color="0.35", ls=":", lw=1, label="N(0, 1) inside ±1σ: 68.3 %")
     ax_c.set_ylim(0, 103)
     ax_c.set_ylabel("grasps inside the interval (%)", fontsize=9)
-    ax_c.set_title("coverage per |θ| bin (95 % Wilson intervals)", fontsize=9, loc="left")
+    ax_c.set_title("coverage per tilt bin (95 % Wilson intervals)", fontsize=9, loc="left")
     ax_r.axhspan(
         TARGET_RMS_Z[0], TARGET_RMS_Z[1], color="#cfe8cf", zorder=0, label="target 0.9–1.1"
     )
@@ -165,11 +165,12 @@ def _calibration_row(axes, rows, objects, edges, colours, markers, extra: bool):
     else:
         ax_r.set_ylim(0, max(1.5, 1.1 * top))
         ax_r.set_ylabel("rms z", fontsize=9)
-    ax_r.set_title("rms z per |θ| bin", fontsize=9, loc="left")
+    ax_r.set_title("rms z per tilt bin", fontsize=9, loc="left")
     for ax in (ax_c, ax_r):
         ticks = [f"{lab}\nn={'/'.join(ns)}" for lab, ns in zip(labels, n_tick)]
         ax.set_xticks(positions, ticks, fontsize=7)
-        ax.set_xlabel("|θ| bin (deg)" + (f"; n = {'/'.join(objects)}" if extra else ""), fontsize=9)
+        label = "tilt in the jaws, 0–90° from level (deg)"
+        ax.set_xlabel(label + (f"; n = {'/'.join(objects)}" if extra else ""), fontsize=9)
         ax.axvline(positions[-1] - 0.5, color="0.6", lw=0.8)
         ax.set_xlim(-0.6, positions[-1] + 0.6)
         ax.legend(

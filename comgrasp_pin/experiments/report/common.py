@@ -143,9 +143,15 @@ def _abs_theta(rows: Sequence[dict]) -> np.ndarray:
 
 
 def _pyplot():
+    """pyplot, on the Agg backend unless pyplot was already imported (a notebook's inline
+    backend, a user's GUI): the report's figures are written to files and closed, and must not
+    switch off the caller's figures."""
+    import sys
+
     import matplotlib
 
-    matplotlib.use("Agg")
+    if "matplotlib.pyplot" not in sys.modules:
+        matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     return plt

@@ -64,7 +64,7 @@ def accuracy_verdict(rows: Sequence[dict], objects: Sequence[str] | None = None)
     rows = _select(rows, objects)
     ok = _ok(rows)
     lines = [
-        "| object | grasps (failed) | mean θ < 10° | mean 10–30° | worst bin vs paper obj1 "
+        "| object | grasps (failed) | mean, tilt < 10° | mean, 10–30° | worst bin vs paper obj1 "
         "(≤ 30°) | above paper in every bin |",
         "|---|---|---|---|---|---|",
     ]
