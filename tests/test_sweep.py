@@ -13,6 +13,7 @@ from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.experiments.reproduce import RunOptions
 from comgrasp_pin.experiments.runner import read_rows
 from comgrasp_pin.experiments.sweep import (
+    MEASURES,
     SweepOptions,
     grid,
     markdown_table,
@@ -165,3 +166,18 @@ def test_a_tiny_sweep_gives_the_experiments_row_at_the_default_point(tmp_path):
     from comgrasp_pin.experiments.report.sweep_plot import sweep_figures
 
     assert len(sweep_figures(table, one, tmp_path)) == 3
+
+
+def test_a_line_figure_of_points_at_0_and_100_percent(tmp_path):
+    """Every trial a success, no interval covering the truth: a Wilson interval then ends
+    at 0 % plus (or 100 % less) a rounding error, which must not make a negative error bar
+    (matplotlib refuses those)."""
+    from comgrasp_pin.experiments.report.sweep_plot import sweep_figures
+
+    params = [parse_param("trial.approach_deg=0,3")]
+    rows = [{**_row(0.99, 0.05, 0.0, 0.01), "trial.approach_deg": v} for v in (0.0, 3.0) * 11]
+    table = summarise(rows, params, "accuracy")
+    assert all(m["success"][0] == 100.0 and m["coverage"][0] == 0.0 for _, m in table)
+    written = sweep_figures(table, params, tmp_path)
+    assert [p.name for p in written] == [f"sweep_{m}.png" for m in MEASURES]
+    assert all(p.stat().st_size > 5000 for p in written)

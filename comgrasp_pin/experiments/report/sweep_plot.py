@@ -18,8 +18,9 @@ from comgrasp_pin.experiments.report.common import _pyplot
 def _line(ax, table, path: str, measure: str) -> None:
     x = np.array([point[path] for point, _ in table])
     value, lo, hi = (np.array([m[measure][i] for _, m in table], float) for i in range(3))
-    lower = np.where(np.isfinite(lo), value - lo, 0.0)
-    upper = np.where(np.isfinite(hi), hi - value, 0.0)
+    # (clipped: a Wilson interval of 100 % ends at 100 % less a rounding error)
+    lower = np.clip(np.where(np.isfinite(lo), value - lo, 0.0), 0.0, None)
+    upper = np.clip(np.where(np.isfinite(hi), hi - value, 0.0), 0.0, None)
     ax.errorbar(x, value, yerr=[lower, upper], fmt="o-", capsize=4)
     ax.set_xlabel(path)
     ax.ticklabel_format(axis="y", useOffset=False)
