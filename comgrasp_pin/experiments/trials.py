@@ -22,7 +22,8 @@ ACCURACY_COLUMNS = [
     "com_std_m", "residual_rms_Nm", "slip_seen", "pos_esti_line_m", "accuracy_line",
     "rolled_slip", "dropped_at_roll", "pos_std_m", "com_path", "extra_pose", "estimator",
     *(f"pos_std_{part}_m" for part in
-      ("estimator", "tilt", "shift", "out_of_plane", "slide", "creep", "off_axis")),
+      ("estimator", "tilt", "shift", "out_of_plane", "slide", "creep", "off_axis",
+       "calibration")),
     "sim_s", "wall_s",
 ]  # fmt: skip
 REGRASP_COLUMNS = [

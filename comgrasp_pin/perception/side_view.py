@@ -85,6 +85,8 @@ class SideView:
             ``x_axis`` from the TCP, its points' median position along and median ee-y (m);
             two views pair them slice by slice (``procedures.rod_motion.depth_change``), or
             None.
+        camera_ee: (3,) the camera's optical centre in the ee frame (m), from T_ee_cam:
+            what a calibration error turns the view about; or None.
     """
 
     T_ee_obj: np.ndarray
@@ -105,6 +107,7 @@ class SideView:
     surface_slope_std: float
     creep: np.ndarray | None = None
     depth_slices: np.ndarray | None = None
+    camera_ee: np.ndarray | None = None
 
 
 def clean_side_depth(depth: np.ndarray) -> tuple[np.ndarray, float, bool]:
@@ -259,7 +262,7 @@ def observe_held_rod(
     return SideView(T_ee_obj, theta, float(hi - lo), grasp_offset, mask, rect,
                     camera.project(ends_cam), camera.project(tcp_cam[None])[0],
                     float(radius), off_axis, axis_std, tilt_std, y0, slope, y0_std, slope_std,
-                    depth_slices=slices)  # fmt: skip
+                    depth_slices=slices, camera_ee=T_ee_cam[:3, 3].copy())  # fmt: skip
 
 
 def _depth_line(along: np.ndarray, y: np.ndarray) -> tuple:

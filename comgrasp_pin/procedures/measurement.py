@@ -182,6 +182,11 @@ def locate_com(robot: RobotModel, held: HeldReadings, config: EpisodeConfig) -> 
         parts = uncertainty.motion_stds(robot, q, tau_b, tau_a, est, T_obj, views, depth,
                                         bounds, trial.estimator, pair_std, prior)  # fmt: skip
     parts["estimator"] = uncertainty.estimator_std(est, T_obj)
+    cal = config.sensors.side_depth
+    if side.camera_ee is not None and cal.enabled:
+        parts["calibration"] = uncertainty.calibration_std(
+            est, T_obj, side.camera_ee, cal.extrinsic_shift,
+            np.radians(cal.extrinsic_turn_deg), cal.scale_std)  # fmt: skip
     if path == "one pose" and prior is None:
         # the closed form meets the vertical CoM line with the axis: a CoM off the axis by
         # h moves that point by h tan(theta) (the prior's std is the h the view allows)

@@ -12,7 +12,9 @@ the jaws. Its variance is the sum of
   in the jaws' plane), ``shift`` (along the jaw axis), ``out of plane``; and ``slide``, along
   the rod's own axis, which the views do not measure well: half their disagreement on where
   the jaws hold the rod;
-- ``off axis`` (one pose, closed form): the CoM's distance from the axis at the seen tilt.
+- ``off axis`` (one pose, closed form): the CoM's distance from the axis at the seen tilt;
+- ``calibration``: the side camera's pose and depth scale, known to its calibration's
+  stated accuracy (``calibration_std``); none for the ideal preset's exact camera.
 Sensitivities are first order (finite differences of the same computation the estimate
 ran), so a source the robot measured small stays small and none is inflated by a factor.
 """
@@ -22,6 +24,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+import pinocchio as pin
 
 from comgrasp_pin.estimation import AxisPrior, ComEstimate, com_along_axis, estimate_com
 from comgrasp_pin.procedures.rod_motion import depth_change_std, rod_motion
@@ -54,6 +57,39 @@ def estimator_std(est: ComEstimate, T_ee_obj: np.ndarray) -> float:
         shifted = replace(est, com_ee=est.com_ee + STEP * np.eye(3)[i])
         J[i] = (com_along_axis(shifted, T_ee_obj) - x0) / STEP
     return float(np.sqrt(max(J @ est.cov[1:, 1:] @ J, 0.0)))
+
+
+def calibration_std(
+    est: ComEstimate,
+    T_ee_obj: np.ndarray,
+    camera_ee: np.ndarray,
+    shift: float,
+    turn: float,
+    scale: float,
+) -> float:
+    """The position's std (m) from the side camera's calibration.
+
+    Its pose is off by ``shift`` (m) in a random direction and by ``turn`` (rad) about a
+    random axis through the camera (``camera_ee``, (3,) in the ee frame), its depth scale by
+    ``scale`` (relative std). The error is common to every view of the episode: it moves
+    the perceived rod, not the rod's motion between views (first order). A fixed length in
+    a random direction puts a third of its variance on each axis.
+    """
+    x0 = com_along_axis(est, T_ee_obj)
+    p, R0 = T_ee_obj[:3, 3], T_ee_obj[:3, :3]
+    moved = []
+    for axis in np.eye(3):
+        T = T_ee_obj.copy()
+        T[:3, 3] = p + shift / np.sqrt(3.0) * axis
+        moved.append(T)
+        R = pin.exp3(turn / np.sqrt(3.0) * axis)
+        T = T_ee_obj.copy()
+        T[:3, :3], T[:3, 3] = R @ R0, camera_ee + R @ (p - camera_ee)
+        moved.append(T)
+    T = T_ee_obj.copy()
+    T[:3, 3] = camera_ee + (1.0 + scale) * (p - camera_ee)
+    moved.append(T)
+    return float(np.sqrt(sum((com_along_axis(est, T) - x0) ** 2 for T in moved)))
 
 
 def tilt_std_one_view(est: ComEstimate, T_ee_obj: np.ndarray, tilt_std: float) -> float:
