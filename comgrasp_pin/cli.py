@@ -202,11 +202,16 @@ def build_parser() -> argparse.ArgumentParser:
     for name, help_text in (
         ("accuracy", "experiment 1: CoM accuracy against tilt (accuracy.csv, figure, table)"),
         ("regrasp", "experiment 2: pick-and-place success, baseline vs regrasp (regrasp.csv)"),
-        ("reproduce", "both experiments and report.md (paper's sizes; --quick for minutes)"),
+        (
+            "reproduce",
+            "both experiments and report.md (paper's sizes; --quick for minutes): "
+            "realistic sensors, and ideal ones beside them for the comparison with the paper",
+        ),
     ):
         p = sub.add_parser(name, help=help_text, description=_sentence(help_text))
         _add_experiment_args(p, f"results/{name}")
         if name == "reproduce":
+            p.set_defaults(sensors="realistic")
             p.add_argument(
                 "--second-seed",
                 type=SEED,
