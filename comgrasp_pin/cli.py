@@ -127,7 +127,8 @@ def _add_sensors_arg(p: argparse.ArgumentParser) -> None:
     p.add_argument("--sensors", default="ideal", choices=SENSOR_PRESETS,
                    help="sensor preset: ideal renders and torques, or realistic (RealSense-class "
                    "depth, link-side torque sensors, gripper model error; realistic_current: a "
-                   "UR CB3's current-based torques) (%(default)s)")  # fmt: skip
+                   "UR CB3's current-based torques); ideal+SOURCE adds one realistic error "
+                   "source to the ideal sensors (%(default)s)")  # fmt: skip
 
 
 def _add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:

@@ -194,7 +194,35 @@ _CURRENT_TORQUE = TorqueSensorConfig(
     viscous=(1.0, 1.0, 0.8, 0.5, 0.5, 0.5),
 )
 
-SENSOR_PRESETS = ("ideal", "realistic", "realistic_current")
+
+def _calibration_only(depth: DepthNoiseConfig) -> DepthNoiseConfig:
+    return DepthNoiseConfig(scale_std=depth.scale_std, extrinsic_shift=depth.extrinsic_shift,
+                            extrinsic_turn_deg=depth.extrinsic_turn_deg)  # fmt: skip
+
+
+def _image_only(depth: DepthNoiseConfig) -> DepthNoiseConfig:
+    return replace(depth, scale_std=0.0, extrinsic_shift=0.0, extrinsic_turn_deg=0.0)
+
+
+_IDEAL_TORQUE = TorqueSensorConfig()
+SOURCES = {
+    "top_depth": lambda c: replace(c, top_depth=_image_only(_D415)),
+    "wrist_depth": lambda c: replace(c, side_depth=_image_only(_D435)),
+    "calibration": lambda c: replace(c, top_depth=_calibration_only(_D415),
+                                     side_depth=_calibration_only(_D435)),
+    "torque_offsets": lambda c: replace(c, torque=replace(_IDEAL_TORQUE, offset_std=0.2)),
+    "torque_drift": lambda c: replace(c, torque=replace(_IDEAL_TORQUE, drift_std=0.005)),
+    "friction": lambda c: replace(c, torque=replace(_CURRENT_TORQUE, noise_std=0.05,
+                                                    offset_std=0.0, drift_std=0.0)),
+    "gripper_model": lambda c: replace(c, gripper_mass_error=0.03, gripper_com_error=0.002),
+}  # fmt: skip
+"""Each error source of the realistic presets on its own, added to the ideal sensors by
+``sensor_preset("ideal+NAME")``: the cameras' image errors (noise, holes, flying pixels,
+dropouts, quantisation) apart from their calibration (pose and depth scale); the link-side
+torque sensor's offsets and its drift; the current-based reading's friction (its white
+noise kept at the ideal 0.05 N m); the gripper's model error."""
+
+SENSOR_PRESETS = ("ideal", "realistic", "realistic_current", *(f"ideal+{s}" for s in SOURCES))
 
 
 def sensor_preset(name: str) -> SensorConfig:
@@ -205,9 +233,13 @@ def sensor_preset(name: str) -> SensorConfig:
     above the table, D435 on the wrist), link-side torque sensors with offsets and drift,
     and a gripper 3 % heavier than modelled with its CoM 2 mm off. ``"realistic_current"``:
     the same with a UR CB3-style current-based torque reading (friction, hysteresis).
+    ``"ideal+SOURCE"``: the ideal sensors with one of the realistic presets' error sources
+    (``SOURCES``), for a sensitivity study.
     """
     if name == "ideal":
         return SensorConfig()
+    if name.startswith("ideal+") and name.removeprefix("ideal+") in SOURCES:
+        return replace(SOURCES[name.removeprefix("ideal+")](SensorConfig()), preset=name)
     if name in ("realistic", "realistic_current"):
         torque = _LINK_TORQUE if name == "realistic" else _CURRENT_TORQUE
         return SensorConfig(name, torque, _D415, _D435, gripper_mass_error=0.03,
