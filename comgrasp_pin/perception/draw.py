@@ -108,9 +108,9 @@ def draw_legend(img: np.ndarray, entries, corner: str = "bottom-left",
         elif mark == "cross":
             cv2.drawMarker(img, mid, colour, cv2.MARKER_CROSS, line_h - 4, 2)
         elif mark == "dot_bar":
-            draw_com(img, mid, np.array([a, b]), size=scale / 0.45)
+            draw_com(img, mid, np.array([a, b]), size=line_h / 25)
         elif mark == "ring":
-            draw_com(img, truth_px=mid, size=scale / 0.45)
+            draw_com(img, truth_px=mid, size=line_h / 25)
         put_text(img, label, (x0 + sw + 10, yc + int(10 * scale)), scale, box=False)
     return img
 

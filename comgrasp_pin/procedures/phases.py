@@ -1,7 +1,8 @@
 """The phases a procedure announces (``Cell.announce``): a log line, a video's caption.
 
-An announcement is ``"<phase>: <detail>"`` or the phase alone; the phase is one of the
-names below and lasts until the next announcement. ``phase_of`` reads it back.
+An announcement is ``"<phase>: <detail>"`` or the phase alone (``MEASURING`` is followed
+by the pose's number); the phase is one of ``PHASES`` and lasts until the next
+announcement. ``phase_of`` reads it back.
 """
 
 from __future__ import annotations
@@ -19,9 +20,18 @@ CARRY = "carry"
 DROP = "drop"
 
 
+PHASES = (BASELINE_GRASP, EMPTY_ARM, TRIAL_GRASP, CAREFUL_LIFT, LIFT, MEASURING, PUT_BACK,
+          PUT_DOWN, REGRASP, CARRY, DROP)  # fmt: skip
+
+
 def phase_of(announcement: str) -> str:
-    """The phase of ``announcement``: its text before the first ``:``."""
-    return announcement.split(":", 1)[0].strip()
+    """The phase of ``announcement``: the name in ``PHASES`` it begins with, or else its
+    text before the first ``:``."""
+    head = announcement.split(":", 1)[0].strip()
+    for name in sorted(PHASES, key=len, reverse=True):
+        if head == name or head.startswith(name + " "):
+            return name
+    return head
 
 
 def trial_grasp_at(offset: float) -> str:
