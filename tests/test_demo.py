@@ -1,6 +1,7 @@
 """The demo a person watches: CoM marks where the cameras see the points, one key frame per
 phase, a printout in one tilt convention, the Rerun recording and its missing extra."""
 
+import re
 import sys
 
 import cv2
@@ -169,3 +170,31 @@ def test_a_rerun_recording_has_the_cameras_clouds_com_and_torques(tmp_path):
                    "world/com/estimate", "world/com/interval", "joint_torques/elbow_joint",
                    "phases", "sim_time"):  # fmt: skip
         assert entity.encode() in data, entity
+
+
+@pytest.mark.slow
+def test_the_readme_demo_shows_every_phase_and_says_what_happened():
+    from comgrasp_pin.cli_demo import TILT, summary
+    from comgrasp_pin.experiments.trials import episode_config
+    from comgrasp_pin.simulation.episode import run_episode
+
+    # The README's demo: obj1, seed 1001 (docs/results/regrasp.csv: obj1, trial 1).
+    result = run_episode("obj1", 1001, "regrasp", config=episode_config())
+    kinds = [ph.phase_of(c) for _, c in result.phases]
+    assert kinds == [ph.EMPTY_ARM, ph.TRIAL_GRASP, ph.CAREFUL_LIFT, ph.MEASURING, ph.MEASURING,
+                     ph.PUT_DOWN, ph.REGRASP, ph.CARRY, ph.DROP]  # fmt: skip
+    times = [t for t, _ in result.phases]
+    assert times == sorted(times) and times[-1] < result.sim_s
+    lines = summary(result)
+    text = "\n".join(lines)
+    assert "trial grasps          1 (no retry)" in text
+    assert "put-down and regrasp  yes: CoM 43 mm from the jaws" in text
+    tilt = next(line for line in lines if TILT in line)
+    numbers = re.findall(r"[-\d.]+", tilt.split(TILT)[1])  # estimate, truth, difference
+    est, true, diff = (float(x) for x in numbers)
+    assert (
+        0.0 <= est <= 90.0
+        and 0.0 <= true <= 90.0
+        and diff == pytest.approx(abs(est - true), abs=0.011)
+    ), tilt
+    assert result.success and "delivered to the drop box" in lines[0]

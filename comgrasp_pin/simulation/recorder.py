@@ -196,7 +196,8 @@ class EpisodeRecorder:
 
         if not self.frames:
             raise InvalidInputError("no frames were recorded")
-        if not cv2.imwrite(str(path), key_frame_strip(self, tile_width, title)):
+        strip = key_frame_strip(self, tile_width, title)
+        if not cv2.imwrite(str(path), strip, [cv2.IMWRITE_PNG_COMPRESSION, 9]):
             raise OutputError(f"OpenCV cannot write {path}")
         return path
 
