@@ -22,40 +22,40 @@ def _rerun_path(text: str) -> Path:
     return path
 
 
+def _row(label: str, value: str) -> str:
+    return f"  {label:<{len(TILT) + 2}}{value}"
+
+
 def summary(result) -> list[str]:
     """The demo's printout of an ``EpisodeResult``: what happened, the estimate vs the truth."""
     kinds = [ph.phase_of(c) for _, c in result.phases]
-    trials = kinds.count(ph.TRIAL_GRASP)
     where = "delivered to the drop box" if result.success else "NOT delivered"
-    lines = [
-        f"object {result.scene.object}, method {result.method}: {where}",
-        "phases (simulated time):",
-    ]
+    lines = [f"object {result.scene.object}, method {result.method}: {where}",
+             "phases (simulated time):"]  # fmt: skip
     lines += [f"  {t:6.1f} s  {caption}" for t, caption in result.phases]
     if result.method == "regrasp":
+        trials = kinds.count(ph.TRIAL_GRASP)
         retries = trials - 1
-        lines.append(
-            f"  trial grasps          {trials} "
-            + ("(no retry)" if retries == 0 else f"({retries} retr{'y' if retries == 1 else 'ies'}"
-               ": the rod turned or fell, was put back and grasped again)")
-        )  # fmt: skip
-        regrasp = "yes" if result.regrasped else "no"
-        lines.append(f"  put-down and regrasp  {regrasp}: {result.reason}")
+        why = "the rod turned or fell, was put back and grasped again"
+        lines.append(_row("trial grasps", f"{trials} " + ("(no retry)" if retries == 0 else
+                     f"({retries} retr{'y' if retries == 1 else 'ies'}: {why})")))  # fmt: skip
+        lines.append(_row("put-down and regrasp",
+                          f"{'yes' if result.regrasped else 'no'}: {result.reason}"))  # fmt: skip
     else:
-        lines.append(f"  grasp                 {result.reason}")
+        lines.append(_row("grasp", result.reason))
     if result.trial is not None:
         t, s = result.trial, result.trial_score
         est, true = tilt_from_level_deg(t.theta), tilt_from_level_deg(s.theta_true)
         diff = tilt_difference_deg(t.theta, s.theta_true)
         error_mm = 1e3 * (s.pos_esti - s.pos_real)
         lines += [
-            f"  {TILT}  {est:5.2f} deg (truth {true:.2f}, difference {diff:.2f})",
-            f"  CoM along the rod     {1e3 * s.pos_esti:7.1f} mm +- {2e3 * t.x_com_std:.1f} "
-            f"(2 sigma) (truth {1e3 * s.pos_real:.1f}, error {error_mm:+.1f})",
-            f"  mass                  {t.mass_esti:7.3f} kg (truth {s.mass_real:.3f})",
-            f"  accuracy              {100 * s.accuracy:7.1f} %",
+            _row(TILT, f"{est:7.2f} deg (truth {true:.2f}, difference {diff:.2f})"),
+            _row("CoM along the rod", f"{1e3 * s.pos_esti:7.1f} mm +- {2e3 * t.x_com_std:.1f} "
+                 f"(2 sigma) (truth {1e3 * s.pos_real:.1f}, error {error_mm:+.1f})"),
+            _row("mass", f"{t.mass_esti:7.3f} kg (truth {s.mass_real:.3f})"),
+            _row("accuracy", f"{100 * s.accuracy:7.1f} %"),
         ]  # fmt: skip
-    lines.append(f"  success               {result.success}")
+    lines.append(_row("success", str(result.success)))
     return lines
 
 

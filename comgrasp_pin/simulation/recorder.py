@@ -150,7 +150,7 @@ class EpisodeRecorder:
             points.insert(0, est.points_world(state.T_world_obj))
         p_world = np.vstack(points)
         views = ((SCENE_CAMERA, self._main, (0, 0), 1.0),
-                 (SIDE_CAMERA, self._inset, self.inset_origin(1), 0.8))  # fmt: skip
+                 (SIDE_CAMERA, self._inset, self.inset_origin(1), 1.0))  # fmt: skip
         for camera, rig, origin, size in views:
             uv, ok = project(rig.intrinsics(camera), state.T_world_cam[camera], p_world)
             uv = (uv + origin) * scale
@@ -174,7 +174,7 @@ class EpisodeRecorder:
         h = frame.shape[0]
         bar = int(round(26 * scale))
         frame[h - bar :] = (0.35 * frame[h - bar :]).astype(frame.dtype)
-        text = f"t = {state.time:5.2f} s   {k}/{n}  {state.caption}"
+        text = f"t = {state.time:5.2f} s" + (f"   {k}/{n}  {state.caption}" if k else "")
         put_text(frame, text, (8 * scale, h - 8 * scale), 0.5 * scale, box=False)
 
     def write_video(self, path: Path) -> Path:
