@@ -127,7 +127,7 @@ def _common(rgb: np.ndarray, mask: np.ndarray, rect: tuple, axis_px: np.ndarray)
     cv2.drawContours(img, contours, -1, OUTLINE, 1)
     box = cv2.boxPoints(rect).astype(np.int32)
     cv2.polylines(img, [box], True, RECT, 1, cv2.LINE_AA)
-    cv2.line(img, *(_px(p) for p in axis_px), AXIS, 1, cv2.LINE_AA)
+    cv2.line(img, _px(axis_px[0]), _px(axis_px[1]), AXIS, 1, cv2.LINE_AA)
     return img
 
 
