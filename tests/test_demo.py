@@ -198,3 +198,33 @@ def test_the_readme_demo_shows_every_phase_and_says_what_happened():
         and diff == pytest.approx(abs(est - true), abs=0.011)
     ), tilt
     assert result.success and "delivered to the drop box" in lines[0]
+
+
+@pytest.mark.slow
+def test_the_side_view_marks_the_true_com_where_the_wrist_camera_sees_it():
+    from comgrasp_pin.config import EpisodeConfig
+    from comgrasp_pin.simulation.episode import measure_and_score
+    from comgrasp_pin.simulation.scene import Scene, World
+    from comgrasp_pin.simulation.views import com_marks_px
+    from comgrasp_pin.simulation.world import SIDE_CAMERA
+
+    world = World(Scene.sample("obj1", 1001), EpisodeConfig(), 1001)
+    try:
+        trial, score = measure_and_score(world)
+        data, rig = world.sim.data, world.rig
+        truth = world.truth()
+        est_px, bar_px, truth_px = com_marks_px(rig, data, SIDE_CAMERA, trial,
+                                                world.robot.ee_pose(world.sim.q),
+                                                truth.p_world_com)  # fmt: skip
+        expected = _mujoco_pixel(world.sim, SIDE_CAMERA, rig.width, rig.height,
+                                 truth.p_world_com)  # fmt: skip
+        # The estimate, seen along the rod: where the true rod frame puts pos_esti.
+        p_est = (truth.T_world_obj @ [score.pos_esti, 0, 0, 1])[:3]
+        expected_est = _mujoco_pixel(world.sim, SIDE_CAMERA, rig.width, rig.height, p_est)
+    finally:
+        world.close()
+    np.testing.assert_allclose(truth_px, expected, atol=1e-6)
+    # The robot's belief (its side view and kinematics) against the truth's frame: within
+    # the side view's millimetre, a few pixels at 0.3 m.
+    np.testing.assert_allclose(est_px, expected_est, atol=4.0)
+    assert np.all(np.isfinite(bar_px))

@@ -99,7 +99,7 @@ def deliver(cell: Cell, config: EpisodeConfig) -> None:
     """Carry the held rod to the drop box, release it, and park."""
     cell.announce(CARRYING)
     cell.carry_to_drop_box()
-    cell.announce(f"{phases.DROP}: released above the drop box")
+    cell.announce(f"{phases.DROP}: let go in the drop box, the arm parks")
     cell.move_to(Q_PARK)
     cell.hold(config.motion.park_rest)
 

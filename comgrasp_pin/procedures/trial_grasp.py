@@ -113,7 +113,8 @@ def grasp_and_lift(
     with cell.watching(watch):
         cell.pick(plan.grasp, grip, grasp_z + trial.careful_lift,
                   trial.careful_lift_time)  # fmt: skip
-        cell.announce(f"{phases.CAREFUL_LIFT}: {100 * trial.careful_lift:.0f} cm, does it turn?")
+        cell.announce(f"{phases.CAREFUL_LIFT}: {100 * trial.careful_lift:.0f} cm up, does it "
+                      "turn? then on up")  # fmt: skip
         cell.hold(trial.careful_hold)
         watch.sample_now()
     tilt = abs(watch.monitor.largest_tilt()) if watch.monitor.times else 0.0
