@@ -67,10 +67,6 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         raise InvalidInputError(
             "--viewer needs a display (DISPLAY is not set); drop it for the video"
         )
-    if args.rerun is not None:
-        from comgrasp_pin.simulation.rerun_log import import_rerun
-
-        import_rerun()  # before the episode: without it, say how to install it
     video = Path(args.out) / f"episode_{args.object}_{args.method}_seed{args.seed}.mp4"
     config = episode_config(sensors=args.sensors)
     result = run_episode(args.object, args.seed, args.method, config=config, video=video,

@@ -127,6 +127,10 @@ def run_episode(
     if config is not None and not isinstance(config, EpisodeConfig):
         raise InvalidInputError(f"config must be an EpisodeConfig, got {type(config).__name__}")
     config = config or EpisodeConfig()
+    if rerun is not None:
+        from comgrasp_pin.simulation.rerun_log import RerunLog, import_rerun
+
+        import_rerun()  # MissingExtraError before anything is built
     scene = Scene.sample(obj, seed, pos_real)
     world = World(scene, config, seed)
     recorder = rerun_log = None
@@ -140,8 +144,6 @@ def run_episode(
         recorder = EpisodeRecorder(world.sim, world.truth)
         world.sim.observers.append(recorder)
     if rerun is not None:
-        from comgrasp_pin.simulation.rerun_log import RerunLog
-
         rerun_log = RerunLog(world.sim, rerun, world.truth)
         world.sim.observers.append(rerun_log)
     cell = SimCell(world, recorder)
