@@ -147,6 +147,30 @@ def test_rerun_needs_an_rrd_file(tmp_path, capsys):
     assert exit_.value.code == 2 and "must name a .rrd file" in capsys.readouterr().err
 
 
+def test_the_point_cloud_of_the_top_camera_lies_on_the_table():
+    from comgrasp_pin.simulation.cameras import CameraRig
+    from comgrasp_pin.simulation.rerun_log import cloud_world
+    from comgrasp_pin.workcell import PICK_AREA, TABLE_Z
+
+    sim = Simulation()
+    sim.reset_arm(Q_DOWN, finger_q=0.02)
+    rig = CameraRig(sim.model, 320, 240)
+    try:
+        depth, rgb = rig.depth(sim.data, "top_down"), rig.rgb(sim.data, "top_down")
+        T = rig.T_world_cam(sim.data, "top_down")
+        p_world, colours = cloud_world(rig.intrinsics("top_down"), T, depth, rgb, stride=2)
+    finally:
+        rig.close()
+    assert p_world.shape == colours.shape and len(p_world) > 0.9 * 160 * 120
+    x0, x1, y0, y1 = PICK_AREA
+    inner = (p_world[:, 0] > x0 + 0.03) & (p_world[:, 0] < x1 - 0.03)
+    inner &= (p_world[:, 1] > y0 + 0.03) & (p_world[:, 1] < y1 - 0.03)
+    assert inner.sum() > 1000
+    z = p_world[inner, 2]
+    assert np.mean(np.abs(z - TABLE_Z) < 2e-3) > 0.85  # the table top (the rest: the arm)
+    assert z.min() > TABLE_Z - 2e-3  # from above, nothing below the table top is seen
+
+
 def test_a_rerun_recording_has_the_cameras_clouds_com_and_torques(tmp_path):
     pytest.importorskip("rerun")
     from comgrasp_pin.simulation.rerun_log import RerunLog

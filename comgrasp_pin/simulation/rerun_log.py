@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from comgrasp_pin.camera import PinholeCamera, transform_points
 from comgrasp_pin.errors import MissingExtraError
 from comgrasp_pin.geometry import invert_transform
 from comgrasp_pin.procedures.measurement import TrialMeasurement
@@ -37,6 +38,16 @@ def import_rerun():
             f"--rerun needs rerun-sdk, which is not installed: {INSTALL}"
         ) from exc
     return rerun
+
+
+def cloud_world(camera: PinholeCamera, T_world_cam: np.ndarray, depth: np.ndarray,
+                rgb: np.ndarray, stride: int = 1) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """The depth image back-projected into the world: (N, 3) points (m) and their (N, 3)
+    RGB colours, every ``stride``-th pixel of each row and column, pixels without depth
+    (0 or inf) left out."""
+    seen = (np.isfinite(depth) & (depth > 0))[::stride, ::stride]
+    p_cam = camera.depth_to_points(np.where(np.isfinite(depth), depth, 0.0))[::stride, ::stride]
+    return transform_points(T_world_cam, p_cam[seen]), rgb[::stride, ::stride][seen]
 
 
 class RerunLog:
@@ -93,12 +104,8 @@ class RerunLog:
         seen = np.isfinite(depth) & (depth > 0) & (depth < 65.0)
         depth_mm = np.where(seen, np.round(1e3 * depth), 0).astype(np.uint16)
         rec.log(f"{path}/depth", rr.DepthImage(depth_mm, meter=1000.0))
-        s = self._stride
-        p_cam = K.depth_to_points(np.where(seen, depth, 0.0))[::s, ::s]
-        keep = seen[::s, ::s]
-        p_world = p_cam[keep] @ T[:3, :3].T + T[:3, 3]
-        rec.log(f"world/points/{camera}", rr.Points3D(p_world, colors=rgb[::s, ::s][keep],
-                                                      radii=0.002))  # fmt: skip
+        p_world, colours = cloud_world(K, T, depth, rgb, self._stride)
+        rec.log(f"world/points/{camera}", rr.Points3D(p_world, colors=colours, radii=0.002))
 
     def finish(self, estimate: ComOnRod | None, phases: list[tuple[float, str]],
                trial: TrialMeasurement | None) -> None:  # fmt: skip
