@@ -8,8 +8,6 @@ import os
 import sys
 from pathlib import Path
 
-import numpy as np
-
 from comgrasp_pin import __version__, cli_args
 from comgrasp_pin.errors import ComGraspError, InvalidInputError
 from comgrasp_pin.experiments.trials import MAX_TRIALS
@@ -75,49 +73,12 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cmd_demo(args: argparse.Namespace) -> int:
-    from comgrasp_pin.simulation.episode import run_episode
-
-    out = Path(args.out)
-    video = out / f"episode_{args.object}_{args.method}_seed{args.seed}.mp4"
-    if args.viewer and not os.environ.get("DISPLAY"):
-        raise InvalidInputError(
-            "--viewer needs a display (DISPLAY is not set); drop it for the video"
-        )
-    from comgrasp_pin.experiments.trials import episode_config
-
-    config = episode_config(sensors=args.sensors)
-    result = run_episode(args.object, args.seed, args.method, config=config, video=video,
-                         viewer=args.viewer)  # fmt: skip
-    print(f"sensors {args.sensors}")
-    print(f"object {args.object}, method {args.method}, seed {args.seed}")
-    if result.trial is not None:
-        t, s = result.trial, result.trial_score
-        print(f"  tilt in the jaws      {np.degrees(t.theta):7.2f} deg "
-              f"(truth {np.degrees(s.theta_true):.2f})")  # fmt: skip
-        print(f"  CoM along the rod     {1e3 * s.pos_esti:7.1f} mm (truth {1e3 * s.pos_real:.1f})")
-        print(f"  mass                  {t.mass_esti:7.3f} kg (truth {s.mass_real:.3f})")
-        print(f"  accuracy              {100 * s.accuracy:7.1f} %")
-    print(f"  decision              {result.reason}")
-    print(f"  success               {result.success}")
-    print(f"video: {video}\nkey frames: {video.with_suffix('.png')}")
-    return 0
-
-
 def _cmd_scene(args: argparse.Namespace) -> int:
     from comgrasp_pin.simulation.world import save_world_xml
 
     path = save_world_xml(Path(args.out) / "world.xml", args.object, args.seed)
     print(f"wrote {path}: the workcell, the robot and {args.object} as one MJCF file")
     print(f"open it in MuJoCo's viewer:  python -m mujoco.viewer --mjcf={path}")
-    return 0
-
-
-def _cmd_views(args: argparse.Namespace) -> int:
-    from comgrasp_pin.simulation.views import save_camera_views
-
-    for path in save_camera_views(Path(args.out), args.object, args.seed):
-        print(f"wrote {path}")
     return 0
 
 
@@ -221,31 +182,9 @@ def build_parser() -> argparse.ArgumentParser:
                 "report its calibration beside the first's",
             )
 
-    demo_help = "one episode with a video and the estimate vs the truth"
-    demo = sub.add_parser("demo", help=demo_help, description=_sentence(demo_help))
-    demo.add_argument("--object", default="obj1", choices=OBJECTS, help="the rod (%(default)s)")
-    demo.add_argument("--seed", type=SEED, default=0, help="scene seed, >= 0 (%(default)s)")
-    demo.add_argument(
-        "--method",
-        default="regrasp",
-        choices=("baseline", "regrasp"),
-        help="regrasp planner or the geometric-centre grasp (%(default)s)",
-    )
-    demo.add_argument(
-        "--out", type=cli_args.out_dir, default="results/demo", help="output folder (%(default)s)"
-    )
-    demo.add_argument("--viewer", action="store_true", help="also show MuJoCo's viewer (display)")
-    _add_sensors_arg(demo)
-    demo.set_defaults(func=_cmd_demo)
+    from comgrasp_pin import cli_demo
 
-    views_help = "both camera views with mask, rectangle, axis, grasp"
-    views = sub.add_parser("views", help=views_help, description=_sentence(views_help))
-    views.add_argument("--object", default="obj2", choices=OBJECTS, help="the rod (%(default)s)")
-    views.add_argument("--seed", type=SEED, default=0, help="scene seed, >= 0 (%(default)s)")
-    views.add_argument(
-        "--out", type=cli_args.out_dir, default="results/views", help="output folder (%(default)s)"
-    )
-    views.set_defaults(func=_cmd_views)
+    cli_demo.add_subcommands(sub, OBJECTS, SEED, _add_sensors_arg, _sentence)
 
     scene = sub.add_parser(
         "scene",

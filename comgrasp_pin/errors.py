@@ -122,3 +122,8 @@ class WorkerDiedError(ComGraspError):
 class BackendError(ComGraspError):
     """The requested backend cannot run trials here (``--backend ray`` without Ray installed,
     or a Ray cluster that cannot be reached)."""
+
+
+class MissingExtraError(ComGraspError):
+    """An optional dependency the command needs is not installed (``--rerun`` without
+    rerun-sdk); the message says how to install it."""

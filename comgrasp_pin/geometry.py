@@ -87,6 +87,20 @@ PARALLEL_TOL = 1e-12
 """Lines whose directions have 1 - cos^2 below this count as parallel."""
 
 
+def tilt_from_level_deg(angle: float) -> float:
+    """The tilt from level of a line at ``angle`` (rad) from the horizontal, in [0, 90] deg.
+
+    A rod's axis is a line: ``angle`` and ``angle`` + 180 deg are the same tilt.
+    """
+    a = abs(np.degrees(angle)) % 180.0
+    return float(min(a, 180.0 - a))
+
+
+def tilt_difference_deg(a: float, b: float) -> float:
+    """The angle between two lines at ``a`` and ``b`` (rad), in [0, 90] deg."""
+    return tilt_from_level_deg(a - b)
+
+
 def _unit(value: object, name: str) -> np.ndarray:
     v = validate.finite_array(value, name, (3,))
     if abs(float(np.linalg.norm(v)) - 1.0) > 1e-6:

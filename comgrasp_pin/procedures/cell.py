@@ -113,4 +113,8 @@ class Cell(Protocol):
         """Run ``watch`` during every motion inside the ``with`` block."""
 
     def announce(self, phase: str) -> None:
-        """Say what the robot does now (a log line, a video caption)."""
+        """Say what the robot does now, until the next announcement (a log line, a video
+        caption)."""
+
+    def mark(self, moment: str) -> None:
+        """Note a moment within a phase (a log line; the phase goes on)."""

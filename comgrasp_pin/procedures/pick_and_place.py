@@ -12,19 +12,21 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from comgrasp_pin.config import EpisodeConfig
+from comgrasp_pin.errors import RodDroppedError, RodSlippedError
 from comgrasp_pin.motion.ik import solve_ik
-from comgrasp_pin.perception.top_down import nearest_graspable
+from comgrasp_pin.perception.top_down import nearest_graspable, nearest_on_handle
+from comgrasp_pin.planning import retry
 from comgrasp_pin.planning.put_down import PutDownPlan, axis_hint_after_put_down, plan_put_down
 from comgrasp_pin.planning.regrasp import com_grasp, decide
+from comgrasp_pin.procedures import phases
 from comgrasp_pin.procedures.cell import Cell
 from comgrasp_pin.procedures.measurement import TrialMeasurement
-from comgrasp_pin.procedures.trial_grasp import trial_with_retry
+from comgrasp_pin.procedures.trial_grasp import trial_grasp
 from comgrasp_pin.workcell import PUT_DOWN_XY, Q_PARK
 
-BASELINE = "baseline: grasp at the geometric centre"
-TRIAL = "trial grasp near the geometric centre"
-CARRYING = "carrying to the drop box"
-"""Phases announced to the cell (``Cell.announce``)."""
+BASELINE = f"{phases.BASELINE_GRASP}: the baseline"
+CARRYING = f"{phases.CARRY}: to the drop box"
+"""Announced to the cell (``Cell.announce``; the others in ``procedures.phases``)."""
 
 
 @dataclass(frozen=True)
@@ -53,14 +55,14 @@ def baseline(cell: Cell, config: EpisodeConfig) -> Grasped:
 
 def regrasp(cell: Cell, config: EpisodeConfig) -> Grasped:
     """Trial grasp; if the planner says so, put the rod down and grasp it at the CoM."""
-    cell.announce(TRIAL)
     trial = trial_with_retry(cell, config)
     decision = decide(trial.theta, trial.slip_seen, trial.x_com_obj,
                       trial.side_view.grasp_offset, config.regrasp)  # fmt: skip
     if not decision.regrasp:
         return Grasped(trial, False, decision.reason)
-    cell.announce(f"regrasp: {decision.reason}")
+    cell.announce(f"{phases.PUT_DOWN}: {decision.reason}")
     plan = put_down(cell, trial, config)
+    cell.announce(f"{phases.REGRASP}: {100 * decision.x_com_obj:+.1f} cm from the centre")
     rod = cell.look_from_above()
     axis_hint = axis_hint_after_put_down(plan, (rod.grasp.x, rod.grasp.y))
     # The CoM lies x_com along the rod from its centre (the side view measures both within
@@ -97,5 +99,37 @@ def deliver(cell: Cell, config: EpisodeConfig) -> None:
     """Carry the held rod to the drop box, release it, and park."""
     cell.announce(CARRYING)
     cell.carry_to_drop_box()
+    cell.announce(f"{phases.DROP}: let go in the drop box, the arm parks")
     cell.move_to(Q_PARK)
     cell.hold(config.motion.park_rest)
+
+
+def trial_with_retry(cell: Cell, config: EpisodeConfig) -> TrialMeasurement:
+    """Careful trial grasps (``planning.retry``): if the rod turns as it is lifted (or falls),
+    put it down, look again and grasp it again where it now lies, towards the end that went
+    down; the last of ``regrasp.attempts`` is not careful."""
+    attempts = config.regrasp.attempts
+    state = retry.RetryState()
+    for attempt in range(attempts):
+        rod = cell.look_from_above()
+        offset = nearest_on_handle(rod, retry.grasp_offset(state, rod.grasp.yaw))
+        try:
+            trial = trial_grasp(cell, config, offset, careful=attempt < attempts - 1,
+                                detection=rod)  # fmt: skip
+            if trial.dropped_at_roll:
+                heavy = retry.heavy_side_from_estimate(trial.T_world_ee, trial.T_ee_obj,
+                                                       trial.x_com_obj,
+                                                       trial.side_view.grasp_offset)  # fmt: skip
+                raise RodDroppedError("it fell out at the rolled pose", heavy)
+            return trial
+        except RodDroppedError as exc:
+            if attempt == attempts - 1:
+                raise
+            if not isinstance(exc, RodSlippedError):  # a slipped rod was put back already
+                cell.announce(f"{phases.PUT_BACK}: {exc}")
+            cell.open_gripper(config.motion.open_time)
+            cell.move_to(Q_PARK)
+            cell.hold(config.regrasp.rest_time)  # the rod comes to rest on the table
+            state = retry.after_failure(state, exc.heavy_side_world, rod.length,
+                                        config.regrasp.retry_shift)  # fmt: skip
+    raise AssertionError("unreachable")

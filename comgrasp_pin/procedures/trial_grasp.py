@@ -29,18 +29,17 @@ from comgrasp_pin.estimation.pose_planning import best_next_pose
 from comgrasp_pin.geometry import GraspPose, rotation_angle
 from comgrasp_pin.motion.ik import grasp_frame, solve_ik, solve_top_down
 from comgrasp_pin.perception import RodDetection
-from comgrasp_pin.perception.top_down import nearest_on_handle
-from comgrasp_pin.planning import retry
 from comgrasp_pin.planning.regrasp import needs_another_pose
 from comgrasp_pin.planning.retry import heavy_side_from_tilt
-from comgrasp_pin.procedures import torques
+from comgrasp_pin.procedures import phases, torques
 from comgrasp_pin.procedures.cell import Cell, SlipWatch, TorqueMeasurement
 from comgrasp_pin.procedures.measurement import HeldReadings, TrialMeasurement, locate_com
 from comgrasp_pin.procedures.rod_motion import mid_window_view
 from comgrasp_pin.workcell import Q_PARK
 
 MEASURED = "trial grasp: the held rod is measured"
-"""Announced when the side camera has seen the rod at the first measurement pose."""
+"""Marked (``Cell.mark``) when the side camera has seen the rod at the first measurement
+pose."""
 
 
 @dataclass(frozen=True)
@@ -107,16 +106,20 @@ def grasp_and_lift(
     if not careful:
         with cell.watching(watch):
             cell.pick(plan.grasp, grip, trial.lift_height, trial.lift_time)
+        cell.announce(f"{phases.LIFT}: to the measurement pose")
         return
     grasp_z = grasp_frame(plan.grasp)[2, 3]
     with cell.watching(watch):
         cell.pick(plan.grasp, grip, grasp_z + trial.careful_lift,
                   trial.careful_lift_time)  # fmt: skip
+        cell.announce(f"{phases.CAREFUL_LIFT}: {100 * trial.careful_lift:.0f} cm up, does it "
+                      "turn? then on up")  # fmt: skip
         cell.hold(trial.careful_hold)
         watch.sample_now()
     tilt = abs(watch.monitor.largest_tilt()) if watch.monitor.times else 0.0
     if tilt > np.radians(trial.careful_abort_deg):
         heavy = _heavy_side(watch, plan, config)
+        cell.announce(f"{phases.PUT_BACK}: it turned by {np.degrees(tilt):.0f} deg")
         # Let go where it is (its low end is on the table already): lowering the jaws
         # back to the grasp height would push that end into the table.
         cell.place(robot.ee_pose(cell.q_des), trial.careful_release_time)
@@ -162,16 +165,18 @@ def measure_held(
         torques.arrive(cell, plan.poses[0], trial, duration=trial.return_time)
         cell.hold(trial.hold_before_measuring)
         watch.sample_now()
+    cell.announce(f"{phases.MEASURING} 1: torques and side view")
     first, side, failure = _measure_window(cell, plan, config)
     if isinstance(failure, ObjectNotFoundError):
         raise RodDroppedError(str(failure), _heavy_side(watch, plan, config)) from failure
     if failure is not None:
         raise failure
     after: list[TorqueMeasurement] = [first]
-    cell.announce(MEASURED)
+    cell.mark(MEASURED)
     slip_seen = watch.slipping_or_tilted()
     moved, side_rolled, dropped = False, None, False
     if len(plan.poses) > 1:
+        cell.announce(f"{phases.MEASURING} 2: rolled {trial.roll_deg:.0f} deg")
         torques.arrive(cell, plan.poses[1], trial, duration=trial.roll_time)
         rolled, side_rolled, failure = _measure_window(cell, plan, config)
         after.append(rolled)
@@ -207,6 +212,7 @@ def measure_another_pose(
     q = candidates[best_next_pose(robot, measured_q, np.array(candidates))]
     bias = np.mean([tb - robot.gravity_torques(m.q) for tb, m in zip(held.tau_before,
                     held.after, strict=True)], axis=0)  # fmt: skip
+    cell.announce(f"{phases.MEASURING} {len(held.after) + 1}: one more roll")
     torques.arrive(cell, q, trial, duration=trial.roll_time)
     after = torques.measure(cell, trial.settle, trial)
     try:
@@ -231,7 +237,9 @@ def trial_grasp(
     if detection is None:
         detection = cell.look_from_above()
     plan = plan_trial(cell, detection, offset, config)
+    cell.announce(f"{phases.EMPTY_ARM}: torques at the measurement poses")
     before = measure_empty(cell, plan, config)
+    cell.announce(phases.trial_grasp_at(offset))
     watch = cell.slip_watch(config.sensors.watch_dt, config.motion.grip_force, detection.length,
                             plan.centre_hint)  # fmt: skip
     grasp_and_lift(cell, plan, watch, careful, config)
@@ -269,31 +277,3 @@ def trial_grasp(
         com_path=loc.path,
         extra_pose=extra,
     )
-
-
-def trial_with_retry(cell: Cell, config: EpisodeConfig) -> TrialMeasurement:
-    """Careful trial grasps (``planning.retry``): if the rod turns as it is lifted (or falls),
-    put it down, look again and grasp it again where it now lies, towards the end that went
-    down; the last of ``regrasp.attempts`` is not careful."""
-    attempts = config.regrasp.attempts
-    state = retry.RetryState()
-    for attempt in range(attempts):
-        rod = cell.look_from_above()
-        offset = nearest_on_handle(rod, retry.grasp_offset(state, rod.grasp.yaw))
-        try:
-            trial = trial_grasp(cell, config, offset, careful=attempt < attempts - 1, detection=rod)
-            if trial.dropped_at_roll:
-                heavy = retry.heavy_side_from_estimate(trial.T_world_ee, trial.T_ee_obj,
-                                                       trial.x_com_obj,
-                                                       trial.side_view.grasp_offset)  # fmt: skip
-                raise RodDroppedError("it fell out at the rolled pose", heavy)
-            return trial
-        except RodDroppedError as exc:
-            if attempt == attempts - 1:
-                raise
-            cell.open_gripper(config.motion.open_time)
-            cell.move_to(Q_PARK)
-            cell.hold(config.regrasp.rest_time)  # the rod comes to rest on the table
-            state = retry.after_failure(state, exc.heavy_side_world, rod.length,
-                                        config.regrasp.retry_shift)  # fmt: skip
-    raise AssertionError("unreachable")

@@ -49,6 +49,8 @@ class CameraRig:
     Attributes:
         noise: the depth errors of each camera, by name (``DepthNoise``; none: the renders
             as they are). ``depth`` applies them; ``calibration_error`` gives the pose error.
+        shadows: cast the lights' shadows (off: a software renderer draws a frame about
+            four times faster, as a video needs; depth images do not depend on it).
     """
 
     def __init__(
@@ -57,11 +59,13 @@ class CameraRig:
         width: int = 640,
         height: int = 480,
         noise: dict[str, DepthNoise] | None = None,
+        shadows: bool = True,
     ):
         self.model = model
         self.width = width
         self.height = height
         self.noise = dict(noise or {})
+        self.shadows = shadows
         self._renderer = _take_renderer(model, width, height)
 
     def close(self) -> None:
@@ -93,6 +97,7 @@ class CameraRig:
         if segmentation:
             r.enable_segmentation_rendering()
         r.update_scene(data, camera)
+        r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = self.shadows  # renderers are shared
         image = r.render().copy()
         r.disable_depth_rendering()
         r.disable_segmentation_rendering()

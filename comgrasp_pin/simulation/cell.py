@@ -1,9 +1,9 @@
 """The simulated robot cell: ``procedures.cell.Cell`` on a MuJoCo ``World``.
 
 Skills come from ``simulation.skills``, eyes from ``simulation.eyes``; what the procedures
-announce is written on the video (when one is recorded) and marks the moment: the world's
-truth is kept for each announced phase (``snapshots``), for scoring only, never handed to
-the procedure.
+announce is written on the video (when one is recorded) and logged with its time
+(``phases``); the world's truth is kept for each announced phase and marked moment
+(``snapshots``), for scoring only, never handed to the procedure.
 """
 
 from __future__ import annotations
@@ -35,7 +35,8 @@ class SimCell:
 
     Attributes:
         world: the simulated world. robot: the arm's Pinocchio model.
-        snapshots: the truth at each announced phase (the latest of each).
+        snapshots: the truth at each announced phase or marked moment (the latest of each).
+        phases: (simulated time (s), phase) of each announcement, in order.
         recorder: an ``EpisodeRecorder`` whose caption follows the announced phases, or None.
     """
 
@@ -44,6 +45,7 @@ class SimCell:
         self._sim, self._rig = world.sim, world.rig
         self._motion, self._sensors = world.config.motion, world.config.sensors
         self.snapshots: dict[str, Snapshot] = {}
+        self.phases: list[tuple[float, str]] = []
         self.recorder = recorder
 
     @property
@@ -101,6 +103,10 @@ class SimCell:
         return self._sim.observing(watch)
 
     def announce(self, phase: str) -> None:
-        self.snapshots[phase] = Snapshot(self.world.truth(), self.world.grasp_offset_true())
+        self.mark(phase)
+        self.phases.append((self._sim.time, phase))
         if self.recorder is not None:
             self.recorder.caption = phase
+
+    def mark(self, moment: str) -> None:
+        self.snapshots[moment] = Snapshot(self.world.truth(), self.world.grasp_offset_true())

@@ -16,10 +16,13 @@ import numpy as np
 
 from comgrasp_pin.config import EpisodeConfig
 from comgrasp_pin.errors import IKError, InvalidInputError, PerceptionError, RodDroppedError
-from comgrasp_pin.procedures import pick_and_place
+from comgrasp_pin.geometry import invert_transform
+from comgrasp_pin.procedures import phases, pick_and_place
 from comgrasp_pin.procedures.measurement import TrialMeasurement
+from comgrasp_pin.procedures.phases import phase_of
 from comgrasp_pin.procedures.trial_grasp import MEASURED, trial_grasp
 from comgrasp_pin.simulation.cell import SimCell
+from comgrasp_pin.simulation.recorder import ComOnRod
 from comgrasp_pin.simulation.scene import Scene, World
 from comgrasp_pin.simulation.scoring import TrialScore, in_drop_box, score_trial, where_is
 
@@ -39,6 +42,20 @@ def measure_and_score(world: World, offset: float = 0.0) -> tuple[TrialMeasureme
     return trial, score(cell, trial)
 
 
+def estimate_on_rod(trial: TrialMeasurement | None, cell: SimCell) -> ComOnRod | None:
+    """The trial's CoM estimate fixed in the rod (its true frame when the rod was measured),
+    known from the end of the last measurement phase on; None without a trial."""
+    if trial is None or MEASURED not in cell.snapshots:
+        return None
+    p_world = trial.T_world_ee @ trial.T_ee_obj @ np.array([trial.x_com_obj, 0.0, 0.0, 1.0])
+    T_world_obj = cell.snapshots[MEASURED].truth.T_world_obj
+    p_obj = invert_transform(T_world_obj) @ p_world
+    kinds = [phase_of(c) for _, c in cell.phases]
+    last = max((k for k, kind in enumerate(kinds) if kind == phases.MEASURING), default=None)
+    since = cell.phases[last + 1][0] if last is not None and last + 1 < len(kinds) else np.inf
+    return ComOnRod(p_obj[:3], float(trial.x_com_std), float(since), T_world_obj.copy())
+
+
 @dataclass(frozen=True)
 class EpisodeResult:
     """Outcome of ``run_episode`` (frozen; ``row()`` flattens it for a CSV).
@@ -52,6 +69,8 @@ class EpisodeResult:
         final_grasp_offset: where the carrying grasp held the rod, from its centre (true, m).
         timings: wall-clock seconds per phase.
         sim_s: simulated seconds of the episode (from the world's construction on).
+        phases: (simulated time (s), announcement) of each phase the procedures announced
+            (``procedures.phases``), in order.
     """
 
     scene: Scene
@@ -64,6 +83,7 @@ class EpisodeResult:
     final_grasp_offset: float
     timings: dict
     sim_s: float = float("nan")
+    phases: tuple = ()
 
     def row(self) -> dict:
         t, s = self.trial, self.trial_score
@@ -95,19 +115,25 @@ def run_episode(
     config: EpisodeConfig | None = None,
     video: Path | None = None,
     viewer: bool = False,
+    rerun: Path | None = None,
 ) -> EpisodeResult:
     """One pick-and-place of ``obj`` on the scene drawn from ``seed`` (same seed, same
     scene and same sensor noise: the result is reproducible). ``video``: write an MP4 and a
     key-frame strip (PNG) of the episode there. ``viewer``: show it in MuJoCo's interactive
-    viewer (needs a display), in real time."""
+    viewer (needs a display), in real time. ``rerun``: write a Rerun recording (.rrd) there
+    (needs the ``rerun`` extra)."""
     if method not in METHODS:
         raise InvalidInputError(f"method must be one of {METHODS}, got {method!r}")
     if config is not None and not isinstance(config, EpisodeConfig):
         raise InvalidInputError(f"config must be an EpisodeConfig, got {type(config).__name__}")
     config = config or EpisodeConfig()
+    if rerun is not None:
+        from comgrasp_pin.simulation.rerun_log import RerunLog, import_rerun
+
+        import_rerun()  # MissingExtraError before anything is built
     scene = Scene.sample(obj, seed, pos_real)
     world = World(scene, config, seed)
-    recorder = None
+    recorder = rerun_log = None
     if viewer:
         from comgrasp_pin.simulation.viewer import LiveViewer
 
@@ -115,8 +141,11 @@ def run_episode(
     if video is not None:
         from comgrasp_pin.simulation.recorder import EpisodeRecorder
 
-        recorder = EpisodeRecorder(world.sim)
+        recorder = EpisodeRecorder(world.sim, world.truth)
         world.sim.observers.append(recorder)
+    if rerun is not None:
+        rerun_log = RerunLog(world.sim, rerun, world.truth)
+        world.sim.observers.append(rerun_log)
     cell = SimCell(world, recorder)
     timings: dict[str, float] = {}
     start = time.perf_counter()
@@ -140,17 +169,26 @@ def run_episode(
             )
         if pick_and_place.CARRYING in cell.snapshots:
             final_offset = cell.snapshots[pick_and_place.CARRYING].grasp_offset
+        if recorder is not None or rerun_log is not None:
+            trial = grasped.trial if grasped is not None else None
+            estimate = estimate_on_rod(trial, cell)
         if recorder is not None:
             video.parent.mkdir(parents=True, exist_ok=True)
+            recorder.finish(estimate, cell.phases)
             recorder.write_video(video)
-            recorder.write_strip(video.with_suffix(".png"))
+            title = f"{obj}, seed {seed}, {method}: {'delivered' if success else 'not delivered'}"
+            recorder.write_strip(video.with_suffix(".png"), title=title)
+        if rerun_log is not None:
+            rerun_log.finish(estimate, cell.phases, trial)
     finally:
         sim_s = world.sim.time
-        if recorder is not None:
-            recorder.close()
+        for observer in (recorder, rerun_log):
+            if observer is not None:
+                observer.close()
         world.close()
     timings["total"] = time.perf_counter() - start - sum(timings.values())
     trial = grasped.trial if grasped is not None else None
     trial_score = score(cell, trial) if trial is not None else None
     return EpisodeResult(scene, method, success, grasped is not None and grasped.regrasped,
-                         reason, trial, trial_score, final_offset, timings, sim_s)  # fmt: skip
+                         reason, trial, trial_score, final_offset, timings, sim_s,
+                         tuple(cell.phases))  # fmt: skip
