@@ -59,6 +59,9 @@ class TrialConfig:
             reading's friction then cancels; ``procedures.torques.arrive``); 0: straight.
         window_sem, window_max: average on until every joint's measured standard error is
             below this (N m; 0: the fixed ``window``), the window at most this long (s).
+        look_attempts, look_period: a side view refused as untrusted (a real camera's
+            noise and holes, ``UntrustedImageError``) is taken again, this many frames in
+            all, this far apart (s; a camera's frame period).
         torque_std_from: the averaged readings' std for the estimator: "spec" (the
             sensor's white noise over the samples) or "measured" (their spread, and the
             sensor's drift over the time between the empty and the held window;
@@ -92,6 +95,8 @@ class TrialConfig:
     window_sem: float = 0.0
     window_max: float = 4.0
     torque_std_from: str = "spec"
+    look_attempts: int = 5
+    look_period: float = 1.0 / 30.0
 
     def __post_init__(self) -> None:
         if self.torque_std_from not in ("spec", "measured"):

@@ -24,11 +24,12 @@ from comgrasp_pin.errors import (
     PerceptionError,
     RodDroppedError,
     RodSlippedError,
+    UntrustedImageError,
 )
 from comgrasp_pin.estimation.pose_planning import best_next_pose
 from comgrasp_pin.geometry import GraspPose, rotation_angle
 from comgrasp_pin.motion.ik import grasp_frame, solve_ik, solve_top_down
-from comgrasp_pin.perception import RodDetection
+from comgrasp_pin.perception import RodDetection, SideView
 from comgrasp_pin.planning.regrasp import needs_another_pose
 from comgrasp_pin.planning.retry import heavy_side_from_tilt
 from comgrasp_pin.procedures import phases, torques
@@ -131,22 +132,36 @@ def grasp_and_lift(
         cell.move_linear(T_up, trial.lift_time)
 
 
+def look(cell: Cell, q: np.ndarray, plan: _Plan, trial) -> SideView:
+    """The side view at ``q``; a frame refused as untrusted (a real camera's noise and holes
+    where the handle's surface is fitted) is taken again, ``look_attempts`` frames in all,
+    ``look_period`` s apart: each frame's noise is its own."""
+    for attempt in range(trial.look_attempts):
+        try:
+            return cell.look_from_side(q, plan.detection.length, plan.centre_hint)
+        except UntrustedImageError:
+            if attempt == trial.look_attempts - 1:
+                raise
+            cell.hold(trial.look_period)
+    raise AssertionError("unreachable")
+
+
 def _measure_window(cell: Cell, plan: _Plan, config: EpisodeConfig):
     """Settle, look, average the torques, look again: the measurement, the rod where it
     was on average meanwhile (``mid_window_view``, its creep kept) and None, or the
     measurement, None and the end view's PerceptionError. A window must be static: while
     the rod turned in the jaws by more than ``still_turn_deg`` during it, measure again
     (at most ``still_attempts`` windows)."""
-    trial, length, hint = config.trial, plan.detection.length, plan.centre_hint
+    trial = config.trial
     for _ in range(trial.still_attempts):
         cell.hold(trial.settle)
         try:
-            start = cell.look_from_side(cell.q_des, length, hint)
+            start = look(cell, cell.q_des, plan, trial)
         except PerceptionError:
             start = None
         measured = torques.measure(cell, 0.0, trial)
         try:
-            view = mid_window_view(start, cell.look_from_side(measured.q, length, hint))
+            view = mid_window_view(start, look(cell, measured.q, plan, trial))
         except PerceptionError as exc:
             return measured, None, exc
         if view.creep is None or rotation_angle(view.creep) <= np.radians(trial.still_turn_deg):
@@ -216,7 +231,7 @@ def measure_another_pose(
     torques.arrive(cell, q, trial, duration=trial.roll_time)
     after = torques.measure(cell, trial.settle, trial)
     try:
-        view = cell.look_from_side(after.q, plan.detection.length, plan.centre_hint)
+        view = look(cell, after.q, plan, trial)
     except PerceptionError:
         view = None
     cell.move_to(plan.poses[0], duration=trial.roll_time)
