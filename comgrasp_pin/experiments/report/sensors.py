@@ -37,17 +37,11 @@ def _rate_cell(successes: int, n: int) -> str:
     return f"{100 * successes / n:.1f} [{100 * lo:.0f}, {100 * hi:.0f}] ({successes}/{n})"
 
 
-def _measures(acc: Sequence[dict], reg: Sequence[dict]) -> dict[str, str]:
-    objects = paper_objects()
-    acc, reg = _select(acc, objects), _select(reg, objects)
+def _accuracy_measures(acc: Sequence[dict]) -> dict[str, str]:
+    acc = _select(acc, paper_objects())
     ok = _ok(acc)
     low = _abs_theta(ok) < UP_TO_DEG
     cal = calibration(calibration_z(ok))
-    rates = success_rates(reg)
-
-    def total(method: str) -> tuple[int, int]:
-        return tuple(sum(rates.get((o, method), (0, 0))[i] for o in objects) for i in (0, 1))
-
     return {
         f"mean accuracy below {UP_TO_DEG:g}°, ours (%)": _mean_cell(_column(ok, "accuracy")[low]),
         f"mean accuracy below {UP_TO_DEG:g}°, the paper's method (%)": _mean_cell(
@@ -59,6 +53,18 @@ def _measures(acc: Sequence[dict], reg: Sequence[dict]) -> dict[str, str]:
         "95 % interval covers the truth (%)": _rate_cell(cal.inside95, cal.n),
         "rms z (1 when the error bars are right)": f"{cal.rms:.2f}" if cal.n else "–",
         "accuracy grasps refused or failed": f"{len(acc) - len(ok)} of {len(acc)}",
+    }
+
+
+def _measures(acc: Sequence[dict], reg: Sequence[dict]) -> dict[str, str]:
+    objects = paper_objects()
+    rates = success_rates(_select(reg, objects))
+
+    def total(method: str) -> tuple[int, int]:
+        return tuple(sum(rates.get((o, method), (0, 0))[i] for o in objects) for i in (0, 1))
+
+    return {
+        **_accuracy_measures(acc),
         "pick-and-place, regrasp planner (%)": _rate_cell(*total("regrasp")),
         "pick-and-place, geometric-centre baseline (%)": _rate_cell(*total("baseline")),
     }
@@ -84,3 +90,50 @@ def sensors_comparison(
         for kind in sorted(set(kinds) | set(ideal_kinds)):
             lines.append(f"| {kind} | {kinds.get(kind, 0)} | {ideal_kinds.get(kind, 0)} |")
     return "\n".join(lines)
+
+
+def sources_table(runs: dict[str, Sequence[dict]]) -> str:
+    """Markdown: one row per sensor preset (``runs``: preset name -> its accuracy rows, the
+    same grasps), the accuracy measures on the paper's objects as columns."""
+    measures = {name: _accuracy_measures(rows) for name, rows in runs.items()}
+    columns = list(next(iter(measures.values())))
+    lines = ["| sensors | " + " | ".join(columns) + " |", "|---" * (len(columns) + 1) + "|"]
+    for name, m in measures.items():
+        lines.append(f"| {name} | " + " | ".join(m[c] for c in columns) + " |")
+    return "\n".join(lines)
+
+
+def sources_figure(runs: dict[str, Sequence[dict]], path) -> None:
+    """PNG: mean accuracy below 30 deg per sensor preset (ours and the paper's method, 95 %
+    t intervals), the share of grasps refused or failed written on each bar."""
+    from comgrasp_pin.experiments.report.common import C_LINE, C_OURS, _pyplot
+
+    plt = _pyplot()
+    names = list(runs)
+    fig, ax = plt.subplots(figsize=(8.5, 4.2), layout="constrained")
+    for k, (column, colour, label) in enumerate(
+        (("accuracy", C_OURS, "ours"), ("accuracy_line", C_LINE, "the paper's method"))
+    ):
+        stats = []
+        for name in names:
+            ok = _ok(_select(runs[name], paper_objects()))
+            values = 100 * _column(ok, column)[_abs_theta(ok) < UP_TO_DEG]
+            stats.append(mean_ci(values[np.isfinite(values)]))
+        x = np.arange(len(names)) + (k - 0.5) * 0.38
+        means = np.array([c.mean for c in stats])
+        err = np.array([[c.mean - c.lo, c.hi - c.mean] for c in stats]).T
+        ax.bar(x, means, 0.36, color=colour, label=label,
+               yerr=np.nan_to_num(np.clip(err, 0, None)), capsize=3)  # fmt: skip
+    for i, name in enumerate(names):
+        rows = _select(runs[name], paper_objects())
+        failed = len(rows) - len(_ok(rows))
+        ax.text(i, 80.5, f"{failed}/{len(rows)}\nrefused", ha="center", fontsize=8)
+    ax.set_xticks(np.arange(len(names)), [n.replace("ideal+", "+") for n in names],
+                  rotation=25, ha="right")  # fmt: skip
+    ax.set_ylim(80, 101)
+    ax.set_ylabel(f"mean accuracy, tilt below {UP_TO_DEG:g}° (%)")
+    ax.set_title("Each realistic error source alone on ideal sensors (paper's objects)")
+    ax.grid(axis="y", alpha=0.3)
+    ax.legend(loc="lower right")
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
