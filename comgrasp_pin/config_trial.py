@@ -62,6 +62,9 @@ class TrialConfig:
         look_attempts, look_period: a side view refused as untrusted (a real camera's
             noise and holes, ``UntrustedImageError``) is taken again, this many frames in
             all, this far apart (s; a camera's frame period).
+        put_back_margin, put_back_time: a rod the side camera cannot measure is laid back
+            where it was grasped, let go this far above the table at its lower end (m),
+            after lowering for this long (s) (``procedures.put_back``).
         torque_std_from: the averaged readings' std for the estimator: "spec" (the
             sensor's white noise over the samples) or "measured" (their spread, and the
             sensor's drift over the time between the empty and the held window;
@@ -96,6 +99,8 @@ class TrialConfig:
     window_max: float = 4.0
     torque_std_from: str = "spec"
     look_attempts: int = 5
+    put_back_margin: float = 0.01
+    put_back_time: float = 2.0
     look_period: float = 1.0 / 30.0
 
     def __post_init__(self) -> None:

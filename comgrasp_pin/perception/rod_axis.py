@@ -18,7 +18,9 @@ MAX_REFINE_TURN_DEG = 8.0  # a cylinder this far from the slice line locked on a
 MAX_REFINE_SHIFT = 0.01  # the same, for its offset (m)
 RADIUS_GIVE = np.arange(0.25, 2.01, 0.25) * 1e-3  # the handle's radius above the fingers' (m)
 FIT_ITERATIONS = 8  # Levenberg-Marquardt steps of the cylinder fit, each refitting the inliers
-FIT_STEPS = (1e-6, 1e-7, 1e-7)  # finite-difference steps of angle (rad), offset, radius (m)
+FIT_STEPS = (1e-6, 1e-7, 1e-7, 1e-7)  # finite-difference steps: angle (rad), offset, radius,
+# y offset (m)
+MAX_Y_SHIFT = 0.003  # a camera's calibration error may move the handle's axis this far in y (m)
 FIT_DAMPING = (1e-6, 1e-3, 1e-1, 1.0)  # damping tried in turn until the cost falls
 FIT_OUTLIER_MARGIN = 0.002  # inliers: within 3 median residuals plus this (m)
 
@@ -76,19 +78,26 @@ def _slope_std(c: np.ndarray, slope: float, intercept: float) -> float:
 def _cylinder_residuals(prm: np.ndarray, pts: np.ndarray) -> np.ndarray:
     """Distance (m) of the points (N, 3) from the axis of the cylinder ``prm``, less its radius.
 
-    ``prm``: axis angle in the x-z plane (rad), its offset along the normal (m), radius (m).
-    The arithmetic of ``np.linalg.norm(rel - np.outer(rel @ u, u), axis=1)`` (the same
-    results to the bit), without its copies.
+    ``prm``: axis angle in the x-z plane (rad), its offset along the normal (m), radius (m),
+    and, when given, the axis' offset along y (m). The arithmetic of
+    ``np.linalg.norm(rel - np.outer(rel @ u, u), axis=1)`` (the same results to the bit),
+    without its copies.
     """
     c, s = np.cos(prm[0]), np.sin(prm[0])
     u = np.array([c, 0.0, s])
     rel = pts - prm[1] * np.array([-s, 0.0, c])
+    if len(prm) > 3:
+        rel = rel - np.array([0.0, prm[3], 0.0])
     d = rel - np.multiply.outer(rel @ u, u)
     return np.sqrt(np.add.reduce(d * d, axis=1)) - prm[2]
 
 
 def fit_cylinder(
-    points: np.ndarray, direction: np.ndarray, point: np.ndarray, radius: float | None = None
+    points: np.ndarray,
+    direction: np.ndarray,
+    point: np.ndarray,
+    radius: float | None = None,
+    free_y: bool = False,
 ) -> tuple[np.ndarray, np.ndarray, float]:
     """Refine the axis (in the plane y = 0) by fitting a cylinder to the visible surface.
 
@@ -96,7 +105,9 @@ def fit_cylinder(
     the camera; the slice centres inherit that offset, which changes along a tilted rod
     and biases the tilt. Fitting |(p - a) x u| = r (axis angle, its offset, radius r) by
     Gauss-Newton, with points far off the cylinder (heads, weights) left out, removes it.
-    ``radius`` (m), when known (half the jaws' opening), is held fixed.
+    ``radius`` (m), when known (half the jaws' opening), is held fixed. ``free_y``: the axis
+    may lie off y = 0 (a camera whose calibrated pose is off moves all the points; the jaws
+    still hold the rod at y = 0, so only its x-z line is kept).
     Returns (direction (2,), point nearest the TCP (2,)) in the x-z plane, and the median
     distance of the points from the cylinder (m).
     """
@@ -105,24 +116,25 @@ def fit_cylinder(
     points = points[:: max(1, len(points) // MAX_FIT_POINTS)]
     angle = np.arctan2(direction[1], direction[0])
     normal = np.array([-direction[1], direction[0]])
-    params = np.array([angle, point @ normal, 0.0])
+    params = np.array([angle, point @ normal, 0.0, 0.0] if free_y else [angle, point @ normal, 0.0])
     params[2] = np.median(_cylinder_residuals(params, points)) if radius is None else radius
-    free = 2 if radius is not None else 3
+    free = [0, 1] + ([] if radius is not None else [2]) + ([3] if free_y else [])
     keep = np.ones(len(points), dtype=bool)
     for _ in range(FIT_ITERATIONS):
         kept = points[keep]
         res = _cylinder_residuals(params, kept)
-        jac = np.empty((len(res), free))
-        for k, h in enumerate(FIT_STEPS[:free]):
-            step = np.zeros(3)
-            step[k] = h
-            jac[:, k] = (_cylinder_residuals(params + step, kept) - res) / h
+        jac = np.empty((len(res), len(free)))
+        for k, i in enumerate(free):
+            step = np.zeros(len(params))
+            step[i] = FIT_STEPS[i]
+            jac[:, k] = (_cylinder_residuals(params + step, kept) - res) / FIT_STEPS[i]
         # Levenberg-Marquardt step: damped, accepted only if it lowers the cost.
         jtj, jtr = jac.T @ jac, jac.T @ res
         cost = np.sum(res**2)
         for damping in FIT_DAMPING:
             delta = np.linalg.solve(jtj + damping * np.diag(np.diag(jtj)), jtr)
-            trial = params - np.r_[delta, np.zeros(3 - free)]
+            trial = params.copy()
+            trial[free] -= delta
             if np.sum(_cylinder_residuals(trial, kept) ** 2) < cost:
                 params = trial
                 break
@@ -132,6 +144,8 @@ def fit_cylinder(
     if u[0] < 0:
         u = -u
     n = np.array([-np.sin(params[0]), np.cos(params[0])])
+    if free_y and abs(params[3]) > MAX_Y_SHIFT:
+        return u, params[1] * n, float("inf")  # more than a calibration error: no fit
     return u, params[1] * n, float(np.median(res_all))
 
 
@@ -159,6 +173,10 @@ def refine_axis(
     x_fit, offset_fit, misfit = min(fits, key=lambda fit: fit[2])
     limit = max(MAX_MISFIT, MAX_MISFIT_PER_RADIUS * radius) if radius else MAX_MISFIT
     limit = max(limit, MISFIT_NOISE * noise)
+    if radius and misfit >= limit:  # the camera's pose may be off: the axis off y = 0
+        x_fit, offset_fit, misfit = min(
+            (fit_cylinder(points, direction, point, radius + dr, free_y=True)
+             for dr in (0.0, *RADIUS_GIVE)), key=lambda fit: fit[2])  # fmt: skip
     near = (
         x_fit @ direction > np.cos(np.radians(MAX_REFINE_TURN_DEG))
         and np.linalg.norm(offset_fit - point) < MAX_REFINE_SHIFT

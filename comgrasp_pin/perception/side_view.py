@@ -146,6 +146,7 @@ def observe_held_rod(
     exclude_capsules: Sequence[tuple[np.ndarray, np.ndarray, float]] = (),
     centre_hint: float | None = None,
     handle_radius: float | None = None,
+    tilt_only: bool = False,
 ) -> SideView:
     """Locate the rod held in the jaws in a side-camera RGBD frame.
 
@@ -168,6 +169,9 @@ def observe_held_rod(
             the rod is seen whole: the rod turns in the jaws, it hardly slides along them.
         handle_radius: half the jaws' opening where they hold the rod (m), from the
             fingers' joint reading; fixes the radius of the fitted cylinder.
+        tilt_only: for a slip watch, which looks for turns of degrees: a noisy image whose
+            handle no cylinder fits gives the slice line's tilt (1-3 deg off at most)
+            instead of an UntrustedImageError.
 
     Raises:
         ObjectNotFoundError, ObjectCutByBorderError, InvalidDepthError, UntrustedImageError
@@ -210,7 +214,7 @@ def observe_held_rod(
     if handle.sum() >= MIN_PIXELS:
         refined = refine_axis(points[handle], x_axis, offset_xz, handle_radius, noise)
         unrefined = refined[0] is x_axis  # refine_axis hands the slice line back as it was
-        if cleaned and unrefined:
+        if cleaned and unrefined and not tilt_only:
             raise UntrustedImageError(
                 "no cylinder fits the held handle's points in this image with holes or noise, "
                 "and the slice centres alone bias the tilt by up to 1-3 deg (measured): a "

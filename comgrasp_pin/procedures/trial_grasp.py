@@ -35,6 +35,7 @@ from comgrasp_pin.planning.retry import heavy_side_from_tilt
 from comgrasp_pin.procedures import phases, torques
 from comgrasp_pin.procedures.cell import Cell, SlipWatch, TorqueMeasurement
 from comgrasp_pin.procedures.measurement import HeldReadings, TrialMeasurement, locate_com
+from comgrasp_pin.procedures.put_back import put_back
 from comgrasp_pin.procedures.rod_motion import mid_window_view
 from comgrasp_pin.workcell import Q_PARK
 
@@ -258,7 +259,12 @@ def trial_grasp(
     watch = cell.slip_watch(config.sensors.watch_dt, config.motion.grip_force, detection.length,
                             plan.centre_hint)  # fmt: skip
     grasp_and_lift(cell, plan, watch, careful, config)
-    held = measure_held(cell, plan, watch, before, config)
+    try:
+        held = measure_held(cell, plan, watch, before, config)
+    except UntrustedImageError as exc:
+        put_back(cell, plan.grasp, detection.length, plan.centre_hint, watch, config)
+        raise RodSlippedError(f"the side camera cannot measure the held rod ({exc}); it was "
+                              "laid back", _heavy_side(watch, plan, config)) from exc  # fmt: skip
     try:
         loc = locate_com(cell.robot, held, config)
         extra = needs_another_pose(loc.std, loc.estimate.mass, config.motion.grip_force,

@@ -54,6 +54,7 @@ def look_from_side(
     centre_hint: float | None = None,
     finger_q: float | None = None,
     stride: int = 1,
+    tilt_only: bool = False,
 ) -> SideView:
     """The held rod's pose in the ee frame, from the side camera at joint reading ``q``
     (``rod_length`` and ``centre_hint`` from the top view help when the rod leaves the
@@ -61,7 +62,7 @@ def look_from_side(
     rendered. ``finger_q``: the fingers' joint
     reading (m), which gives the held handle's radius. ``stride`` > 1 measures on every
     stride-th pixel of each row and column (stride^2 times fewer points: the slip monitor's
-    frames, which need the tilt only)."""
+    frames, which need the tilt only; ``tilt_only``: see ``observe_held_rod``)."""
     radius = None if finger_q is None else handle_radius(finger_q)
     if radius is not None and radius <= 0:
         raise ObjectNotFoundError("the jaws are closed on nothing: no rod is held")
@@ -71,7 +72,7 @@ def look_from_side(
     depth = rig.depth(data, SIDE_CAMERA)[::stride, ::stride]
     return observe_held_rod(None, depth, camera, T_ee_cam, T_world_ee,
                             TABLE_Z, rod_length, arm_capsules(robot, q), centre_hint,
-                            radius)  # fmt: skip
+                            radius, tilt_only)  # fmt: skip
 
 
 def handle_radius(finger_q: float) -> float:
@@ -121,7 +122,7 @@ class SlipWatcher:
         try:
             view = look_from_side(self.rig, sim.data, self.robot, sim.q, self.rod_length,
                                   self.centre_hint, sim.finger_q[0],
-                                  stride=self.stride)  # fmt: skip
+                                  stride=self.stride, tilt_only=True)  # fmt: skip
         except PerceptionError:
             self.failed_frames += 1
             return
