@@ -124,10 +124,10 @@ def hardware_trial(trial: TrialConfig) -> TrialConfig:
     Each measurement pose reached by way of the pose plus 1 deg in every joint, the last
     1 s (at up to 0.03 rad/s every joint moves above a drive's stiction speed, and comes to
     rest moving the same way before and after the grasp; 3 deg in 0.5 s shook near-slip
-    grasps: of 18 accuracy grasps 3 fell and 6 turned by 20-60 deg more than without); windows averaged on until each
-    joint's measured standard error is below 3 mN m, 4 s at most (a 0.1 N m current
-    reading at 500 Hz needs 2.2 s; a 0.05 N m torque sensor's 1 s is enough); the
-    estimator's noise from the windows' spread and the sensor's drift.
+    grasps: of 18 accuracy grasps 3 fell and 6 turned by 20-60 deg more than without);
+    windows averaged on until each joint's measured standard error is below 3 mN m, 4 s at
+    most (a 0.1 N m current reading at 500 Hz needs 2.2 s; a 0.05 N m torque sensor's 1 s
+    is enough); the estimator's noise from the windows' spread and the sensor's drift.
     """
     return replace(trial, approach_deg=1.0, approach_time=1.0, window_sem=0.003,
                    window_max=4.0, torque_std_from="measured")  # fmt: skip
