@@ -41,3 +41,19 @@ def test_side_by_side_measures_by_hand():
     assert "(1/2)" in rows["pick-and-place, geometric-centre baseline (%)"][0]
     assert rows["UntrustedImageError"] == ["1", "0 |"]  # (the last cell keeps its bar)
     assert rows["AmbiguousObjectError"][0] == "1"
+
+
+def test_the_sources_table_and_figure(tmp_path):
+    """One row per preset, the same measures as the comparison; a figure a person reads."""
+    from comgrasp_pin.experiments.report.sensors import sources_figure, sources_table
+
+    runs = {"ideal": [_acc("obj1", 10.0, 0.99, 0.98, 0.5), _acc("obj2", 5.0, 0.97, 0.95, 1.0)],
+            "ideal+torque_drift": [_acc("obj1", 10.0, 0.95, 0.94, 0.2),
+                                   {**_acc("obj2", 0, "", "", 0), "error": "X: y"}]}  # fmt: skip
+    lines = sources_table(runs).splitlines()
+    assert lines[0].startswith("| sensors | mean accuracy below 30°, ours (%)")
+    assert lines[2].startswith("| ideal | 98.0 ") and lines[2].endswith("| 0 of 2 |")
+    assert lines[3].startswith("| ideal+torque_drift | 95.0 (n 1) ") and "1 of 2" in lines[3]
+    path = tmp_path / "sources.png"
+    sources_figure(runs, path)
+    assert path.stat().st_size > 10_000
