@@ -96,11 +96,17 @@ def test_the_objects_table_matches_the_code():
         assert abs(float(cells[8]) - 100 * (1 - 5 * holds / (1e3 * o.length))) <= 0.5
 
 
-def test_the_accuracy_table_matches_docs_results():
-    """The README's per-bin numbers against docs/results/accuracy.csv, recomputed here."""
-    rows = _table("### Results at the paper's size", "tilt in the jaws, 0–90° from level")
+@pytest.mark.parametrize(
+    "heading, run",
+    [("### Results at the paper's size, realistic sensors", "."),
+     ("### The same with ideal sensors", "ideal")],
+)  # fmt: skip
+def test_the_accuracy_table_matches_docs_results(heading, run):
+    """The README's per-bin numbers against docs/results[/ideal]/accuracy.csv, recomputed
+    here."""
+    rows = _table(heading, "tilt in the jaws, 0–90° from level")
     by_name = {r[0]: r[1:] for r in rows}
-    with open(RESULTS / "accuracy.csv", newline="") as f:
+    with open(RESULTS / run / "accuracy.csv", newline="") as f:
         csv_rows = [r for r in csv.DictReader(f) if r["object"] in PAPER_OBJECTS]
     good = [r for r in csv_rows if not r["error"]]
     tilt = np.abs([float(r["theta_deg"]) for r in good])
