@@ -132,8 +132,8 @@ def sources_figure(runs: dict[str, Sequence[dict]], path) -> None:
                   rotation=25, ha="right")  # fmt: skip
     ax.set_ylim(80, 101)
     ax.set_ylabel(f"mean accuracy, tilt below {UP_TO_DEG:g}° (%)")
-    ax.set_title("Each realistic error source alone on ideal sensors (paper's objects)")
+    ax.set_title("Each realistic error source alone on ideal sensors (paper's objects)", pad=24)
     ax.grid(axis="y", alpha=0.3)
-    ax.legend(loc="lower right")
+    ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=2, frameon=False)
     fig.savefig(path, dpi=90)
     plt.close(fig)
