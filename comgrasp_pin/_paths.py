@@ -63,3 +63,23 @@ def example_robot_urdf(relative: str) -> Path:
     if not path.exists():
         raise MissingAssetError(f"no such example-robot-data file: {path}")
     return path
+
+
+def results_dir() -> Path:
+    """The paper-size runs committed with the repository (``docs/results``), for the notebooks.
+
+    ``COMGRASP_RESULTS`` when set; else ``docs/results`` beside the package (a source checkout
+    or an editable install), or above or in the current folder (a notebook opened in the
+    repository's ``notebooks/``, the package installed from it). A wheel does not carry them.
+    """
+    import os
+
+    if os.environ.get("COMGRASP_RESULTS"):
+        return Path(os.environ["COMGRASP_RESULTS"])
+    for root in (_PACKAGE.parent, Path.cwd().parent, Path.cwd()):
+        if (root / "docs" / "results" / "accuracy.csv").exists():
+            return root / "docs" / "results"
+    raise MissingAssetError(
+        "docs/results (the committed paper-size runs) not found beside the package nor from "
+        f"the current folder {Path.cwd()}; set COMGRASP_RESULTS to its path"
+    )

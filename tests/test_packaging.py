@@ -144,3 +144,16 @@ def test_wheel_carries_every_module(wheel):
     modules = {f for f in _repo_files() if f.startswith("comgrasp_pin/") and f.endswith(".py")}
     missing = modules - set(wheel.namelist())
     assert not missing, sorted(missing)
+
+
+def test_the_notebooks_find_the_committed_results(monkeypatch, tmp_path):
+    """results_dir: COMGRASP_RESULTS when set; from the repository's notebooks/ folder
+    otherwise, installed in place or not (CI installs the package into site-packages)."""
+    from comgrasp_pin._paths import results_dir
+
+    repo = Path(__file__).resolve().parents[1]
+    monkeypatch.setenv("COMGRASP_RESULTS", str(tmp_path))
+    assert results_dir() == tmp_path
+    monkeypatch.delenv("COMGRASP_RESULTS")
+    monkeypatch.chdir(repo / "notebooks")
+    assert results_dir().resolve() == (repo / "docs" / "results").resolve()
