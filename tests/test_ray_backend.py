@@ -67,7 +67,9 @@ def test_a_killed_worker_and_an_exception_are_failed_trials_and_can_be_retried(t
 
 
 def _slow_value(task: dict) -> dict:
-    time.sleep(0.5)
+    # long enough for Ray to start its second worker on a loaded machine (0.5 s was not:
+    # both tasks went to the first worker while the second was still starting)
+    time.sleep(2.0)
     return _value(task)
 
 
