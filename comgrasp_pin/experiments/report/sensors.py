@@ -110,13 +110,14 @@ def sources_figure(runs: dict[str, Sequence[dict]], path) -> None:
 
     plt = _pyplot()
     names = list(runs)
+    selected = {name: _select(runs[name], paper_objects()) for name in names}
     fig, ax = plt.subplots(figsize=(8.5, 4.2), layout="constrained")
     for k, (column, colour, label) in enumerate(
         (("accuracy", C_OURS, "ours"), ("accuracy_line", C_LINE, "the paper's method"))
     ):
         stats = []
         for name in names:
-            ok = _ok(_select(runs[name], paper_objects()))
+            ok = _ok(selected[name])
             values = 100 * _column(ok, column)[_abs_theta(ok) < UP_TO_DEG]
             stats.append(mean_ci(values[np.isfinite(values)]))
         x = np.arange(len(names)) + (k - 0.5) * 0.38
@@ -125,7 +126,7 @@ def sources_figure(runs: dict[str, Sequence[dict]], path) -> None:
         ax.bar(x, means, 0.36, color=colour, label=label,
                yerr=np.nan_to_num(np.clip(err, 0, None)), capsize=3)  # fmt: skip
     for i, name in enumerate(names):
-        rows = _select(runs[name], paper_objects())
+        rows = selected[name]
         failed = len(rows) - len(_ok(rows))
         ax.text(i, 80.5, f"{failed}/{len(rows)}\nrefused", ha="center", fontsize=8)
     ax.set_xticks(np.arange(len(names)), [n.replace("ideal+", "+") for n in names],
