@@ -152,6 +152,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--objects", default="obj1,obj2")
     parser.add_argument("--trials", type=int, default=1)
+    parser.add_argument("--sensors", default="ideal", help="sensor preset (config_sensors)")
     parser.add_argument("--out", default=str(Path(__file__).parent / "results" /
                                              "episode_phases.json"))  # fmt: skip
     args = parser.parse_args()
@@ -160,14 +161,18 @@ def main() -> None:
     overhead = _overhead_us(profile)
     profile.install()
     accuracy_trial(make_tasks(objects[:1], 1, 99, ("trial",))[0])  # warm-up: imports, renderer
-    accuracy = [_episode(profile, accuracy_trial, t)
-                for t in make_tasks(objects, args.trials, 0, ("trial",))]  # fmt: skip
-    regrasp = [_episode(profile, regrasp_trial, t)
-               for t in make_tasks(objects, args.trials, 0, ("regrasp",))]  # fmt: skip
+
+    def tasks(method: str) -> list[dict]:
+        return [{**t, "sensors": args.sensors}
+                for t in make_tasks(objects, args.trials, 0, (method,))]  # fmt: skip
+
+    accuracy = [_episode(profile, accuracy_trial, t) for t in tasks("trial")]
+    regrasp = [_episode(profile, regrasp_trial, t) for t in tasks("regrasp")]
     result = {
         "accuracy_trial": _mean(accuracy),
         "regrasp_episode": _mean(regrasp),
         "episodes": {"accuracy": accuracy, "regrasp": regrasp},
+        "sensors": args.sensors,
         "timer_overhead_us": overhead,
         "environment": {"cpus": os.cpu_count(), "load_avg_1min": os.getloadavg()[0],
                         "mujoco": mujoco.__version__,

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import warnings
-
 import cv2
 import numpy as np
 
@@ -142,19 +140,25 @@ def drop_flying(depth: np.ndarray, tolerance: float) -> np.ndarray:
     between its neighbours and agrees with none: some are nearer and some farther by more
     than ``tolerance`` (m), and none is within it. A pixel of a surface agrees with some
     neighbour; one at an edge whose own side was lost is not between. Lost pixels (0, inf)
-    stay lost and are no one's neighbours.
+    stay lost and are no one's neighbours: they count as infinitely far for the nearest
+    neighbour and infinitely near for the farthest (minima and maxima are exact, so this is
+    the NaN-aware reduction over the 8 neighbours, without stacking them).
     """
     valid = np.isfinite(depth) & (depth > 0)
-    padded = np.pad(np.where(valid, depth, np.nan), 1, constant_values=np.nan)
     h, w = depth.shape
-    shifts = [(dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if dy or dx]
-    stack = np.stack([padded[1 + dy : 1 + dy + h, 1 + dx : 1 + dx + w] for dy, dx in shifts])
-    with np.errstate(invalid="ignore"), warnings.catch_warnings():
-        warnings.simplefilter("ignore", RuntimeWarning)  # pixels with no valid neighbour
-        d = np.where(valid, depth, np.nan)
-        near, far = np.nanmin(stack, axis=0), np.nanmax(stack, axis=0)
-        closest = np.nanmin(np.abs(stack - d), axis=0)
-    flying = (d - near > tolerance) & (far - d > tolerance) & (closest > tolerance)
+    d = np.where(valid, depth, np.nan)
+    for_min = np.pad(np.where(valid, depth, np.inf), 1, constant_values=np.inf)
+    for_max = np.pad(np.where(valid, depth, -np.inf), 1, constant_values=-np.inf)
+    near, far, closest = np.full((h, w), np.inf), np.full((h, w), -np.inf), np.full((h, w), np.inf)
+    gap = np.empty((h, w))
+    with np.errstate(invalid="ignore"):  # inf - inf where a lost pixel meets a lost neighbour
+        for dy, dx in ((dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if dy or dx):
+            neighbour = for_min[1 + dy : 1 + dy + h, 1 + dx : 1 + dx + w]
+            np.minimum(near, neighbour, out=near)
+            np.maximum(far, for_max[1 + dy : 1 + dy + h, 1 + dx : 1 + dx + w], out=far)
+            np.abs(np.subtract(neighbour, d, out=gap), out=gap)
+            np.fmin(closest, gap, out=closest)
+        flying = (d - near > tolerance) & (far - d > tolerance) & (closest > tolerance)
     out = depth.copy()
     out[valid & flying] = 0.0
     return out

@@ -75,21 +75,37 @@ def _slope_std(c: np.ndarray, slope: float, intercept: float) -> float:
     return float(np.sqrt(np.sum(residual**2) / (k - 2) / spread))
 
 
-def _cylinder_residuals(prm: np.ndarray, pts: np.ndarray) -> np.ndarray:
+def _cylinder_residuals(
+    prm: np.ndarray, pts: np.ndarray, y2: np.ndarray | None = None
+) -> np.ndarray:
     """Distance (m) of the points (N, 3) from the axis of the cylinder ``prm``, less its radius.
 
     ``prm``: axis angle in the x-z plane (rad), its offset along the normal (m), radius (m),
-    and, when given, the axis' offset along y (m). The arithmetic of
-    ``np.linalg.norm(rel - np.outer(rel @ u, u), axis=1)`` (the same results to the bit),
-    without its copies.
+    and, when given, the axis' offset along y (m). ``y2``: the points' y squared, which the
+    axis does not change without a y offset (``fit_cylinder`` computes it once per fit).
+    The arithmetic of ``np.linalg.norm(rel - np.outer(rel @ u, u), axis=1)``, operation for
+    operation (the same results to the bit, tests/test_fast_paths.py), on the x and z columns
+    only: the axis has no y component, so the y column of that difference is the points'
+    own y.
     """
     c, s = np.cos(prm[0]), np.sin(prm[0])
     u = np.array([c, 0.0, s])
     rel = pts - prm[1] * np.array([-s, 0.0, c])
     if len(prm) > 3:
-        rel = rel - np.array([0.0, prm[3], 0.0])
-    d = rel - np.multiply.outer(rel @ u, u)
-    return np.sqrt(np.add.reduce(d * d, axis=1)) - prm[2]
+        rel -= np.array([0.0, prm[3], 0.0])
+        y2 = rel[:, 1] * rel[:, 1]
+    elif y2 is None:
+        y2 = pts[:, 1] * pts[:, 1]
+    t = rel @ u
+    d0 = rel[:, 0] - t * c
+    d2 = rel[:, 2] - t * s
+    out = d0 * d0
+    out += y2
+    d2 *= d2
+    out += d2
+    np.sqrt(out, out=out)
+    out -= prm[2]
+    return out
 
 
 def fit_cylinder(
@@ -114,20 +130,22 @@ def fit_cylinder(
     # Three parameters need no more than a few thousand points (a full-resolution view
     # of a thick handle has tens of thousands): every k-th point, spread along the rod.
     points = points[:: max(1, len(points) // MAX_FIT_POINTS)]
+    y2_all = None if free_y else points[:, 1] * points[:, 1]
     angle = np.arctan2(direction[1], direction[0])
     normal = np.array([-direction[1], direction[0]])
     params = np.array([angle, point @ normal, 0.0, 0.0] if free_y else [angle, point @ normal, 0.0])
-    params[2] = np.median(_cylinder_residuals(params, points)) if radius is None else radius
+    params[2] = np.median(_cylinder_residuals(params, points, y2_all)) if radius is None else radius
     free = [0, 1] + ([] if radius is not None else [2]) + ([3] if free_y else [])
     keep = np.ones(len(points), dtype=bool)
+    res = _cylinder_residuals(params, points, y2_all)
     for _ in range(FIT_ITERATIONS):
         kept = points[keep]
-        res = _cylinder_residuals(params, kept)
+        y2 = None if y2_all is None else y2_all[keep]
         jac = np.empty((len(res), len(free)))
         for k, i in enumerate(free):
             step = np.zeros(len(params))
             step[i] = FIT_STEPS[i]
-            jac[:, k] = (_cylinder_residuals(params + step, kept) - res) / FIT_STEPS[i]
+            jac[:, k] = (_cylinder_residuals(params + step, kept, y2) - res) / FIT_STEPS[i]
         # Levenberg-Marquardt step: damped, accepted only if it lowers the cost.
         jtj, jtr = jac.T @ jac, jac.T @ res
         cost = np.sum(res**2)
@@ -135,11 +153,13 @@ def fit_cylinder(
             delta = np.linalg.solve(jtj + damping * np.diag(np.diag(jtj)), jtr)
             trial = params.copy()
             trial[free] -= delta
-            if np.sum(_cylinder_residuals(trial, kept) ** 2) < cost:
+            if np.sum(_cylinder_residuals(trial, kept, y2) ** 2) < cost:
                 params = trial
                 break
-        res_all = np.abs(_cylinder_residuals(params, points))
+        res_signed = _cylinder_residuals(params, points, y2_all)
+        res_all = np.abs(res_signed)
         keep = res_all < 3.0 * np.median(res_all[keep]) + FIT_OUTLIER_MARGIN
+        res = res_signed[keep]  # each point's residual is its own: those of the kept points
     u = np.array([np.cos(params[0]), np.sin(params[0])])
     if u[0] < 0:
         u = -u

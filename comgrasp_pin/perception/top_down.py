@@ -13,6 +13,7 @@ millimetres towards the image edges).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import cv2
@@ -72,7 +73,7 @@ class RodDetection:
 
 
 def detect_rod_top_down(
-    rgb: np.ndarray | None,
+    rgb: np.ndarray | Callable[[], np.ndarray] | None,
     depth: np.ndarray,
     camera: PinholeCamera,
     T_world_cam: np.ndarray,
@@ -91,15 +92,19 @@ def detect_rod_top_down(
     measure the rod (a 1 cm rod's ends lost in the noise, its handle broken in two) and the
     colour image ``rgb`` (H, W, 3 uint8, registered to the depth) is given, the rod is
     measured again with the colour's help (``_segment``); if that fails too, its error is
-    raised.
+    raised. ``rgb`` may be a function that takes the colour image: it is then called only
+    when the colour is needed (a render saved on every other view).
     """
-    depth = check_images(rgb, depth, camera)
+    depth = check_images(None if callable(rgb) else rgb, depth, camera)
     view = view_table(depth, camera, T_world_cam, pick_area, EDGE_BAND)
     try:
         return _detect(view, None, depth, camera, T_world_cam, pick_area)
     except (ObjectNotFoundError, AmbiguousObjectError) as exc:
         if rgb is None or not view.cleaned or isinstance(exc, ObjectCutByBorderError):
             raise
+        if callable(rgb):
+            rgb = rgb()
+            check_images(rgb, depth, camera)
         try:
             return _detect(view, rgb, depth, camera, T_world_cam, pick_area)
         except PerceptionError as again:

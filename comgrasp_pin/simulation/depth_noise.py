@@ -53,25 +53,27 @@ class DepthNoise:
         c, rng = self.config, self._rng
         finite = np.isfinite(depth) & (depth > 0)
         far = np.where(finite, depth, _FAR).astype(np.float32)
-        near_side = cv2.erode(far, _KERNEL).astype(float)
-        far_side = cv2.dilate(far, _KERNEL).astype(float)
-        edge = (far_side - near_side) > c.edge_jump
+        near_side, far_side = cv2.erode(far, _KERNEL), cv2.dilate(far, _KERNEL)  # float32
+        edge = np.subtract(far_side, near_side, dtype=float) > c.edge_jump
         if c.edge_band_px > 1:
             size = 2 * c.edge_band_px - 1
             edge = cv2.dilate(edge.astype(np.uint8), np.ones((size, size), np.uint8)) > 0
         out = np.where(finite, depth * self.scale, np.inf)
-        out = out + self._axial_noise(np.where(finite, depth, 0.0))
+        out += self._axial_noise(np.where(finite, depth, 0.0))
         u = rng.random(depth.shape)
         lost = edge & (u < c.edge_hole_prob)
         flying = edge & ~lost & (u < c.edge_hole_prob + c.flying_prob) & (far_side < _FAR)
         mix = rng.random(depth.shape)
-        out[flying] = self.scale * (near_side + mix * (far_side - near_side))[flying]
+        near, span = near_side[flying].astype(float), far_side[flying].astype(float)
+        out[flying] = self.scale * (near + mix[flying] * (span - near))
         dropped = ~edge & (rng.random(depth.shape) < c.dropout_prob)
         out[lost | (dropped & (mix < 0.5))] = 0.0
         out[dropped & (mix >= 0.5)] = np.inf
         if c.quantum > 0:
             valid = np.isfinite(out) & (out > 0)
-            out[valid] = np.round(out[valid] / c.quantum) * c.quantum
+            steps = np.round(out / c.quantum)
+            steps *= c.quantum
+            np.copyto(out, steps, where=valid)
         return out
 
     def _axial_noise(self, depth: np.ndarray) -> np.ndarray:
@@ -84,4 +86,8 @@ class DepthNoise:
         if c.noise_corr_px > 0:
             blurred = cv2.GaussianBlur(white, (0, 0), c.noise_corr_px)
             white = blurred / max(float(blurred.std()), 1e-12)
-        return white.astype(float) * c.axial_std(1.0) * depth * depth
+        noise = white.astype(float)
+        noise *= c.axial_std(1.0)
+        noise *= depth
+        noise *= depth
+        return noise

@@ -32,9 +32,10 @@ WRIST_RADIUS = 0.06  # UR5 wrist housings: about 0.045-0.055 m, with a margin (m
 def look_from_above(rig: CameraRig, data: mujoco.MjData) -> RodDetection:
     """Detect the rod on the table with the top-down camera. The detection needs the depth
     only where it is a clean render; a real camera's (``CameraRig.noise``) comes with the
-    colour image, which helps where the depth cannot tell a thin rod from the table."""
+    colour image, which helps where the depth cannot tell a thin rod from the table. It is
+    rendered only then (the same frame: nothing moves while perception runs)."""
     depth = rig.depth(data, TOP_CAMERA)
-    rgb = rig.rgb(data, TOP_CAMERA) if TOP_CAMERA in rig.noise else None
+    rgb = (lambda: rig.rgb(data, TOP_CAMERA)) if TOP_CAMERA in rig.noise else None
     T_world_cam = rig.T_world_cam(data, TOP_CAMERA) @ rig.calibration_error(TOP_CAMERA)
     return detect_rod_top_down(rgb, depth, rig.intrinsics(TOP_CAMERA), T_world_cam)
 

@@ -1,0 +1,98 @@
+"""The perception's fast paths against the plain formulas they replace (issue 16).
+
+Each speed change must leave every result as it was, to the bit, so that a run's rows stay
+the same for the same seeds (benchmarks/compare_runs.py checks whole runs). The plain
+formulas are written out here, independently of the package's code, and compared on
+random inputs (hypothesis) and on the corner cases: lost pixels (0, inf), image borders,
+pixels with no valid neighbour, a free y offset.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from comgrasp_pin.perception._points import drop_flying
+from comgrasp_pin.perception.rod_axis import _cylinder_residuals
+
+
+def plain_cylinder_residuals(prm: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """Distance of each point from the axis (angle prm[0] in x-z, offset prm[1] along its
+    normal, optional y offset prm[3]), less the radius prm[2]: the textbook formula."""
+    u = np.array([np.cos(prm[0]), 0.0, np.sin(prm[0])])
+    n = np.array([-np.sin(prm[0]), 0.0, np.cos(prm[0])])
+    rel = pts - prm[1] * n
+    if len(prm) > 3:
+        rel = rel - np.array([0.0, prm[3], 0.0])
+    return np.linalg.norm(rel - np.outer(rel @ u, u), axis=1) - prm[2]
+
+
+def plain_drop_flying(depth: np.ndarray, tolerance: float) -> np.ndarray:
+    """Flying pixels lost, with the NaN-aware reductions over a stack of the 8 neighbours."""
+    valid = np.isfinite(depth) & (depth > 0)
+    padded = np.pad(np.where(valid, depth, np.nan), 1, constant_values=np.nan)
+    h, w = depth.shape
+    stack = np.stack([padded[1 + dy : 1 + dy + h, 1 + dx : 1 + dx + w]
+                      for dy in (-1, 0, 1) for dx in (-1, 0, 1) if dy or dx])  # fmt: skip
+    d = np.where(valid, depth, np.nan)
+    with np.errstate(invalid="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        near, far = np.nanmin(stack, axis=0), np.nanmax(stack, axis=0)
+        closest = np.nanmin(np.abs(stack - d), axis=0)
+    flying = (d - near > tolerance) & (far - d > tolerance) & (closest > tolerance)
+    out = depth.copy()
+    out[valid & flying] = 0.0
+    return out
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    n=st.integers(1, 4000),
+    angle=st.floats(-3.2, 3.2),
+    offset=st.floats(-0.05, 0.05),
+    radius=st.floats(0.0, 0.03),
+    y_offset=st.one_of(st.none(), st.floats(-0.004, 0.004)),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_cylinder_residuals_are_the_plain_formula_to_the_bit(n, angle, offset, radius,
+                                                             y_offset, seed):  # fmt: skip
+    pts = np.random.default_rng(seed).normal(0.0, 0.05, (n, 3))
+    prm = np.array([angle, offset, radius] + ([] if y_offset is None else [y_offset]))
+    expected = plain_cylinder_residuals(prm, pts)
+    assert np.array_equal(_cylinder_residuals(prm, pts), expected)
+    if y_offset is None:  # the points' y squared, given once per fit
+        assert np.array_equal(_cylinder_residuals(prm, pts, pts[:, 1] ** 2), expected)
+    keep = np.random.default_rng(seed + 1).random(n) < 0.6  # a point's residual is its own
+    assert np.array_equal(_cylinder_residuals(prm, pts)[keep], expected[keep])
+    assert np.array_equal(plain_cylinder_residuals(prm, pts[keep]), expected[keep])
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    h=st.integers(1, 40),
+    w=st.integers(1, 40),
+    lost=st.floats(0.0, 0.9),
+    steps=st.floats(0.0, 0.5),
+    tolerance=st.sampled_from([0.0, 0.002, 0.01, 0.05]),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_drop_flying_is_the_stacked_reduction_to_the_bit(h, w, lost, steps, tolerance, seed):
+    rng = np.random.default_rng(seed)
+    depth = rng.uniform(0.3, 0.6, (h, w))
+    depth[rng.random((h, w)) < steps] += 0.1  # edges between two surfaces
+    depth[rng.random((h, w)) < 0.3 * steps] -= 0.05  # and pixels between them
+    gone = rng.random((h, w)) < lost
+    depth[gone] = np.where(rng.random((h, w)) < 0.5, 0.0, np.inf)[gone]
+    assert np.array_equal(drop_flying(depth, tolerance), plain_drop_flying(depth, tolerance))
+
+
+def test_drop_flying_loses_a_pixel_between_two_surfaces():
+    depth = np.full((5, 6), 0.5)
+    depth[:, 3:] = 0.6
+    depth[2, 3] = 0.55  # a stereo camera's mix of the two sides
+    out = drop_flying(depth, 0.01)
+    assert out[2, 3] == 0.0
+    assert np.count_nonzero(out == 0.0) == 1
