@@ -15,7 +15,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from comgrasp_pin.perception._points import drop_flying
+from comgrasp_pin.perception._points import drop_flying, median, slice_medians
 from comgrasp_pin.perception.rod_axis import _cylinder_residuals
 
 
@@ -96,3 +96,18 @@ def test_drop_flying_loses_a_pixel_between_two_surfaces():
     out = drop_flying(depth, 0.01)
     assert out[2, 3] == 0.0
     assert np.count_nonzero(out == 0.0) == 1
+
+
+@settings(max_examples=200, deadline=None)
+@given(n=st.integers(1, 3000), width=st.integers(1, 40), seed=st.integers(0, 2**32 - 1))
+def test_medians_are_numpys_to_the_bit(n, width, seed):
+    rng = np.random.default_rng(seed)
+    along, across = rng.normal(0.0, 0.1, n), rng.normal(0.0, 0.01, n)
+    assert median(across) == np.median(across)
+    bins = np.floor(along / (width * 1e-3)).astype(int)
+    labels, medians = slice_medians(bins, (along, across), 5)
+    expected = [b for b in np.unique(bins) if np.count_nonzero(bins == b) >= 5]
+    assert labels.tolist() == expected
+    assert medians.shape == (len(expected), 2)
+    for row, b in zip(medians, expected, strict=True):
+        assert row[0] == np.median(along[bins == b]) and row[1] == np.median(across[bins == b])

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from comgrasp_pin.perception._points import fit_line
+from comgrasp_pin.perception._points import fit_line, median, slice_medians
 
 MAX_FIT_POINTS = 3000
 MAX_MISFIT = 5e-4  # a round handle's points lie this close to the fitted cylinder (m) ...
@@ -47,10 +47,9 @@ def centre_line(
         normal = np.array([-direction[1], direction[0]])
         along, across = xz @ direction, xz @ normal
         bins = np.floor(along / bin_width).astype(int)
-        labels = [b for b in np.unique(bins) if np.count_nonzero(bins == b) >= 5]
+        labels, c = slice_medians(bins, (along, across), 5)
         if len(labels) < 3:
             break
-        c = np.array([(np.median(along[bins == b]), np.median(across[bins == b])) for b in labels])
         keep = np.ones(len(c), dtype=bool)
         for _ in range(3):
             slope, intercept = np.polyfit(c[keep, 0], c[keep, 1], 1)
@@ -158,7 +157,7 @@ def fit_cylinder(
                 break
         res_signed = _cylinder_residuals(params, points, y2_all)
         res_all = np.abs(res_signed)
-        keep = res_all < 3.0 * np.median(res_all[keep]) + FIT_OUTLIER_MARGIN
+        keep = res_all < 3.0 * median(res_all[keep]) + FIT_OUTLIER_MARGIN
         res = res_signed[keep]  # each point's residual is its own: those of the kept points
     u = np.array([np.cos(params[0]), np.sin(params[0])])
     if u[0] < 0:
@@ -166,7 +165,7 @@ def fit_cylinder(
     n = np.array([-np.sin(params[0]), np.cos(params[0])])
     if free_y and abs(params[3]) > MAX_Y_SHIFT:
         return u, params[1] * n, float("inf")  # more than a calibration error: no fit
-    return u, params[1] * n, float(np.median(res_all))
+    return u, params[1] * n, float(median(res_all))
 
 
 def refine_axis(

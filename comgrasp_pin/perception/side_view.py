@@ -28,6 +28,7 @@ from comgrasp_pin.perception._points import (
     fill_holes,
     noise_level,
     points_in,
+    slice_medians,
 )
 from comgrasp_pin.perception.rod_axis import centre_line, refine_axis
 from comgrasp_pin.perception.rod_ends import centre_along, end_profile
@@ -278,12 +279,11 @@ def _depth_line(along: np.ndarray, y: np.ndarray) -> tuple:
     line (point by point they would be some 30 times too small).
     """
     bins = np.floor(along / DEPTH_SLICE).astype(int)
-    labels, counts = np.unique(bins, return_counts=True)
-    labels = labels[counts >= 5]
+    labels, medians = slice_medians(bins, (along, y), 5)
     if len(labels) < 3:
         y_mid = float(np.median(y)) if len(y) else 0.0
         return y_mid, 0.0, float("inf"), float("inf"), None
-    c = np.array([(b, np.median(along[bins == b]), np.median(y[bins == b])) for b in labels])
+    c = np.column_stack([labels, medians])
     (slope, y0), cov = np.polyfit(c[:, 1], c[:, 2], 1, cov=True)  # scaled by the residuals
     return float(y0), float(slope), float(np.sqrt(cov[1, 1])), float(np.sqrt(cov[0, 0])), c
 
