@@ -1,4 +1,4 @@
-"""The perception's fast paths against the plain formulas they replace (issue 16).
+"""The fast paths of perception and of the simulated cameras against the plain formulas (issue 16).
 
 Each speed change must leave every result as it was, to the bit, so that a run's rows stay
 the same for the same seeds (benchmarks/compare_runs.py checks whole runs). The plain
@@ -10,13 +10,17 @@ pixels with no valid neighbour, a free y offset.
 from __future__ import annotations
 
 import warnings
+from dataclasses import replace
 
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from comgrasp_pin.config_sensors import sensor_preset
 from comgrasp_pin.perception._points import drop_flying, median, slice_medians
 from comgrasp_pin.perception.rod_axis import _cylinder_residuals
+from comgrasp_pin.simulation.depth_noise import DepthNoise
 
 
 def plain_cylinder_residuals(prm: np.ndarray, pts: np.ndarray) -> np.ndarray:
@@ -111,3 +115,18 @@ def test_medians_are_numpys_to_the_bit(n, width, seed):
     assert medians.shape == (len(expected), 2)
     for row, b in zip(medians, expected, strict=True):
         assert row[0] == np.median(along[bins == b]) and row[1] == np.median(across[bins == b])
+
+
+@pytest.mark.parametrize("stride", [2, 3])
+@pytest.mark.parametrize("corr_px", [0.0, 1.0])
+def test_depth_noise_on_every_stride_th_pixel_is_the_full_images(stride, corr_px):
+    """A slip watch's frame: the corrupted image's every stride-th pixel, to the bit, and
+    the camera's random stream left where the whole image leaves it."""
+    config = replace(sensor_preset("realistic").side_depth, noise_corr_px=corr_px)
+    rng = np.random.default_rng(4)
+    depth = np.full((120, 160), np.inf)
+    depth[30:90, 20:140] = 0.45 + 0.02 * rng.random((60, 120))  # a surface with edges
+    depth[50:60, 60:100] = 0.35  # and a nearer one on it
+    whole, strided = DepthNoise(config, seed=9), DepthNoise(config, seed=9)
+    assert np.array_equal(strided.apply(depth, stride), whole.apply(depth)[::stride, ::stride])
+    assert strided._rng.random() == whole._rng.random()

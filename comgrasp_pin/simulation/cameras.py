@@ -107,13 +107,14 @@ class CameraRig:
         """(H, W, 3) uint8 RGB image."""
         return self._render(data, camera)
 
-    def depth(self, data: mujoco.MjData, camera: str) -> np.ndarray:
+    def depth(self, data: mujoco.MjData, camera: str, stride: int = 1) -> np.ndarray:
         """(H, W) float z-depth along the optical axis (m); ``inf`` where nothing is seen,
-        and, with the camera's ``noise``, 0 or inf where the sensor lost the pixel."""
+        and, with the camera's ``noise``, 0 or inf where the sensor lost the pixel.
+        ``stride`` > 1: every stride-th pixel of each row and column of that image."""
         depth = self._render(data, camera, depth=True).astype(float)
         depth[depth >= self.model.vis.map.zfar * self.model.stat.extent * 0.999] = np.inf
         noise = self.noise.get(camera)
-        return depth if noise is None else noise.apply(depth)
+        return depth[::stride, ::stride] if noise is None else noise.apply(depth, stride)
 
     def calibration_error(self, camera: str) -> np.ndarray:
         """(4, 4) T_cam_calibrated: the camera frame the robot's calibration gives, in the

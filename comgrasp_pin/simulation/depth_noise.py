@@ -47,10 +47,13 @@ class DepthNoise:
             direction = rng.standard_normal(3)
             self.T_cam_calibrated[:3, 3] = c.extrinsic_shift * direction / np.linalg.norm(direction)
 
-    def apply(self, depth: np.ndarray) -> np.ndarray:
+    def apply(self, depth: np.ndarray, stride: int = 1) -> np.ndarray:
         """(H, W) corrupted copy of the rendered z-depth (m, inf = no return); lost pixels
-        are 0 or inf."""
-        c, rng = self.config, self._rng
+        are 0 or inf. ``stride`` > 1: only every stride-th pixel of each row and column,
+        ``apply(depth)[::stride, ::stride]`` to the bit (the edges, the correlated noise and
+        the random draws are made over the whole image; the per-pixel arithmetic only where
+        it is kept)."""
+        c, rng, k = self.config, self._rng, (slice(None, None, stride),) * 2
         finite = np.isfinite(depth) & (depth > 0)
         far = np.where(finite, depth, _FAR).astype(np.float32)
         near_side, far_side = cv2.erode(far, _KERNEL), cv2.dilate(far, _KERNEL)  # float32
@@ -58,15 +61,18 @@ class DepthNoise:
         if c.edge_band_px > 1:
             size = 2 * c.edge_band_px - 1
             edge = cv2.dilate(edge.astype(np.uint8), np.ones((size, size), np.uint8)) > 0
+        white = self._white(depth.shape)
+        u, mix = rng.random(depth.shape)[k], rng.random(depth.shape)[k]
+        dropped = ~edge[k] & (rng.random(depth.shape)[k] < c.dropout_prob)
+        depth, finite, edge = depth[k], finite[k], edge[k]
+        near_side, far_side = near_side[k], far_side[k]
         out = np.where(finite, depth * self.scale, np.inf)
-        out += self._axial_noise(np.where(finite, depth, 0.0))
-        u = rng.random(depth.shape)
+        if white is not None:
+            out += self._axial_noise(white[k], np.where(finite, depth, 0.0))
         lost = edge & (u < c.edge_hole_prob)
         flying = edge & ~lost & (u < c.edge_hole_prob + c.flying_prob) & (far_side < _FAR)
-        mix = rng.random(depth.shape)
         near, span = near_side[flying].astype(float), far_side[flying].astype(float)
         out[flying] = self.scale * (near + mix[flying] * (span - near))
-        dropped = ~edge & (rng.random(depth.shape) < c.dropout_prob)
         out[lost | (dropped & (mix < 0.5))] = 0.0
         out[dropped & (mix >= 0.5)] = np.inf
         if c.quantum > 0:
@@ -76,18 +82,23 @@ class DepthNoise:
             np.copyto(out, steps, where=valid)
         return out
 
-    def _axial_noise(self, depth: np.ndarray) -> np.ndarray:
-        """(H, W) noise of RMS depth^2 * subpixel / (focal_px * baseline) (m), correlated
-        over ``noise_corr_px`` pixels."""
+    def _white(self, shape: tuple[int, ...]) -> np.ndarray | None:
+        """(H, W) float32 unit noise, correlated over ``noise_corr_px`` pixels; None
+        without axial noise."""
         c = self.config
         if c.focal_px <= 0 or c.baseline <= 0:
-            return np.zeros_like(depth)
-        white: np.ndarray = self._rng.standard_normal(depth.shape).astype(np.float32)
+            return None
+        white: np.ndarray = self._rng.standard_normal(shape).astype(np.float32)
         if c.noise_corr_px > 0:
             blurred = cv2.GaussianBlur(white, (0, 0), c.noise_corr_px)
             white = blurred / max(float(blurred.std()), 1e-12)
+        return white
+
+    def _axial_noise(self, white: np.ndarray, depth: np.ndarray) -> np.ndarray:
+        """(H, W) noise of RMS depth^2 * subpixel / (focal_px * baseline) (m), from the unit
+        noise ``white`` (``_white``)."""
         noise = white.astype(float)
-        noise *= c.axial_std(1.0)
+        noise *= self.config.axial_std(1.0)
         noise *= depth
         noise *= depth
         return noise

@@ -70,7 +70,7 @@ def look_from_side(
     T_world_ee, T_ee_cam = side_camera_pose(robot, q)
     T_ee_cam = T_ee_cam @ rig.calibration_error(SIDE_CAMERA)
     camera = rig.intrinsics(SIDE_CAMERA).subsampled(stride)
-    depth = rig.depth(data, SIDE_CAMERA)[::stride, ::stride]
+    depth = rig.depth(data, SIDE_CAMERA, stride)
     return observe_held_rod(None, depth, camera, T_ee_cam, T_world_ee,
                             TABLE_Z, rod_length, arm_capsules(robot, q), centre_hint,
                             radius, tilt_only)  # fmt: skip
