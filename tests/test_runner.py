@@ -1,9 +1,12 @@
 """The trial runner keeps every finished trial, records failures and resumes."""
 
+import os
+
 import pytest
 
 from comgrasp_pin.errors import ResumeError
 from comgrasp_pin.experiments.runner import read_rows, run_trials
+from comgrasp_pin.experiments.threads import THREAD_VARIABLES, thread_env, worker_threads
 
 
 def _square(task: dict) -> dict:
@@ -53,3 +56,40 @@ def test_parallel_workers_give_the_same_rows(tmp_path):
         return sorted((str(r["trial"]), str(r.get("value", "")), r["error"]) for r in rows)
 
     assert key(serial) == key(read_rows(tmp_path / "b.csv")) == key(parallel)
+
+
+def _thread_settings(task: dict) -> dict:
+    import os
+
+    import cv2
+
+    return {"value": f"{os.environ.get('OPENBLAS_NUM_THREADS')},{cv2.getNumThreads()}"}
+
+
+def test_workers_share_the_cores_instead_of_each_taking_them_all(tmp_path, monkeypatch):
+    """Each of 2 worker processes on 2 cores runs its libraries on 1 thread (their default
+    is one per core: measured, the two processes then wait on each other's threads); the
+    driver's own environment is left as it was."""
+    monkeypatch.setattr(os, "cpu_count", lambda: 2)
+    for name in THREAD_VARIABLES:
+        monkeypatch.delenv(name, raising=False)
+    rows = run_trials(_thread_settings, _tasks(2), tmp_path / "t.csv", COLUMNS, workers=2)
+    assert [r["value"] for r in rows] == ["1,1", "1,1"]
+    assert not any(name in os.environ for name in THREAD_VARIABLES)
+
+
+def test_threads_per_worker():
+    assert thread_env(2, cores=2) == dict.fromkeys(THREAD_VARIABLES, "1")
+    assert thread_env(1, cores=2)["LP_NUM_THREADS"] == "2"
+    assert thread_env(3, cores=8)["OPENBLAS_NUM_THREADS"] == "2"
+    assert thread_env(16, cores=2)["OMP_NUM_THREADS"] == "1"  # never none
+
+
+def test_a_thread_count_the_user_set_is_kept(monkeypatch):
+    monkeypatch.delenv("LP_NUM_THREADS", raising=False)
+    monkeypatch.setenv("OPENBLAS_NUM_THREADS", "4")
+    env = thread_env(2, cores=2)
+    assert env["OPENBLAS_NUM_THREADS"] == "4" and env["LP_NUM_THREADS"] == "1"
+    with worker_threads(2):
+        assert os.environ["OPENBLAS_NUM_THREADS"] == "4" and os.environ["LP_NUM_THREADS"] == "1"
+    assert os.environ["OPENBLAS_NUM_THREADS"] == "4" and "LP_NUM_THREADS" not in os.environ

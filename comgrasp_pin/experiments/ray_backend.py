@@ -19,6 +19,7 @@ import os
 from collections.abc import Callable, Sequence
 
 from comgrasp_pin.errors import BackendError, WorkerDiedError
+from comgrasp_pin.experiments.threads import thread_env
 
 BACKENDS = ("local", "ray")
 RAY_INIT_OPTIONS = {"include_dashboard": False, "log_to_driver": False}
@@ -71,8 +72,10 @@ def ensure_ray(workers: int, address: str | None = None):
     ray = import_ray()
     if ray.is_initialized():
         return ray
-    # headless rendering on every worker, wherever it runs
-    env = {"env_vars": {"MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}}
+    # headless rendering on every worker, wherever it runs; one thread per task's CPU
+    # (experiments.threads: Ray runs as many tasks as a node has CPUs)
+    env_vars = {"MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl"), **thread_env(1, cores=1)}
+    env = {"env_vars": env_vars}
     try:
         if address:
             ray.init(address=address, runtime_env=env, **RAY_INIT_OPTIONS)

@@ -29,6 +29,7 @@ from comgrasp_pin.errors import InvalidInputError, ResumeError, WorkerDiedError
 from comgrasp_pin.experiments import run_files
 from comgrasp_pin.experiments.ray_backend import check_backend, ensure_ray, run_on_ray
 from comgrasp_pin.experiments.run_files import RowAppender
+from comgrasp_pin.experiments.threads import worker_threads
 
 KEY_COLUMNS = ("object", "trial", "method")
 WORKER_DIED = (
@@ -194,6 +195,11 @@ def _run_pool(fn, queue: deque, workers: int, record) -> list[dict]:
     """Run tasks from ``queue`` (at most ``workers`` at a time) until it is empty or a
     worker dies; return the tasks in flight when it died (none otherwise). A task that
     kills the only worker of a one-worker pool is recorded as failed."""
+    with worker_threads(workers):  # the workers start as tasks are submitted
+        return _run_in_pool(fn, queue, workers, record)
+
+
+def _run_in_pool(fn, queue: deque, workers: int, record) -> list[dict]:
     pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
     running: dict[Future, dict] = {}
     try:

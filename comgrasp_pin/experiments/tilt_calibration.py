@@ -37,6 +37,7 @@ from comgrasp_pin.experiments.design import (
     monotone,
     wrap_tilt,
 )
+from comgrasp_pin.experiments.threads import worker_threads
 from comgrasp_pin.planning.holding import holding_lever
 
 
@@ -97,12 +98,15 @@ class _Pool:
     def __enter__(self) -> _Pool:
         if self.workers > 1:
             context = multiprocessing.get_context("spawn")
+            self._threads = worker_threads(self.workers)  # the workers start on submit
+            self._threads.__enter__()
             self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=context)
         return self
 
     def __exit__(self, *exc) -> None:
         if self._pool is not None:
             self._pool.shutdown(cancel_futures=True)
+            self._threads.__exit__(None, None, None)
 
     def _record(self, row: dict) -> None:
         self.done[_task_key(row)] = row
