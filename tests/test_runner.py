@@ -1,6 +1,10 @@
 """The trial runner keeps every finished trial, records failures and resumes."""
 
 import os
+import subprocess
+import sys
+import time
+from pathlib import Path
 
 import pytest
 
@@ -93,3 +97,43 @@ def test_a_thread_count_the_user_set_is_kept(monkeypatch):
     with worker_threads(2):
         assert os.environ["OPENBLAS_NUM_THREADS"] == "4" and os.environ["LP_NUM_THREADS"] == "1"
     assert os.environ["OPENBLAS_NUM_THREADS"] == "4" and "LP_NUM_THREADS" not in os.environ
+
+
+DRIVER = """
+import sys
+sys.path.insert(0, {tests!r})
+from _slow_task import sleep_and_record_pid
+from comgrasp_pin.experiments.runner import run_trials
+tasks = [{{"object": "obj1", "trial": k, "method": "m", "pid_dir": {pids!r}, "sleep_s": 120}}
+         for k in range(4)]
+run_trials(sleep_and_record_pid, tasks, {csv!r}, ["object", "trial", "method", "value"], workers=2)
+"""
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    return not Path(f"/proc/{pid}/stat").read_text().split()[2] == "Z"  # a zombie is gone
+
+
+def test_workers_of_a_killed_driver_do_not_run_on(tmp_path):
+    """Killing a run's driver (SIGKILL: no clean-up) ends its pool's workers within seconds,
+    rather than leaving them to run their trials as orphans."""
+    pids = tmp_path / "pids"
+    pids.mkdir()
+    code = DRIVER.format(tests=str(Path(__file__).parent), pids=str(pids),
+                         csv=str(tmp_path / "out.csv"))  # fmt: skip
+    driver = subprocess.Popen([sys.executable, "-c", code])
+    deadline = time.monotonic() + 60
+    while len(list(pids.iterdir())) < 2 and time.monotonic() < deadline:
+        time.sleep(0.2)
+    workers = [int(p.name) for p in pids.iterdir()]
+    assert len(workers) == 2 and all(_alive(pid) for pid in workers)
+    driver.kill()
+    driver.wait()
+    deadline = time.monotonic() + 10
+    while any(_alive(pid) for pid in workers) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert not any(_alive(pid) for pid in workers)

@@ -16,6 +16,9 @@ from __future__ import annotations
 
 import csv
 import multiprocessing
+import os
+import threading
+import time
 import traceback
 from collections import Counter, deque
 from collections.abc import Callable, Sequence
@@ -32,6 +35,7 @@ from comgrasp_pin.experiments.run_files import RowAppender
 from comgrasp_pin.experiments.threads import worker_threads
 
 KEY_COLUMNS = ("object", "trial", "method")
+PARENT_CHECK_S = 1.0  # how often a pool worker checks that its driver is still there (s)
 WORKER_DIED = (
     "the worker process running this trial died (killed, crashed or out of memory); the run "
     "went on without it: run it again with --resume --retry-failed"
@@ -199,8 +203,22 @@ def _run_pool(fn, queue: deque, workers: int, record) -> list[dict]:
         return _run_in_pool(fn, queue, workers, record)
 
 
+def exit_with_parent(parent: int) -> None:
+    """A pool worker's initializer: the worker ends when the process that started it
+    (``parent``, its pid) is gone. A driver killed outright cannot shut its pool down, and
+    its workers would run on as orphans, each a core busy with trials nobody records."""
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(PARENT_CHECK_S)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="exit-with-parent", daemon=True).start()
+
+
 def _run_in_pool(fn, queue: deque, workers: int, record) -> list[dict]:
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
+                               initializer=exit_with_parent, initargs=(os.getpid(),))  # fmt: skip
     running: dict[Future, dict] = {}
     try:
         while queue or running:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import json
 import multiprocessing
+import os
 import sys
 import time
 from collections.abc import Sequence
@@ -37,6 +38,7 @@ from comgrasp_pin.experiments.design import (
     monotone,
     wrap_tilt,
 )
+from comgrasp_pin.experiments.runner import exit_with_parent
 from comgrasp_pin.experiments.threads import worker_threads
 from comgrasp_pin.planning.holding import holding_lever
 
@@ -100,7 +102,9 @@ class _Pool:
             context = multiprocessing.get_context("spawn")
             self._threads = worker_threads(self.workers)  # the workers start on submit
             self._threads.__enter__()
-            self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=context)
+            self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=context,
+                                             initializer=exit_with_parent,
+                                             initargs=(os.getpid(),))  # fmt: skip
         return self
 
     def __exit__(self, *exc) -> None:
