@@ -404,3 +404,17 @@ def test_reproduce_with_a_second_seed_runs_accuracy_again_and_reports_it(tmp_pat
     section = text.split("## A second seed: the accuracy experiment with seed 7")[1]
     assert "| tilt bin (deg) | n | coverage ±1σ (68 %)" in section.split("## Experiment 2")[0]
     assert "rms z" in section
+
+
+def test_the_trials_own_time_sums_every_rows_wall_time(tmp_path):
+    """run.json's trial_core_minutes: every row of the run's CSVs (the headline's, ideal/,
+    seed<S>/), error rows without a wall time counting 0."""
+    from comgrasp_pin.experiments.reproduce import _trial_minutes
+
+    files = {"accuracy.csv": ["30", "90"], "ideal/regrasp.csv": ["60", ""],
+             "seed1/accuracy.csv": ["120"], "other.csv": ["6000"]}  # fmt: skip
+    for name, walls in files.items():
+        path = tmp_path / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text("object,wall_s\n" + "".join(f"obj1,{w}\n" for w in walls))
+    assert _trial_minutes(tmp_path) == pytest.approx((30 + 90 + 60 + 120) / 60)

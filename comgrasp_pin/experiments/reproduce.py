@@ -14,7 +14,7 @@ from comgrasp_pin.config import sensor_preset
 from comgrasp_pin.experiments import report
 from comgrasp_pin.experiments.ray_backend import check_backend
 from comgrasp_pin.experiments.report.sensors import sensors_comparison
-from comgrasp_pin.experiments.runner import run_trials
+from comgrasp_pin.experiments.runner import read_rows, run_trials
 from comgrasp_pin.experiments.trials import (
     ACCURACY_COLUMNS,
     REGRASP_COLUMNS,
@@ -158,6 +158,13 @@ six objects; in brackets the 95 % interval (t for means, Wilson for rates).
 """
 
 
+def _trial_minutes(out: Path) -> float:
+    """The trials' own wall time in minutes: the ``wall_s`` of every row of the run's CSVs
+    (its folder, ``ideal/`` and ``seed<S>/``), rows of an earlier, resumed part included."""
+    paths = [p for name in ("accuracy.csv", "regrasp.csv") for p in out.rglob(name)]
+    return sum(float(row.get("wall_s") or 0.0) for p in paths for row in read_rows(p)) / 60
+
+
 def reproduce(opts: RunOptions) -> Path:
     """Both experiments and ``report.md`` with figures, tables and the settings used."""
     out, objects, trials, seed, noise = opts.out, opts.objects, opts.trials, opts.seed, opts.noise
@@ -170,13 +177,18 @@ def reproduce(opts: RunOptions) -> Path:
     reg = run_regrasp(opts)
     end = time.perf_counter()
     second = _second_seed_section(opts, out)
+    after_second = time.perf_counter()
     ideal = _ideal_section(opts, out, acc, reg)
+    done = time.perf_counter()
     beside = "" if opts.sensors == "ideal" else " (ideal sensors beside it below)"
     settings = settings_summary(noise, opts.estimator, opts.sensors)
     meta = {
         "objects": list(objects), "trials_per_object": trials, "seed": seed, "workers": workers,
         "backend": opts.backend,
         "accuracy_minutes": (mid - start) / 60, "regrasp_minutes": (end - mid) / 60,
+        "second_seed_minutes": (after_second - end) / 60,
+        "ideal_minutes": (done - after_second) / 60,
+        "total_minutes": (done - start) / 60, "trial_core_minutes": _trial_minutes(out),
         "versions": _versions(), "settings": settings,
     }  # fmt: skip
     (out / "run.json").write_text(json.dumps(meta, indent=2, default=str))
@@ -186,8 +198,11 @@ def reproduce(opts: RunOptions) -> Path:
 
 {report.run_summary(acc, reg, seed)}
 Sensors: the `{opts.sensors}` preset{beside}.
-Run time on {workers or "all the cluster's"} worker(s) ({opts.backend} backend): accuracy
-{meta["accuracy_minutes"]:.1f} min, regrasp {meta["regrasp_minutes"]:.1f} min.
+Run time on {workers or "all the cluster's"} worker(s) ({opts.backend} backend):
+{meta["total_minutes"]:.1f} min in all (accuracy {meta["accuracy_minutes"]:.1f}, pick-and-place
+{meta["regrasp_minutes"]:.1f}, the second seed {meta["second_seed_minutes"]:.1f}, ideal sensors
+{meta["ideal_minutes"]:.1f} min); a resumed run counts its last part only. The trials' own
+time, every row's `wall_s` together: {meta["trial_core_minutes"]:.1f} core-minutes.
 
 ## Experiment 1: CoM accuracy against the tilt in the jaws
 
