@@ -418,3 +418,13 @@ def test_the_trials_own_time_sums_every_rows_wall_time(tmp_path):
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text("object,wall_s\n" + "".join(f"obj1,{w}\n" for w in walls))
     assert _trial_minutes(tmp_path) == pytest.approx((30 + 90 + 60 + 120) / 60)
+
+
+def test_the_run_time_names_the_parts_that_ran():
+    from comgrasp_pin.experiments.reproduce import _parts
+
+    meta = {"accuracy_minutes": 0.7, "regrasp_minutes": 1.4, "second_seed_minutes": 0.0,
+            "ideal_minutes": 1.38}  # fmt: skip
+    assert _parts(meta) == "accuracy 0.7, pick-and-place 1.4, ideal sensors 1.4 min"
+    meta.update(second_seed_minutes=16.0, ideal_minutes=0.0)
+    assert _parts(meta) == "accuracy 0.7, pick-and-place 1.4, the second seed 16.0 min"

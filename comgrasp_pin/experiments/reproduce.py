@@ -165,6 +165,18 @@ def _trial_minutes(out: Path) -> float:
     return sum(float(row.get("wall_s") or 0.0) for p in paths for row in read_rows(p)) / 60
 
 
+def _parts(meta: dict) -> str:
+    """The minutes of each part of the run, the optional parts only where they ran."""
+    text = f"accuracy {meta['accuracy_minutes']:.1f}, pick-and-place {meta['regrasp_minutes']:.1f}"
+    for name, key in (
+        ("the second seed", "second_seed_minutes"),
+        ("ideal sensors", "ideal_minutes"),
+    ):
+        if meta[key] > 0.05:
+            text += f", {name} {meta[key]:.1f}"
+    return text + " min"
+
+
 def reproduce(opts: RunOptions) -> Path:
     """Both experiments and ``report.md`` with figures, tables and the settings used."""
     out, objects, trials, seed, noise = opts.out, opts.objects, opts.trials, opts.seed, opts.noise
@@ -199,10 +211,9 @@ def reproduce(opts: RunOptions) -> Path:
 {report.run_summary(acc, reg, seed)}
 Sensors: the `{opts.sensors}` preset{beside}.
 Run time on {workers or "all the cluster's"} worker(s) ({opts.backend} backend):
-{meta["total_minutes"]:.1f} min in all (accuracy {meta["accuracy_minutes"]:.1f}, pick-and-place
-{meta["regrasp_minutes"]:.1f}, the second seed {meta["second_seed_minutes"]:.1f}, ideal sensors
-{meta["ideal_minutes"]:.1f} min); a resumed run counts its last part only. The trials' own
-time, every row's `wall_s` together: {meta["trial_core_minutes"]:.1f} core-minutes.
+{meta["total_minutes"]:.1f} min in all ({_parts(meta)}); a resumed run counts its last part
+only. The trials' own time, every row's `wall_s` together: {meta["trial_core_minutes"]:.1f}
+core-minutes.
 
 ## Experiment 1: CoM accuracy against the tilt in the jaws
 
