@@ -408,16 +408,18 @@ def test_reproduce_with_a_second_seed_runs_accuracy_again_and_reports_it(tmp_pat
 
 def test_the_trials_own_time_sums_every_rows_wall_time(tmp_path):
     """run.json's trial_core_minutes: every row of the run's CSVs (the headline's, ideal/,
-    seed<S>/), error rows without a wall time counting 0."""
-    from comgrasp_pin.experiments.reproduce import _trial_minutes
+    seed<S>/), error rows without a wall time counting 0; other folders' CSVs not."""
+    from comgrasp_pin.experiments.reproduce import RunOptions, _run_folders, _trial_minutes
 
     files = {"accuracy.csv": ["30", "90"], "ideal/regrasp.csv": ["60", ""],
-             "seed1/accuracy.csv": ["120"], "other.csv": ["6000"]}  # fmt: skip
+             "seed1/accuracy.csv": ["120"], "other.csv": ["6000"],
+             "sensitivity/ideal/accuracy.csv": ["6000"]}  # fmt: skip
     for name, walls in files.items():
         path = tmp_path / name
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text("object,wall_s\n" + "".join(f"obj1,{w}\n" for w in walls))
-    assert _trial_minutes(tmp_path) == pytest.approx((30 + 90 + 60 + 120) / 60)
+    folders = _run_folders(RunOptions(out=tmp_path, second_seed=1))
+    assert _trial_minutes(folders) == pytest.approx((30 + 90 + 60 + 120) / 60)
 
 
 def test_the_run_time_names_the_parts_that_ran():

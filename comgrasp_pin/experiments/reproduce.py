@@ -158,11 +158,17 @@ six objects; in brackets the 95 % interval (t for means, Wilson for rates).
 """
 
 
-def _trial_minutes(out: Path) -> float:
-    """The trials' own wall time in minutes: the ``wall_s`` of every row of the run's CSVs
-    (its folder, ``ideal/`` and ``seed<S>/``), rows of an earlier, resumed part included."""
-    paths = [p for name in ("accuracy.csv", "regrasp.csv") for p in out.rglob(name)]
+def _trial_minutes(folders: list[Path]) -> float:
+    """The trials' own wall time in minutes: the ``wall_s`` of every row of the run's CSVs in
+    ``folders`` (the run's, ``ideal/``, ``seed<S>/``), rows of an earlier, resumed part too."""
+    paths = [folder / name for folder in folders for name in ("accuracy.csv", "regrasp.csv")]
     return sum(float(row.get("wall_s") or 0.0) for p in paths for row in read_rows(p)) / 60
+
+
+def _run_folders(opts: RunOptions) -> list[Path]:
+    """The folders a run writes its CSVs to: its own, ``ideal/``, and ``seed<S>/``."""
+    seeds = [] if opts.second_seed is None else [opts.out / f"seed{opts.second_seed}"]
+    return [opts.out, opts.out / "ideal", *seeds]
 
 
 def _parts(meta: dict) -> str:
@@ -200,7 +206,8 @@ def reproduce(opts: RunOptions) -> Path:
         "accuracy_minutes": (mid - start) / 60, "regrasp_minutes": (end - mid) / 60,
         "second_seed_minutes": (after_second - end) / 60,
         "ideal_minutes": (done - after_second) / 60,
-        "total_minutes": (done - start) / 60, "trial_core_minutes": _trial_minutes(out),
+        "total_minutes": (done - start) / 60,
+        "trial_core_minutes": _trial_minutes(_run_folders(opts)),
         "versions": _versions(), "settings": settings,
     }  # fmt: skip
     (out / "run.json").write_text(json.dumps(meta, indent=2, default=str))
