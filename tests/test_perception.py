@@ -6,6 +6,7 @@ import pytest
 
 from comgrasp_pin.camera import PinholeCamera
 from comgrasp_pin.errors import (
+    AmbiguousObjectError,
     ComGraspError,
     InvalidDepthError,
     ObjectCutByBorderError,
@@ -342,3 +343,28 @@ def test_depth_line_standard_error_matches_the_scatter_of_surfaces():
         stds.append(y0_std)
     spread = np.std(np.array(y0s) + 0.02)
     assert 0.7 < np.median(stds) / spread < 1.4, (np.median(stds), spread)
+
+
+def test_a_head_joined_by_a_thin_neck_is_one_object():
+    """A 1 cm stick's head joined to its handle by a 2 px neck: the 3 x 3 opening cuts the
+    neck, and the two pieces (one blob before it) stay one object; two blobs with a gap of
+    1 px stay two."""
+    from comgrasp_pin.perception._points import largest_component
+    from comgrasp_pin.perception.rod_shape import check_one_object
+
+    mask = np.zeros((120, 200), bool)
+    mask[56:64, 20:120] = True  # the handle, 8 px wide: 800 px
+    mask[59:61, 120:126] = True  # the neck, 2 px wide
+    mask[40:80, 126:150] = True  # the head, 40 x 24 px: 960 px
+    blob = largest_component(mask, 100, "test image")
+    assert blob[60, 140] and blob[60, 50]  # the head and the handle
+    assert blob.sum() == 800 + 960  # the neck's pixels are the opening's, not the blob's
+    check_one_object(mask, blob)  # one object: no AmbiguousObjectError
+
+    apart = mask.copy()
+    apart[:, 120:126] = False
+    apart[:, 121:126] = mask[:, 126:127].repeat(5, axis=1)  # the head, 1 px from the handle
+    blob = largest_component(apart, 100, "test image")
+    assert blob[60, 140] and not blob[60, 50]
+    with pytest.raises(AmbiguousObjectError):
+        check_one_object(apart, blob)

@@ -46,16 +46,23 @@ def border_pixels(blob: np.ndarray) -> np.ndarray:
 
 
 def largest_component(mask: np.ndarray, min_pixels: int, what: str) -> np.ndarray:
-    """The largest connected blob of ``mask``, after a small opening.
+    """The largest connected blob of ``mask``, after a small opening, with the pieces the
+    opening cut off it.
 
+    The opening removes specks and one-pixel bridges; it can also cut a thin neck, such as
+    a 1 cm stick's between its handle and its head. Opened pieces that were one blob of
+    ``mask`` before the opening are one object: they are kept with the largest.
     ObjectNotFoundError if there is none, ObjectCutByBorderError if it touches the border.
     """
-    mask = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    raw = mask.astype(np.uint8)
+    opened = cv2.morphologyEx(raw, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(opened, connectivity=8)
     if count <= 1 or stats[1:, cv2.CC_STAT_AREA].max() < min_pixels:
         raise ObjectNotFoundError(f"no object found in the {what} (fewer than {min_pixels} px)")
     best = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
-    blob = labels == best
+    _, raw_labels = cv2.connectedComponents(raw, connectivity=8)
+    seed = tuple(np.argwhere(labels == best)[0])  # a pixel of the largest opened blob
+    blob = (raw_labels == raw_labels[seed]) & (opened > 0)
     if border_pixels(blob).any():
         raise ObjectCutByBorderError(f"the object touches the border of the {what}")
     return blob
