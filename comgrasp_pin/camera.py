@@ -94,4 +94,6 @@ def transform_points(T_a_b: np.ndarray, p_b: np.ndarray) -> np.ndarray:
     p_b = np.atleast_2d(np.asarray(p_b, dtype=float))
     if p_b.ndim != 2 or p_b.shape[1] != 3:
         raise InvalidInputError(f"points must have shape (N, 3), got {p_b.shape}")
-    return p_b @ T_a_b[:3, :3].T + T_a_b[:3, 3]
+    p_a = p_b @ T_a_b[:3, :3].T
+    p_a += T_a_b[:3, 3]  # in place: an image's 300 000 points are not copied again
+    return p_a

@@ -130,3 +130,26 @@ def test_depth_noise_on_every_stride_th_pixel_is_the_full_images(stride, corr_px
     whole, strided = DepthNoise(config, seed=9), DepthNoise(config, seed=9)
     assert np.array_equal(strided.apply(depth, stride), whole.apply(depth)[::stride, ::stride])
     assert strided._rng.random() == whole._rng.random()
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    n=st.integers(1, 5000),
+    rotvec=st.lists(st.floats(-3.0, 3.0), min_size=3, max_size=3),
+    shift=st.lists(st.floats(-2.0, 2.0), min_size=3, max_size=3),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_transform_points_is_the_plain_product_to_the_bit(n, rotvec, shift, seed):
+    """``transform_points`` (the translation added in place)
+    against p @ R^T + t written out, on points of a depth image's range."""
+    import cv2
+
+    from comgrasp_pin.camera import transform_points
+
+    T = np.eye(4)
+    T[:3, :3] = cv2.Rodrigues(np.array(rotvec, float).reshape(3, 1))[0]
+    T[:3, 3] = shift
+    p = np.random.default_rng(seed).uniform(-3.0, 3.0, (n, 3))
+    np.testing.assert_array_equal(transform_points(T, p), p @ T[:3, :3].T + T[:3, 3])
+    image = np.random.default_rng(seed).uniform(0.1, 2.0, (480 * 640, 3))  # a whole image
+    np.testing.assert_array_equal(transform_points(T, image), image @ T[:3, :3].T + T[:3, 3])

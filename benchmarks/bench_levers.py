@@ -1,0 +1,169 @@
+"""What the levers that change the physics buy, and what they cost: paired sweeps.
+
+    python benchmarks/bench_levers.py [--trials 10] [--workers 2] [--runs /tmp/levers]
+                                      [--out benchmarks/results/levers.json]
+
+Issue 16 lists levers that would make an episode cheaper by changing what is simulated: a
+coarser physics step, shorter fixed waits. Each is a value of the config tree, so each is
+measured with ``comgrasp sweep`` (kept in ``--runs``, resumable): the paper's six objects,
+``--trials`` trials each, at the current value and at the lever's, with the same seeds at
+both (the same scenes and sensor noise: common random numbers). Per lever, experiment and
+sensor preset the JSON gives
+
+- the speed: wall seconds and simulated seconds per trial at each value, and their ratio
+  (the two values' trials run one after the other in one process pool);
+- what changes: ours' mean accuracy, the coverage of the 95 % interval and the refusals at
+  each value, the paired difference of accuracy (lever - current, t interval) over the
+  grasps measured at both, how far the tilt in the jaws moved; for pick-and-place, each
+  method's successes at each value and the scenes whose outcome flipped.
+
+A lever "pays" when it is faster and its paired differences' intervals hold 0 (or lie within
+a point of accuracy) with no more refusals or failures: nothing here decides that, the
+README says what was kept and why.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from comgrasp_pin.experiments.stats import Z_95, mean_ci, paired_difference, wilson_interval
+
+OBJECTS = "obj1,obj2,obj3,obj4,obj5,obj6"
+LEVERS = {
+    "sim_dt": ("world.sim_dt", (0.002, 0.004), "the physics step (the servo and the torque "
+               "sensor run every step, so their rate halves with it)"),
+    "settle": ("trial.settle", (0.5, 0.2), "the wait before every torque window, empty arm "
+               "and holding"),
+    "noslip": ("world.noslip_iterations", (50, 20), "MuJoCo's no-slip solver iterations, "
+               "which make static friction hold in the jaws"),
+}  # fmt: skip
+CASES = (("accuracy", "ideal"), ("accuracy", "realistic"), ("regrasp", "ideal"))
+
+
+def run_sweep(path: str, values, experiment: str, sensors: str, args, out: Path) -> Path:
+    """``comgrasp sweep`` of ``path`` at ``values`` into ``out`` (resumed if there)."""
+    cmd = [sys.executable, "-m", "comgrasp_pin.cli", "sweep", "--param",
+           f"{path}={','.join(str(v) for v in values)}", "--experiment", experiment,
+           "--sensors", sensors, "--objects", OBJECTS, "--trials", str(args.trials),
+           "--workers", str(args.workers), "--out", str(out)]  # fmt: skip
+    if (out / "sweep.csv").exists():
+        cmd.append("--resume")
+    subprocess.run(cmd, check=True, env={**os.environ, "MUJOCO_GL": "egl"})
+    return out / "sweep.csv"
+
+
+def _f(row: dict, key: str) -> float:
+    try:
+        return float(row[key])
+    except (KeyError, ValueError):
+        return float("nan")
+
+
+def _speed(rows: list[dict]) -> dict:
+    wall = [_f(r, "wall_s") for r in rows]
+    sim = [_f(r, "sim_s") for r in rows]
+    return {"trials": len(rows), "wall_s_per_trial": float(np.nanmean(wall)),
+            "sim_s_per_trial": float(np.nanmean(sim)),
+            "realtime_factor": float(np.nansum(sim) / np.nansum(wall))}  # fmt: skip
+
+
+def _accuracy_side(rows: list[dict]) -> dict:
+    measured = [r for r in rows if not r.get("error") and np.isfinite(_f(r, "accuracy"))]
+    acc = np.array([_f(r, "accuracy") for r in measured])
+    z = np.array([(_f(r, "pos_esti_m") - _f(r, "pos_real_m")) / _f(r, "pos_std_m")
+                  for r in measured])  # fmt: skip
+    inside = int(np.sum(np.abs(z) <= Z_95))
+    ci = mean_ci(100 * acc)
+    return {"measured": len(measured), "refused": len(rows) - len(measured),
+            "accuracy_pct": [ci.mean, ci.lo, ci.hi],
+            "coverage95_pct": [100 * inside / max(len(z), 1),
+                               *(100 * x for x in wilson_interval(inside, len(z)))],
+            "rms_z": float(np.sqrt(np.mean(z**2))) if len(z) else float("nan")}  # fmt: skip
+
+
+def _regrasp_side(rows: list[dict]) -> dict:
+    out = {}
+    for method in ("baseline", "regrasp"):
+        mine = [r for r in rows if r["method"] == method]
+        wins = sum(_f(r, "success") == 1 for r in mine)
+        out[method] = [wins, len(mine)]
+    return out
+
+
+def compare(csv_path: Path, path: str, values, experiment: str) -> dict:
+    """The two values' speed and outcomes, and their paired differences."""
+    with open(csv_path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    at = {v: [r for r in rows if float(r[path]) == float(v)] for v in values}
+    base, lever = values
+    out = {"values": list(values), "speed": {str(v): _speed(at[v]) for v in values}}
+    out["wall_ratio_current_over_lever"] = (out["speed"][str(base)]["wall_s_per_trial"]
+                                            / out["speed"][str(lever)]["wall_s_per_trial"])  # fmt: skip
+    key = ("object", "trial", "method")
+    pairs = {}
+    for v in values:
+        for r in at[v]:
+            pairs.setdefault(tuple(r[k] for k in key), {})[v] = r
+    both = [p for p in pairs.values() if len(p) == 2]
+    if experiment == "accuracy":
+        out["outcome"] = {str(v): _accuracy_side(at[v]) for v in values}
+        a = np.array([_f(p[lever], "accuracy") for p in both])
+        b = np.array([_f(p[base], "accuracy") for p in both])
+        d = paired_difference(100 * a, 100 * b)
+        tilt = np.array([abs(_f(p[lever], "theta_true_deg") - _f(p[base], "theta_true_deg"))
+                         for p in both])  # fmt: skip
+        tilt = tilt[np.isfinite(tilt)]
+        out["paired"] = {"accuracy_diff_pct": [d.diff.mean, d.diff.lo, d.diff.hi, d.diff.n],
+                         "lever_better": d.a_better, "current_better": d.b_better,
+                         "tilt_change_deg_median": float(np.median(tilt)) if len(tilt) else None,
+                         "tilt_changed_over_5deg": int(np.sum(tilt > 5.0))}  # fmt: skip
+    else:
+        out["outcome"] = {str(v): _regrasp_side(at[v]) for v in values}
+        flips = {m: [0, 0] for m in ("baseline", "regrasp")}
+        for p in both:
+            s0, s1 = _f(p[base], "success"), _f(p[lever], "success")
+            if s0 != s1:
+                flips[p[base]["method"]][int(s1 == 1)] += 1
+        out["paired"] = {"flipped_to_failure_and_to_success": flips}
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--trials", type=int, default=10)
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--levers", default=",".join(LEVERS))
+    parser.add_argument("--runs", type=Path, default=Path("/tmp/comgrasp_levers"))
+    parser.add_argument("--out", type=Path, default=Path("benchmarks/results/levers.json"))
+    args = parser.parse_args()
+    results = {}
+    for name in args.levers.split(","):
+        path, values, what = LEVERS[name]
+        results[name] = {"path": path, "what": what}
+        for experiment, sensors in CASES:
+            start = time.perf_counter()
+            out = args.runs / f"{name}_{experiment}_{sensors}"
+            csv_path = run_sweep(path, values, experiment, sensors, args, out)
+            case = compare(csv_path, path, values, experiment)
+            case["sweep_wall_s"] = time.perf_counter() - start
+            results[name][f"{experiment}_{sensors}"] = case
+            print(name, experiment, sensors, json.dumps(case["speed"]), flush=True)
+    results["environment"] = {"trials_per_object": args.trials, "objects": OBJECTS,
+                              "workers": args.workers, "cpus": os.cpu_count(),
+                              "date": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())}  # fmt: skip
+    args.out.parent.mkdir(parents=True, exist_ok=True)
+    args.out.write_text(json.dumps(results, indent=2) + "\n")
+    print(f"wrote {args.out}")
+
+
+if __name__ == "__main__":
+    main()
