@@ -82,6 +82,29 @@ def test_workers_share_the_cores_instead_of_each_taking_them_all(tmp_path, monke
     assert not any(name in os.environ for name in THREAD_VARIABLES)
 
 
+def _calibration_row(task: dict) -> dict:
+    return {**task, "pid": os.getpid(), "threads": os.environ.get("OPENBLAS_NUM_THREADS")}
+
+
+def test_the_tilt_calibration_pool_is_the_runners(tmp_path, monkeypatch):
+    """The tilt calibration's pool (``spawn_pool``, as the runner's): 2 spawned workers,
+    1 thread each on 2 cores, every task once; with its log, a second pool runs none again."""
+    from comgrasp_pin.experiments.tilt_calibration import _Pool
+
+    monkeypatch.setattr(os, "cpu_count", lambda: 2)
+    for name in THREAD_VARIABLES:
+        monkeypatch.delenv(name, raising=False)
+    tasks = [{"object": "obj1", "lever": 0.01 * k, "side": 1.0, "seed": k} for k in range(6)]
+    log = tmp_path / "calibration.jsonl"
+    with _Pool(2, log) as pool:
+        rows = pool.map(_calibration_row, tasks)
+    assert [r["seed"] for r in rows] == list(range(6))
+    assert {r["threads"] for r in rows} == {"1"} and os.getpid() not in {r["pid"] for r in rows}
+    with _Pool(2, log) as pool:
+        assert pool.map(_calibration_row, tasks) == rows  # all from the log
+    assert len(log.read_text().splitlines()) == 6
+
+
 def test_threads_per_worker():
     assert thread_env(2, cores=2) == dict.fromkeys(THREAD_VARIABLES, "1")
     assert thread_env(1, cores=2)["LP_NUM_THREADS"] == "2"

@@ -21,9 +21,10 @@ import threading
 import time
 import traceback
 from collections import Counter, deque
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
+from contextlib import contextmanager
 from pathlib import Path
 
 from tqdm import tqdm
@@ -199,8 +200,28 @@ def _run_pool(fn, queue: deque, workers: int, record) -> list[dict]:
     """Run tasks from ``queue`` (at most ``workers`` at a time) until it is empty or a
     worker dies; return the tasks in flight when it died (none otherwise). A task that
     kills the only worker of a one-worker pool is recorded as failed."""
+    with spawn_pool(workers) as pool:
+        return _run_in_pool(pool, fn, queue, workers, record)
+
+
+@contextmanager
+def spawn_pool(workers: int) -> Iterator[ProcessPoolExecutor]:
+    """A pool of ``workers`` spawned processes (each with its own MuJoCo and OpenGL
+    context) that run their libraries on ``cores // workers`` threads (``worker_threads``)
+    and end when this process is gone (``exit_with_parent``); shut down, tasks not yet
+    started cancelled, when the block ends."""
     with worker_threads(workers):  # the workers start as tasks are submitted
-        return _run_in_pool(fn, queue, workers, record)
+        context = multiprocessing.get_context("spawn")
+        pool = ProcessPoolExecutor(
+            max_workers=workers,
+            mp_context=context,
+            initializer=exit_with_parent,
+            initargs=(os.getpid(),),
+        )
+        try:
+            yield pool
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)
 
 
 def exit_with_parent(parent: int) -> None:
@@ -216,28 +237,23 @@ def exit_with_parent(parent: int) -> None:
     threading.Thread(target=watch, name="exit-with-parent", daemon=True).start()
 
 
-def _run_in_pool(fn, queue: deque, workers: int, record) -> list[dict]:
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
-                               initializer=exit_with_parent, initargs=(os.getpid(),))  # fmt: skip
+def _run_in_pool(pool: ProcessPoolExecutor, fn, queue: deque, workers: int, record) -> list[dict]:
     running: dict[Future, dict] = {}
-    try:
-        while queue or running:
-            while queue and len(running) < workers:
-                try:
-                    future = pool.submit(_safe_call, fn, queue[0])
-                except BrokenProcessPool:
-                    return list(running.values())
-                running[future] = queue.popleft()
-            finished, _ = wait(running, return_when=FIRST_COMPLETED)
-            died = [running[f] for f in finished if isinstance(f.exception(), BrokenProcessPool)]
-            for future in finished:
-                task, exc = running.pop(future), future.exception()
-                if not isinstance(exc, BrokenProcessPool):
-                    record(_error_row(task, exc) if exc is not None else future.result())
-            if died and workers == 1:
-                record(_error_row(died[0], WorkerDiedError(WORKER_DIED)))
-            elif died:
-                return died + list(running.values())
-        return []
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)
+    while queue or running:
+        while queue and len(running) < workers:
+            try:
+                future = pool.submit(_safe_call, fn, queue[0])
+            except BrokenProcessPool:
+                return list(running.values())
+            running[future] = queue.popleft()
+        finished, _ = wait(running, return_when=FIRST_COMPLETED)
+        died = [running[f] for f in finished if isinstance(f.exception(), BrokenProcessPool)]
+        for future in finished:
+            task, exc = running.pop(future), future.exception()
+            if not isinstance(exc, BrokenProcessPool):
+                record(_error_row(task, exc) if exc is not None else future.result())
+        if died and workers == 1:
+            record(_error_row(died[0], WorkerDiedError(WORKER_DIED)))
+        elif died:
+            return died + list(running.values())
+    return []

@@ -9,12 +9,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import multiprocessing
-import os
 import sys
 import time
 from collections.abc import Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import as_completed
+from contextlib import ExitStack
 from pathlib import Path
 
 import numpy as np
@@ -38,8 +37,7 @@ from comgrasp_pin.experiments.design import (
     monotone,
     wrap_tilt,
 )
-from comgrasp_pin.experiments.runner import exit_with_parent
-from comgrasp_pin.experiments.threads import worker_threads
+from comgrasp_pin.experiments.runner import spawn_pool
 from comgrasp_pin.planning.holding import holding_lever
 
 
@@ -98,19 +96,13 @@ class _Pool:
         self._pool = None
 
     def __enter__(self) -> _Pool:
+        self._stack = ExitStack()
         if self.workers > 1:
-            context = multiprocessing.get_context("spawn")
-            self._threads = worker_threads(self.workers)  # the workers start on submit
-            self._threads.__enter__()
-            self._pool = ProcessPoolExecutor(max_workers=self.workers, mp_context=context,
-                                             initializer=exit_with_parent,
-                                             initargs=(os.getpid(),))  # fmt: skip
+            self._pool = self._stack.enter_context(spawn_pool(self.workers))
         return self
 
     def __exit__(self, *exc) -> None:
-        if self._pool is not None:
-            self._pool.shutdown(cancel_futures=True)
-            self._threads.__exit__(None, None, None)
+        self._stack.close()
 
     def _record(self, row: dict) -> None:
         self.done[_task_key(row)] = row

@@ -46,8 +46,7 @@ def border_pixels(blob: np.ndarray) -> np.ndarray:
 
 
 def largest_component(mask: np.ndarray, min_pixels: int, what: str) -> np.ndarray:
-    """The largest connected blob of ``mask``, after a small opening, with the pieces the
-    opening cut off it.
+    """The largest connected blob of ``mask`` after a small opening, and what it cut off.
 
     The opening removes specks and one-pixel bridges; it can also cut a thin neck, such as
     a 1 cm stick's between its handle and its head. Opened pieces that were one blob of
