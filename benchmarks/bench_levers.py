@@ -11,7 +11,8 @@ both (the same scenes and sensor noise: common random numbers). Per lever, exper
 sensor preset the JSON gives
 
 - the speed: wall seconds and simulated seconds per trial at each value, and their ratio
-  (the two values' trials run one after the other in one process pool);
+  (the two values' trials run one after the other in one process pool: the machine's drift
+  from hour to hour, about 10 %, is in the ratio);
 - what changes: ours' mean accuracy, the coverage of the 95 % interval and the refusals at
   each value, the paired difference of accuracy (lever - current, t interval) over the
   grasps measured at both, how far the tilt in the jaws moved; for pick-and-place, each
