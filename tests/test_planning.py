@@ -121,7 +121,8 @@ def test_grasp_offset_flips_sign_when_the_rod_is_seen_turned_by_pi(direction, ya
     assert b == pytest.approx(-a)
     # Either way the grasp goes to the same point, s along the remembered direction.
     np.testing.assert_allclose(a * _unit(yaw), b * _unit(yaw + np.pi), atol=1e-12)
-    np.testing.assert_allclose(a * _unit(yaw) @ _unit(direction), s * abs(np.cos(yaw - direction)))
+    along = a * _unit(yaw) @ _unit(direction)  # m; atol: an s of 5e-324 m underflows to 0
+    np.testing.assert_allclose(along, s * abs(np.cos(yaw - direction)), atol=1e-15)
 
 
 def test_grasp_offset_before_any_heavy_side_is_the_centre():
