@@ -52,6 +52,7 @@ def test_estimates_need_a_robot_model(one_pose):
      ({"margin": -0.1}, "margin .* must be >= 0"),
      ({"max_offset": float("inf")}, "max_offset .* must be finite"),
      ({"max_offset": 0.0}, "max_offset .* must be > 0"),
+     ({"max_offset": 9e307}, "max_offset .* <= 6.28"),
      ({"n_grid": 1}, "n_grid must be an integer >= 2"),
      ({"n_grid": 2.5}, "n_grid must be an integer"),
      ({"n_grid": 10**6}, "n_grid must be an integer >= 2 and <= 21"),

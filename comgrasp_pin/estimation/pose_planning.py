@@ -42,7 +42,7 @@ def plan_wrist_poses(
         robot: the arm (n >= 3 joints).
         q: (n,) measurement configuration (rad / m), returned as row 0.
         k: number of poses wanted (an integer >= 1).
-        max_offset: largest change of a wrist joint from q (rad, finite, > 0).
+        max_offset: largest change of a wrist joint from q (rad, > 0, at most 2 pi).
         n_grid: grid points per wrist joint in [-max_offset, max_offset] (2 ... MAX_GRID).
         margin: distance kept from the joint limits (rad, finite, >= 0).
 
@@ -59,7 +59,9 @@ def plan_wrist_poses(
     k = validate.integer(k, "k", low=1)
     if robot.nq < N_WRIST:
         raise InvalidInputError(f"the robot has {robot.nq} joints; a wrist needs {N_WRIST}")
-    max_offset = validate.number(max_offset, "max_offset (rad)", low=0.0, low_open=True)
+    # a turn at most: a larger offset is the same poses, and a huge one overflows the grid
+    max_offset = validate.number(max_offset, "max_offset (rad)", low=0.0, high=2 * np.pi,
+                                 low_open=True)  # fmt: skip
     n_grid = validate.integer(n_grid, "n_grid", low=2, high=MAX_GRID)
     margin = validate.number(margin, "margin (rad)", low=0.0)
     if k == 1:
