@@ -83,6 +83,15 @@ class RodSlippedError(RodDroppedError):
     template = "the rod slipped as it was lifted: {}"
 
 
+class HeldRodUnmeasuredError(RodSlippedError):
+    """The side camera could not measure the held rod (every frame refused as untrusted:
+    noise and holes where the handle's surface is fitted), so it was laid back where it was
+    grasped. It did not necessarily slip; like a rod that slipped it is grasped again, and
+    ``heavy_side_world`` tells where its CoM lies, if the watch saw it turn."""
+
+    template = "the side camera cannot measure the held rod, so it was laid back: {}"
+
+
 class MissingAssetError(ComGraspError):
     """A file the package ships or depends on (urdf/, sim/, example-robot-data) is missing:
     the installation is broken."""

@@ -14,3 +14,20 @@ def test_the_lower_end_clears_the_table_by_the_margin():
     assert release_height_above_grasp(0.4, 0.0, 0.0, 0.01) == pytest.approx(0.01)  # level
     # hanging straight down: the whole far part of the rod below the jaws
     assert release_height_above_grasp(0.3, 0.02, np.pi / 2, 0.0) == pytest.approx(0.17)
+
+
+def test_a_rod_the_side_camera_cannot_measure_is_said_to_be_laid_back_not_slipped():
+    """A real realistic trial grasp of the flat bar (obj3, accuracy trial 2 of seed 0, which
+    docs/results refuses): every side view is untrusted, the rod is laid back, and the error
+    says so; it is a RodSlippedError still, which the retry policy grasps again."""
+    from comgrasp_pin.errors import HeldRodUnmeasuredError, RodSlippedError
+    from comgrasp_pin.experiments.trials import accuracy_trial, trial_seed
+
+    task = {"object": "obj3", "trial": 2, "method": "trial", "seed": trial_seed(0, "obj3", 2),
+            "sensors": "realistic"}  # fmt: skip
+    with pytest.raises(HeldRodUnmeasuredError) as caught:
+        accuracy_trial(task)
+    assert isinstance(caught.value, RodSlippedError)
+    message = str(caught.value)
+    assert message.startswith("the side camera cannot measure the held rod, so it was laid back")
+    assert "slipped" not in message and "no cylinder fits" in message

@@ -19,6 +19,7 @@ import numpy as np
 from comgrasp_pin.config import EpisodeConfig
 from comgrasp_pin.errors import (
     EmptyGripperError,
+    HeldRodUnmeasuredError,
     IKError,
     ObjectNotFoundError,
     PerceptionError,
@@ -263,8 +264,7 @@ def trial_grasp(
         held = measure_held(cell, plan, watch, before, config)
     except UntrustedImageError as exc:
         put_back(cell, plan.grasp, detection.length, plan.centre_hint, watch, config)
-        raise RodSlippedError(f"the side camera cannot measure the held rod ({exc}); it was "
-                              "laid back", _heavy_side(watch, plan, config)) from exc  # fmt: skip
+        raise HeldRodUnmeasuredError(str(exc), _heavy_side(watch, plan, config)) from exc
     try:
         loc = locate_com(cell.robot, held, config)
         extra = needs_another_pose(loc.std, loc.estimate.mass, config.motion.grip_force,
