@@ -50,6 +50,7 @@ def test_estimates_need_a_robot_model(one_pose):
     ("kwargs", "message"),
     [({"margin": float("nan")}, "margin .* must be finite"),
      ({"margin": -0.1}, "margin .* must be >= 0"),
+     ({"margin": 1e308}, "margin .* <= 6.28"),
      ({"max_offset": float("inf")}, "max_offset .* must be finite"),
      ({"max_offset": 0.0}, "max_offset .* must be > 0"),
      ({"max_offset": 9e307}, "max_offset .* <= 6.28"),

@@ -44,7 +44,7 @@ def plan_wrist_poses(
         k: number of poses wanted (an integer >= 1).
         max_offset: largest change of a wrist joint from q (rad, > 0, at most 2 pi).
         n_grid: grid points per wrist joint in [-max_offset, max_offset] (2 ... MAX_GRID).
-        margin: distance kept from the joint limits (rad, finite, >= 0).
+        margin: distance kept from the joint limits (rad, >= 0, at most 2 pi).
 
     Returns:
         (k, n) configurations; only the last three joints differ from ``q``.
@@ -63,7 +63,7 @@ def plan_wrist_poses(
     max_offset = validate.number(max_offset, "max_offset (rad)", low=0.0, high=2 * np.pi,
                                  low_open=True)  # fmt: skip
     n_grid = validate.integer(n_grid, "n_grid", low=2, high=MAX_GRID)
-    margin = validate.number(margin, "margin (rad)", low=0.0)
+    margin = validate.number(margin, "margin (rad)", low=0.0, high=2 * np.pi)
     if k == 1:
         return q[None].copy()
     candidates = _wrist_candidates(robot, q, max_offset, n_grid, margin)
