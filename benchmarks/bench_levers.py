@@ -13,10 +13,10 @@ sensor preset the JSON gives
 - the speed: wall seconds and simulated seconds per trial at each value, and their ratio
   (the two values' trials run one after the other in one process pool: the machine's drift
   from hour to hour, about 10 %, is in the ratio);
-- what changes: ours' mean accuracy, the coverage of the 95 % interval and the refusals at
-  each value, the paired difference of accuracy (lever - current, t interval) over the
-  grasps measured at both, how far the tilt in the jaws moved; for pick-and-place, each
-  method's successes at each value and the scenes whose outcome flipped.
+- what changes: at each value the sweep's own measures (ours' mean accuracy, the grasps that
+  gave an estimate, the coverage of the 95 % interval) and the rms z; the paired difference of accuracy (lever - current, t interval) over the
+  grasps measured at both, how far the tilt in the jaws moved; for pick-and-place, both
+  methods' successes at each value and the scenes whose outcome flipped.
 
 A lever "pays" when it is faster and its paired differences' intervals hold 0 (or lie within
 a point of accuracy) with no more refusals or failures: nothing here decides that, the
@@ -36,7 +36,8 @@ from pathlib import Path
 
 import numpy as np
 
-from comgrasp_pin.experiments.stats import Z_95, mean_ci, paired_difference, wilson_interval
+from comgrasp_pin.experiments.stats import calibration, paired_difference, z_scores
+from comgrasp_pin.experiments.sweep import point_measures
 
 OBJECTS = "obj1,obj2,obj3,obj4,obj5,obj6"
 LEVERS = {
@@ -77,26 +78,18 @@ def _speed(rows: list[dict]) -> dict:
             "realtime_factor": float(np.nansum(sim) / np.nansum(wall))}  # fmt: skip
 
 
-def _accuracy_side(rows: list[dict]) -> dict:
-    measured = [r for r in rows if not r.get("error") and np.isfinite(_f(r, "accuracy"))]
-    acc = np.array([_f(r, "accuracy") for r in measured])
-    z = np.array([(_f(r, "pos_esti_m") - _f(r, "pos_real_m")) / _f(r, "pos_std_m")
-                  for r in measured])  # fmt: skip
-    inside = int(np.sum(np.abs(z) <= Z_95))
-    ci = mean_ci(100 * acc)
-    return {"measured": len(measured), "refused": len(rows) - len(measured),
-            "accuracy_pct": [ci.mean, ci.lo, ci.hi],
-            "coverage95_pct": [100 * inside / max(len(z), 1),
-                               *(100 * x for x in wilson_interval(inside, len(z)))],
-            "rms_z": float(np.sqrt(np.mean(z**2))) if len(z) else float("nan")}  # fmt: skip
-
-
-def _regrasp_side(rows: list[dict]) -> dict:
-    out = {}
-    for method in ("baseline", "regrasp"):
-        mine = [r for r in rows if r["method"] == method]
-        wins = sum(_f(r, "success") == 1 for r in mine)
-        out[method] = [wins, len(mine)]
+def _outcome(rows: list[dict], experiment: str) -> dict:
+    """One value's outcome: the sweep's own measures (``sweep.point_measures``: mean
+    accuracy, success, coverage of the 95 % interval, each as value, 95 % low, high, n),
+    the rms z of the error bars, and for pick-and-place the baseline's successes too."""
+    out: dict = dict(point_measures(rows, experiment))
+    ok = [r for r in rows if not r.get("error")]
+    z = z_scores(*(np.array([_f(r, c) for r in ok]) for c in
+                   ("pos_esti_m", "pos_real_m", "pos_std_m")))  # fmt: skip
+    out["rms_z"] = calibration(z).rms
+    if experiment == "regrasp":
+        baseline = [r for r in rows if r["method"] == "baseline"]
+        out["baseline_successes"] = [sum(_f(r, "success") == 1 for r in baseline), len(baseline)]
     return out
 
 
@@ -106,7 +99,8 @@ def compare(csv_path: Path, path: str, values, experiment: str) -> dict:
         rows = list(csv.DictReader(f))
     at = {v: [r for r in rows if float(r[path]) == float(v)] for v in values}
     base, lever = values
-    out = {"values": list(values), "speed": {str(v): _speed(at[v]) for v in values}}
+    out = {"values": list(values), "speed": {str(v): _speed(at[v]) for v in values},
+           "outcome": {str(v): _outcome(at[v], experiment) for v in values}}  # fmt: skip
     out["wall_ratio_current_over_lever"] = (out["speed"][str(base)]["wall_s_per_trial"]
                                             / out["speed"][str(lever)]["wall_s_per_trial"])  # fmt: skip
     key = ("object", "trial", "method")
@@ -116,7 +110,6 @@ def compare(csv_path: Path, path: str, values, experiment: str) -> dict:
             pairs.setdefault(tuple(r[k] for k in key), {})[v] = r
     both = [p for p in pairs.values() if len(p) == 2]
     if experiment == "accuracy":
-        out["outcome"] = {str(v): _accuracy_side(at[v]) for v in values}
         a = np.array([_f(p[lever], "accuracy") for p in both])
         b = np.array([_f(p[base], "accuracy") for p in both])
         d = paired_difference(100 * a, 100 * b)
@@ -128,7 +121,6 @@ def compare(csv_path: Path, path: str, values, experiment: str) -> dict:
                          "tilt_change_deg_median": float(np.median(tilt)) if len(tilt) else None,
                          "tilt_changed_over_5deg": int(np.sum(tilt > 5.0))}  # fmt: skip
     else:
-        out["outcome"] = {str(v): _regrasp_side(at[v]) for v in values}
         flips = {m: [0, 0] for m in ("baseline", "regrasp")}
         for p in both:
             s0, s1 = _f(p[base], "success"), _f(p[lever], "success")
@@ -151,11 +143,9 @@ def main() -> None:
         path, values, what = LEVERS[name]
         results[name] = {"path": path, "what": what}
         for experiment, sensors in CASES:
-            start = time.perf_counter()
             out = args.runs / f"{name}_{experiment}_{sensors}"
             csv_path = run_sweep(path, values, experiment, sensors, args, out)
             case = compare(csv_path, path, values, experiment)
-            case["sweep_wall_s"] = time.perf_counter() - start
             results[name][f"{experiment}_{sensors}"] = case
             print(name, experiment, sensors, json.dumps(case["speed"]), flush=True)
     results["environment"] = {"trials_per_object": args.trials, "objects": OBJECTS,
