@@ -140,8 +140,8 @@ def test_depth_noise_on_every_stride_th_pixel_is_the_full_images(stride, corr_px
     seed=st.integers(0, 2**32 - 1),
 )
 def test_transform_points_is_the_plain_product_to_the_bit(n, rotvec, shift, seed):
-    """``transform_points`` (the translation added in place)
-    against p @ R^T + t written out, on points of a depth image's range."""
+    """``transform_points``, which adds the translation in place, is p @ R^T + t written
+    out, to the bit: on random points and on a whole image's worth of depths."""
     import cv2
 
     from comgrasp_pin.camera import transform_points
