@@ -32,15 +32,28 @@ class ArmServo:
         self.ki = ki
         self.tau_i_limit = tau_i_limit
         self.tau_i = np.zeros(n)
+        self._work = np.zeros(n)
 
     def reset(self) -> None:
         """Forget the integral term (after teleporting the arm)."""
         self.tau_i[:] = 0.0
 
-    def ctrl(self, q: np.ndarray, q_des: np.ndarray, tau_ff: np.ndarray, dt: float) -> np.ndarray:
-        """Actuator command (rad) for one control step of length ``dt`` (s)."""
-        tau_i = self.tau_i
-        tau_i += (self.ki * self.kp * dt) * (q_des - q)
+    def ctrl(
+        self,
+        q: np.ndarray,
+        q_des: np.ndarray,
+        tau_ff: np.ndarray,
+        dt: float,
+        out: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """Actuator command (rad) for one control step of length ``dt`` (s), written into
+        ``out`` (n,) when given (a view of MjData's ctrl: no array made per step)."""
+        tau_i, work = self.tau_i, self._work
+        np.subtract(q_des, q, out=work)
+        work *= self.ki * self.kp * dt
+        tau_i += work
         np.minimum(tau_i, self.tau_i_limit, out=tau_i)  # np.clip costs more on 6 numbers
         np.maximum(tau_i, -self.tau_i_limit, out=tau_i)
-        return q_des + (tau_ff + tau_i) * (1.0 / self.kp)
+        np.add(tau_ff, tau_i, out=work)
+        work *= 1.0 / self.kp
+        return np.add(q_des, work, out=out)

@@ -34,7 +34,8 @@ class Simulation:
         model, data: the MuJoCo model and data.
         q_des: (6,) commanded arm configuration (rad).
         grip_force: commanded force of each finger (N); positive closes, negative opens.
-        tau_measured: (6,) the torque sensor's latest sample (N m), noisy.
+        tau_measured: (6,) the torque sensor's latest sample (N m), noisy (formed when
+            read: samples nobody reads only advance the sensor's noise and drift).
         observers: callables ``f(sim)`` run after every physics step (video recording, slip
             monitoring); each should return at once unless it is its time to act.
     """
@@ -61,19 +62,40 @@ class Simulation:
         c = self.config
         self.servo = ArmServo(len(ARM_JOINTS), kp, c.servo_ki, c.servo_tau_i_limit)
         self._arm_qadr, self._arm_vadr, self._arm_act, self._tau_adr = (
-            _as_slice(a) for a in (self._arm_qadr, self._arm_vadr, self._arm_act, self._tau_adr)
+            _contiguous(a, name)
+            for a, name in zip(
+                (self._arm_qadr, self._arm_vadr, self._arm_act, self._tau_adr),
+                ("qpos", "qvel", "actuator", "torque sensor"),
+                strict=True,
+            )
         )
         self.q_des = np.zeros(len(ARM_JOINTS))
         self.grip_force = 0.0
         self.sensor = make_torque_sensor(len(ARM_JOINTS), sensor or TorqueSensorConfig(), seed)
         mujoco.mj_forward(m, self.data)
-        self.tau_measured = self.joint_torques()
+        self._tau = self.joint_torques()
+        self._unread = 0  # control steps since the sensor's last formed sample
+        d = self.data
+        # Views into MjData (its arrays live as long as it does): no copy, no index per step.
+        self._q_arm, self._qd_arm = d.qpos[self._arm_qadr], d.qvel[self._arm_vadr]
+        self._bias_arm, self._ctrl_arm = d.qfrc_bias[self._arm_vadr], d.ctrl[self._arm_act]
+        self._tau_true = d.sensordata[self._tau_adr]
         self.observers: list[Callable[[Simulation], None]] = []
         self._unstable_counts = self.data.warning.number[UNSTABLE]  # a live view
 
     @property
     def time(self) -> float:
         return float(self.data.time)
+
+    @property
+    def tau_measured(self) -> np.ndarray:
+        """(6,) the torque sensor's sample at the last control step (N m)."""
+        if self._unread:
+            dt = self.model.opt.timestep
+            self.sensor.skip(self._unread - 1, dt)
+            self._tau = self.sensor.read(self._tau_true, dt)
+            self._unread = 0
+        return self._tau
 
     @property
     def q(self) -> np.ndarray:
@@ -118,15 +140,30 @@ class Simulation:
             UnstablePhysicsError: the state went bad (NaN, inf or huge positions,
                 velocities, accelerations or controls; MuJoCo's ``mjWARN_BAD*`` warnings).
         """
+        self._advance(n, None)
+
+    def track(self, q_des: np.ndarray) -> None:
+        """One physics step per row of ``q_des`` (N, 6) (rad), each row commanded in turn
+        (``step`` with ``q_des`` set before each step)."""
+        self._advance(len(q_des), q_des)
+
+    def _advance(self, n: int, q_path: np.ndarray | None) -> None:
         m, d = self.model, self.data
         dt = m.opt.timestep
         d.ctrl[self._finger_act] = self.grip_force
-        qadr, vadr, act, tau_adr = self._arm_qadr, self._arm_vadr, self._arm_act, self._tau_adr
-        ctrl, read, observers = self.servo.ctrl, self.sensor.read, self.observers
-        for _ in range(n):
-            d.ctrl[act] = ctrl(d.qpos[qadr], self.q_des, d.qfrc_bias[vadr], dt)
+        q, qd, bias, ctrl, tau_true = (self._q_arm, self._qd_arm, self._bias_arm,
+                                       self._ctrl_arm, self._tau_true)  # fmt: skip
+        servo, observers = self.servo.ctrl, self.observers
+        read_each_step = self.sensor.needs_velocity
+        for i in range(n):
+            if q_path is not None:
+                self.q_des = q_path[i]
+            servo(q, self.q_des, bias, dt, ctrl)
             mujoco.mj_step(m, d)
-            self.tau_measured = read(d.sensordata[tau_adr], dt, d.qvel[vadr])
+            if read_each_step:
+                self._tau = self.sensor.read(tau_true, dt, qd)
+            else:
+                self._unread += 1
             for observer in observers:
                 observer(self)
         if self._unstable_counts.any():
@@ -157,21 +194,27 @@ class Simulation:
         """Hold still for ``settle`` s, then average the sensor over ``window`` s."""
         self.hold(settle)
         start = self.time
-        n = max(1, int(round(window / self.model.opt.timestep)))
+        dt = self.model.opt.timestep
+        n = max(1, int(round(window / dt)))
         taus = np.empty((n, len(ARM_JOINTS)))
         qs = np.empty((n, len(ARM_JOINTS)))
+        # Without observers (which may read the sensor) the window's samples are formed at
+        # once from the true torques, as the sensor would have formed them step by step.
+        at_once = not (self.sensor.needs_velocity or self.observers)
         for k in range(n):
             self.step()
-            taus[k] = self.tau_measured
-            qs[k] = self.data.qpos[self._arm_qadr]
+            taus[k] = self._tau_true if at_once else self.tau_measured
+            qs[k] = self._q_arm
+        if at_once:
+            self.sensor.skip(self._unread - n, dt)
+            taus = self.sensor.read_many(taus, dt)
+            self._tau, self._unread = taus[-1].copy(), 0
         std_error = taus.std(axis=0, ddof=1) / np.sqrt(n) if n > 1 else np.full(6, np.inf)
-        return TorqueMeasurement(
-            taus.mean(axis=0), std_error, qs.mean(axis=0), n, n * self.model.opt.timestep, start
-        )
+        return TorqueMeasurement(taus.mean(axis=0), std_error, qs.mean(axis=0), n, n * dt, start)
 
 
-def _as_slice(index: np.ndarray) -> np.ndarray | slice:
-    """A contiguous index array as a slice (indexing by a slice is a view, with no copy)."""
-    if len(index) and np.array_equal(index, np.arange(index[0], index[0] + len(index))):
-        return slice(int(index[0]), int(index[0]) + len(index))
-    return index
+def _contiguous(index: np.ndarray, what: str) -> slice:
+    """The arm's contiguous ``index`` array as a slice (indexing by a slice is a view)."""
+    if len(index) == 0 or not np.array_equal(index, np.arange(index[0], index[0] + len(index))):
+        raise ValueError(f"the arm's {what} addresses {index} are not contiguous in the model")
+    return slice(int(index[0]), int(index[0]) + len(index))

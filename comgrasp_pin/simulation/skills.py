@@ -26,10 +26,7 @@ from comgrasp_pin.workcell import DROP_BOX_XY, GRIPPER
 def follow(sim: Simulation, traj: Quintic) -> None:
     """Track ``traj`` (started now) with the servo, one sample per physics step."""
     dt = sim.model.opt.timestep
-    qs = traj.sample(np.arange(1, int(np.ceil(traj.duration / dt)) + 1) * dt)[0]
-    for q in qs:
-        sim.q_des = q
-        sim.step(1)
+    sim.track(traj.sample(np.arange(1, int(np.ceil(traj.duration / dt)) + 1) * dt)[0])
 
 
 def move_to(
@@ -80,11 +77,9 @@ def move_linear(
         knots.append(q)
     knots = np.array(knots)
     steps = int(round(duration / dt))
-    for k in range(1, steps + 1):
-        x = k / steps * n
-        i = min(int(x), n - 1)
-        sim.q_des = knots[i] + (x - i) * (knots[i + 1] - knots[i])
-        sim.step(1)
+    x = np.arange(1, steps + 1) / steps * n  # knot intervals covered at each step
+    i = np.minimum(x.astype(int), n - 1)
+    sim.track(knots[i] + (x - i)[:, None] * (knots[i + 1] - knots[i]))
 
 
 def open_gripper(sim: Simulation, config: MotionConfig, duration: float) -> None:
