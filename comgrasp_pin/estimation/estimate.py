@@ -10,7 +10,6 @@ import math
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import overload
 
 import numpy as np
 
@@ -21,16 +20,6 @@ MIN_MASS_KG = 1e-3
 """Without torque_std, a payload below this mass (kg) is taken as an empty gripper."""
 MASS_SIGMAS = 3.0
 """With torque_std, a payload below MASS_SIGMAS standard deviations is an empty gripper."""
-
-
-@overload
-def _readonly(a: np.ndarray) -> np.ndarray: ...
-@overload
-def _readonly(a: None) -> None: ...
-def _readonly(a: np.ndarray | None) -> np.ndarray | None:
-    if a is not None:
-        a.flags.writeable = False
-    return a
 
 
 @dataclass(frozen=True)
@@ -140,6 +129,31 @@ def check_finite_result(**values: float | np.ndarray | None) -> None:
         )
 
 
+def refuse_empty_gripper(mass: float, mass_var: float | None, cond: float) -> None:
+    """EmptyGripperError (or UnobservableError) when ``mass`` (kg) is not measurably positive.
+
+    Args:
+        mass: the estimated mass (kg).
+        mass_var: its variance (kg^2), or None without a covariance.
+        cond: the condition number of the torque regression.
+    """
+    threshold = MIN_MASS_KG if mass_var is None else MASS_SIGMAS * math.sqrt(max(mass_var, 0.0))
+    if mass > threshold:
+        return
+    if mass_var is not None and cond > NEAR_SINGULAR:
+        raise UnobservableError(
+            f"the pose set is near singular (condition number {cond:.3g} > "
+            f"{NEAR_SINGULAR:g}): the estimate {mass:.3g} kg +- {threshold / MASS_SIGMAS:.3g} "
+            "kg is swamped by its error bar; measure away from singular configurations"
+        )
+    what = f"{MASS_SIGMAS:g} standard deviations" if mass_var is not None else "MIN_MASS_KG"
+    raise EmptyGripperError(
+        f"estimated payload mass {mass:.3g} kg is not measurably above zero (threshold "
+        f"{threshold:.3g} kg = {what}): is the gripper empty, or are tau_before and "
+        "tau_after swapped?"
+    )
+
+
 def assemble_estimate(
     mass: float,
     com_ee: np.ndarray,
@@ -178,39 +192,70 @@ def assemble_estimate(
             deviations, or MIN_MASS_KG without a covariance).
     """
     m = float(mass)
-    if cov is not None:
-        threshold = MASS_SIGMAS * math.sqrt(max(cov[0, 0], 0.0))
-    else:
-        threshold = MIN_MASS_KG
-    if not m > threshold:
-        if cov is not None and cond > NEAR_SINGULAR:
-            raise UnobservableError(
-                f"the pose set is near singular (condition number {cond:.3g} > "
-                f"{NEAR_SINGULAR:g}): the estimate {m:.3g} kg +- {threshold / MASS_SIGMAS:.3g} "
-                "kg is swamped by its error bar; measure away from singular configurations"
-            )
-        what = f"{MASS_SIGMAS:g} standard deviations" if cov is not None else "MIN_MASS_KG"
-        raise EmptyGripperError(
-            f"estimated payload mass {m:.3g} kg is not measurably above zero (threshold "
-            f"{threshold:.3g} kg = {what}): is the gripper empty, or are tau_before and "
-            "tau_after swapped?"
-        )
+    refuse_empty_gripper(m, None if cov is None else float(cov[0, 0]), float(cond))
+    return new_estimate(
+        np.array(com_ee, dtype=float),
+        m,
+        None if cov is None else np.array(cov, dtype=float),
+        None if u is None else np.array(u, dtype=float),
+        np.array(residuals, dtype=float),
+        np.array(sv, dtype=float),
+        float(cond),
+        method,
+        status,
+        iters,
+        np.array(T, dtype=float),
+        noise_std,
+    )
+
+
+def new_estimate(
+    com_ee: np.ndarray,
+    mass: float,
+    cov: np.ndarray | None,
+    u: np.ndarray | None,
+    residuals: np.ndarray,
+    sv: np.ndarray,
+    cond: float,
+    method: str,
+    status: str,
+    iters: int,
+    T: np.ndarray,
+    noise_std: float | None,
+) -> ComEstimate:
+    """The ``ComEstimate`` of arrays this package owns (made read-only here, not copied).
+
+    Refuses non-finite results (InvalidInputError). The dataclass's own ``__init__`` sets
+    each of its 15 fields through ``object.__setattr__`` (frozen), 2 us of a 10 us estimate;
+    the instance dictionary is filled in one step instead, with the same fields.
+    """
     rms = math.sqrt(float(residuals.ravel() @ residuals.ravel()) / residuals.size)
-    check_finite_result(mass=m, com_ee=com_ee, cov=cov, residual_rms=rms)
-    return ComEstimate(
-        com_ee=_readonly(np.array(com_ee, dtype=float)),
-        mass=m,
-        weight=m * G0,
-        unobservable_ee=_readonly(None if u is None else np.array(u, dtype=float)),
-        cov=_readonly(None if cov is None else np.array(cov, dtype=float)),
+    # Python float sums never warn: NaN or inf anywhere (or an overflowing sum) shows here,
+    # and check_finite_result then names what is not finite
+    screen = mass + rms + sum(com_ee.tolist())
+    if cov is not None:
+        screen += sum(cov.ravel().tolist())
+    if not math.isfinite(screen):
+        check_finite_result(mass=mass, com_ee=com_ee, cov=cov, residual_rms=rms)
+    for a in (com_ee, u, cov, residuals, sv, T):
+        if a is not None:
+            a.setflags(write=False)
+    est = object.__new__(ComEstimate)
+    est.__dict__.update(
+        com_ee=com_ee,
+        mass=mass,
+        weight=mass * G0,
+        unobservable_ee=u,
+        cov=cov,
         residual_rms=rms,
-        residuals=_readonly(residuals),
-        condition_number=float(cond),
-        singular_values=_readonly(sv),
+        residuals=residuals,
+        condition_number=cond,
+        singular_values=sv,
         method=method,
         solver_status=status,
         iterations=iters,
         n_poses=residuals.shape[0],
-        T_world_ee=_readonly(np.array(T, dtype=float)),
+        T_world_ee=T,
         noise_std=noise_std,
     )
+    return est

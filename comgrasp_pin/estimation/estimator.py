@@ -31,12 +31,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from comgrasp_pin.errors import InvalidInputError, UnobservableError
-from comgrasp_pin.estimation import ipopt
+from comgrasp_pin.estimation import closed_form, ipopt
+from comgrasp_pin.estimation.closed_form import NOISE_FLOOR
 from comgrasp_pin.estimation.estimate import (
     ComEstimate,
     assemble_estimate,
     delta_method,
-    singular_is_unobservable,
 )
 from comgrasp_pin.estimation.inputs import check_options, validate_inputs
 from comgrasp_pin.estimation.prior import AxisPrior
@@ -53,9 +53,6 @@ RCOND = 1e-6
 """Singular values of Y below RCOND * (largest) count as unobservable directions."""
 MASS_NULL_TOL = 1e-3
 """A lost direction whose mass component exceeds this (unit null vector) makes m unobservable."""
-NOISE_FLOOR = 1e-6
-"""No torque difference is taken as known better than this (N m): the noise estimated from
-the residuals of noise-free data is floored here, so its weights stay finite."""
 
 
 @dataclass(frozen=True)
@@ -74,7 +71,6 @@ class _Reduced:
     cond: float
 
 
-@singular_is_unobservable()
 def estimate_com(
     robot: RobotModel,
     q: np.ndarray,
@@ -117,14 +113,30 @@ def estimate_com(
     """
     check_options(method, rcond, loss, huber_delta, com_prior, torque_std)
     Q, dtau, sigma = validate_inputs(robot, q, tau_before, tau_after, torque_std)
-    red = _reduce(robot, Q, rcond, _motion_maps(payload_motion_ee, len(Q)))
+    try:
+        if method == "lstsq" and payload_motion_ee is None:
+            est = closed_form.estimate(robot, Q, dtau, sigma, rcond)
+            if est is not None:
+                return est
+        return _estimate(robot, Q, dtau, sigma, method, rcond, loss, huber_delta, com_prior,
+                         payload_motion_ee)  # fmt: skip
+    except np.linalg.LinAlgError as exc:
+        raise UnobservableError(
+            f"the regression is numerically singular ({exc}): the poses do not determine the "
+            "estimate (a larger rcond refuses such pose sets up front)"
+        ) from None
+
+
+def _estimate(robot, Q, dtau, sigma, method, rcond, loss, huber_delta, com_prior, motion):
+    """The general path: SVD observability and ``np.linalg.lstsq`` (any pose set), IPOPT."""
+    red = _reduce(robot, Q, rcond, _motion_maps(motion, len(Q)))
     k, n = Q.shape
     b = dtau.ravel()
     Yr = red.Y @ red.B
     # Row weights: 1 / std of each torque difference, given or estimated from the residuals.
     noise_std = None
     if sigma is not None:
-        rows_w = np.tile(1.0 / (math.sqrt(2.0) * sigma), k)
+        rows_w = np.tile(1.0 / (math.sqrt(2.0) * np.broadcast_to(sigma, (n,))), k)
     else:
         w_plain = np.linalg.lstsq(Yr, b, rcond=None)[0]
         dof = len(b) - Yr.shape[1]
