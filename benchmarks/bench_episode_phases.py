@@ -9,8 +9,9 @@ each phase's time is exclusive (a render inside the slip watch counts as a rende
 watch). Phases:
 
 - ``mj_step``: MuJoCo's physics step (C).
-- ``step_python``: the Python of ``Simulation.step`` and ``measure_torques`` around it: servo,
-  torque sensor, observer dispatch, instability check (per step: ``per_step_us``).
+- ``step_python``: the Python of ``Simulation.step``/``track`` (their ``_advance``) and
+  ``measure_torques`` around it: servo, torque sensor, observer dispatch, instability check
+  (per step: ``per_step_us``).
 - ``render``: offscreen renders (depth for perception, RGB/segmentation where asked).
 - ``perception_top``, ``perception_side``: the top view and the side view (OpenCV + NumPy) on
   the rendered images.
@@ -49,7 +50,7 @@ from comgrasp_pin.simulation.cameras import CameraRig  # noqa: E402
 
 PHASES = {
     "mj_step": [(mujoco, "mj_step")],
-    "step_python": [(sim_module.Simulation, "step"), (sim_module.Simulation, "measure_torques")],
+    "step_python": [(sim_module.Simulation, "_advance"), (sim_module.Simulation, "measure_torques")],
     "render": [(CameraRig, "_render")],
     "perception_top": [(eyes, "detect_rod_top_down")],
     "perception_side": [(eyes, "observe_held_rod")],
