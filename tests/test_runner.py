@@ -160,3 +160,31 @@ def test_workers_of_a_killed_driver_do_not_run_on(tmp_path):
     while any(_alive(pid) for pid in workers) and time.monotonic() < deadline:
         time.sleep(0.2)
     assert not any(_alive(pid) for pid in workers)
+
+
+def _pid_or_death(task: dict) -> dict:
+    if task.get("die"):
+        os._exit(3)
+    return {"value": os.getpid()}
+
+
+def test_a_kept_pool_serves_several_runs_and_is_dropped_when_a_worker_dies(tmp_path):
+    """Inside ``kept_pool`` two experiments run on the same two worker processes (started
+    once); a worker's death fails that trial only, and the runs after it start their own
+    pool, their rows complete."""
+    from comgrasp_pin.experiments.runner import _KEPT, kept_pool
+
+    with kept_pool(2):
+        first = run_trials(_pid_or_death, _tasks(6), tmp_path / "a.csv", COLUMNS, workers=2)
+        second = run_trials(_pid_or_death, _tasks(6), tmp_path / "b.csv", COLUMNS, workers=2)
+        pids = {r["value"] for r in first} | {r["value"] for r in second}
+        assert len(pids) == 2 and os.getpid() not in pids
+        dying = [{**t, "die": t["trial"] == 2} for t in _tasks(6)]
+        third = run_trials(_pid_or_death, dying, tmp_path / "c.csv", COLUMNS, workers=2)
+        assert 2 not in _KEPT  # the broken pool is not kept
+        fourth = run_trials(_pid_or_death, _tasks(4), tmp_path / "d.csv", COLUMNS, workers=2)
+    assert [bool(r["error"]) for r in sorted(third, key=lambda r: r["trial"])] == [
+        False, False, True, False, False, False
+    ]  # fmt: skip
+    assert not any(r["error"] for r in fourth) and not {r["value"] for r in fourth} & pids
+    assert not _KEPT

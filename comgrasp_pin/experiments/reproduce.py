@@ -14,7 +14,7 @@ from comgrasp_pin.config import sensor_preset
 from comgrasp_pin.experiments import report
 from comgrasp_pin.experiments.ray_backend import check_backend
 from comgrasp_pin.experiments.report.sensors import sensors_comparison
-from comgrasp_pin.experiments.runner import read_rows, run_trials
+from comgrasp_pin.experiments.runner import kept_pool, read_rows, run_trials
 from comgrasp_pin.experiments.trials import (
     ACCURACY_COLUMNS,
     REGRASP_COLUMNS,
@@ -189,15 +189,16 @@ def reproduce(opts: RunOptions) -> Path:
     workers = opts.workers
     check_backend(opts.backend, opts.ray_address)
     out.mkdir(parents=True, exist_ok=True)
-    start = time.perf_counter()
-    acc = run_accuracy(opts)
-    mid = time.perf_counter()
-    reg = run_regrasp(opts)
-    end = time.perf_counter()
-    second = _second_seed_section(opts, out)
-    after_second = time.perf_counter()
-    ideal = _ideal_section(opts, out, acc, reg)
-    done = time.perf_counter()
+    with kept_pool(workers if opts.backend == "local" else 1):  # workers started once
+        start = time.perf_counter()
+        acc = run_accuracy(opts)
+        mid = time.perf_counter()
+        reg = run_regrasp(opts)
+        end = time.perf_counter()
+        second = _second_seed_section(opts, out)
+        after_second = time.perf_counter()
+        ideal = _ideal_section(opts, out, acc, reg)
+        done = time.perf_counter()
     beside = "" if opts.sensors == "ideal" else " (ideal sensors beside it below)"
     settings = settings_summary(noise, opts.estimator, opts.sensors)
     meta = {

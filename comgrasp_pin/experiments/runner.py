@@ -199,9 +199,37 @@ def _run_parallel(fn, todo, workers: int, record) -> None:
 def _run_pool(fn, queue: deque, workers: int, record) -> list[dict]:
     """Run tasks from ``queue`` (at most ``workers`` at a time) until it is empty or a
     worker dies; return the tasks in flight when it died (none otherwise). A task that
-    kills the only worker of a one-worker pool is recorded as failed."""
+    kills the only worker of a one-worker pool is recorded as failed. The pool is the one
+    ``kept_pool`` keeps, if it has as many workers, else a new one."""
+    kept = _KEPT.get(workers)
+    if kept is not None:
+        died = _run_in_pool(kept, fn, queue, workers, record)
+        if died:
+            del _KEPT[workers]  # broken: what runs next starts a pool of its own
+        return died
     with spawn_pool(workers) as pool:
         return _run_in_pool(pool, fn, queue, workers, record)
+
+
+_KEPT: dict[int, ProcessPoolExecutor] = {}
+"""The pools ``kept_pool`` keeps, by their number of workers."""
+
+
+@contextmanager
+def kept_pool(workers: int) -> Iterator[None]:
+    """Within the block, every local run of ``workers`` processes uses one pool: its
+    workers start (imports, OpenGL context, solvers) once for several experiments, not
+    once for each. A trial's result does not depend on the worker it runs in: each builds
+    its world from its own seed."""
+    if workers <= 1 or workers in _KEPT:
+        yield
+        return
+    with spawn_pool(workers) as pool:
+        _KEPT[workers] = pool
+        try:
+            yield
+        finally:
+            _KEPT.pop(workers, None)
 
 
 @contextmanager
