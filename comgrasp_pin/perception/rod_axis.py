@@ -135,27 +135,30 @@ def fit_cylinder(
     params = np.array([angle, point @ normal, 0.0, 0.0] if free_y else [angle, point @ normal, 0.0])
     params[2] = np.median(_cylinder_residuals(params, points, y2_all)) if radius is None else radius
     free = [0, 1] + ([] if radius is not None else [2]) + ([3] if free_y else [])
+    # Every residual is evaluated on all the points and the inliers' taken from it (a
+    # point's residual is its own, tests/test_fast_paths.py): the accepted trial's are the
+    # next iteration's, and no inlier copy of the points is made.
     keep = np.ones(len(points), dtype=bool)
-    res = _cylinder_residuals(params, points, y2_all)
+    res_signed = _cylinder_residuals(params, points, y2_all)
+    res = res_signed
     for _ in range(FIT_ITERATIONS):
-        kept = points[keep]
-        y2 = None if y2_all is None else y2_all[keep]
         jac = np.empty((len(res), len(free)))
         for k, i in enumerate(free):
             step = np.zeros(len(params))
             step[i] = FIT_STEPS[i]
-            jac[:, k] = (_cylinder_residuals(params + step, kept, y2) - res) / FIT_STEPS[i]
-        # Levenberg-Marquardt step: damped, accepted only if it lowers the cost.
+            stepped = _cylinder_residuals(params + step, points, y2_all)[keep]
+            jac[:, k] = (stepped - res) / FIT_STEPS[i]
+        # Levenberg-Marquardt step: damped, accepted only if it lowers the inliers' cost.
         jtj, jtr = jac.T @ jac, jac.T @ res
         cost = np.sum(res**2)
         for damping in FIT_DAMPING:
             delta = np.linalg.solve(jtj + damping * np.diag(np.diag(jtj)), jtr)
             trial = params.copy()
             trial[free] -= delta
-            if np.sum(_cylinder_residuals(trial, kept, y2) ** 2) < cost:
-                params = trial
+            trial_signed = _cylinder_residuals(trial, points, y2_all)
+            if np.sum(trial_signed[keep] ** 2) < cost:
+                params, res_signed = trial, trial_signed
                 break
-        res_signed = _cylinder_residuals(params, points, y2_all)
         res_all = np.abs(res_signed)
         keep = res_all < 3.0 * median(res_all[keep]) + FIT_OUTLIER_MARGIN
         res = res_signed[keep]  # each point's residual is its own: those of the kept points

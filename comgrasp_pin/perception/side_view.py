@@ -27,15 +27,12 @@ from comgrasp_pin.perception._points import (
     drop_flying,
     fill_holes,
     noise_level,
-    points_in,
     slice_medians,
 )
+from comgrasp_pin.perception.held_region import held_candidates, robot_volume
 from comgrasp_pin.perception.rod_axis import centre_line, refine_axis
 from comgrasp_pin.perception.rod_ends import centre_along, end_profile
 
-SLAB_HALF_WIDTH = 0.08  # |y_ee| of the region the held object may occupy (m)
-REACH = 0.40  # distance from the TCP beyond which nothing is the held object (m)
-TABLE_MARGIN = 0.003  # points less than this above the table are the table (m)
 MIN_PIXELS = 60
 CLEAN_NOISE = 3e-4  # depth noisier than this (m, robust std about its median) is filtered
 FLYING_MIN, FLYING_SIGMAS = 0.005, 4.0  # flying pixels: this far from all neighbours (m, stds)
@@ -44,11 +41,6 @@ MIN_EXTENT = 0.05  # a held rod is at least this long in view (m)
 DEPTH_MARGIN = 0.003  # the handle's surface lies within its radius (+ this) of y_ee = 0 (m)
 DEPTH_SLICE = 0.01  # slices along the rod for its depth line (m)
 OFF_AXIS_PERCENTILE = 99.0  # SideView.off_axis: nearly the farthest point, robust to a stray
-# The gripper's own volume in the ee frame (from the URDF): fingers and pads (with margin),
-# palm, and the wrist above it.
-_FINGERS = (0.016, 0.06, -0.085, 0.018)  # |x| <, |y| <, z from, z to
-_PALM = (0.035, 0.075, -0.14, -0.075)
-_WRIST_RADIUS, _WRIST_BELOW_Z = 0.05, -0.13
 
 
 @dataclass(frozen=True)
@@ -127,15 +119,6 @@ def clean_side_depth(depth: np.ndarray) -> tuple[np.ndarray, float, bool]:
     return depth, 0.0, False
 
 
-def _gripper_volume(p: np.ndarray) -> np.ndarray:
-    x, y, z = p[..., 0], p[..., 1], p[..., 2]
-    inside = np.zeros(x.shape, dtype=bool)
-    for ax, ay, z0, z1 in (_FINGERS, _PALM):
-        inside |= (np.abs(x) < ax) & (np.abs(y) < ay) & (z > z0) & (z < z1)
-    inside |= (np.hypot(x, y) < _WRIST_RADIUS) & (z < _WRIST_BELOW_Z)
-    return inside
-
-
 def observe_held_rod(
     rgb: np.ndarray | None,
     depth: np.ndarray,
@@ -189,23 +172,8 @@ def observe_held_rod(
     handle_radius = validate.optional_number(handle_radius, "handle_radius (m)", low=0.0,
                                              low_open=True)  # fmt: skip
     depth, noise, cleaned = clean_side_depth(check_images(rgb, depth, camera))
-    p = points_in(T_ee_cam, depth, camera)
-    finite = np.isfinite(p[..., 0])
-    candidate = finite & (np.abs(p[..., 1]) < SLAB_HALF_WIDTH)
-    candidate &= np.linalg.norm(np.nan_to_num(p, nan=1e3), axis=-1) < REACH
-    if T_world_ee is not None and table_z is not None:
-        z_world = np.nan_to_num(p, nan=1e3) @ T_world_ee[2, :3] + T_world_ee[2, 3]
-        candidate &= z_world > table_z + TABLE_MARGIN
-
-    def excluded(pts: np.ndarray) -> np.ndarray:
-        """The robot's own volume (gripper and arm) among points (N, 3)."""
-        inside = _gripper_volume(pts)
-        for p0, p1, radius in exclude_capsules:
-            inside |= _in_capsule(pts, np.asarray(p0, float), np.asarray(p1, float), radius)
-        return inside
-
-    idx = np.flatnonzero(candidate)  # the costlier tests only on what is left
-    candidate.flat[idx[excluded(p.reshape(-1, 3)[idx])]] = False
+    excluded = robot_volume(exclude_capsules)
+    p, candidate = held_candidates(depth, camera, T_ee_cam, T_world_ee, table_z, excluded)
     if not candidate.any():
         raise ObjectNotFoundError("nothing is held between the jaws (side camera)")
     mask = blobs(candidate, MIN_PIXELS, "side-camera image")
@@ -286,11 +254,3 @@ def _depth_line(along: np.ndarray, y: np.ndarray) -> tuple:
     c = np.column_stack([labels, medians])
     (slope, y0), cov = np.polyfit(c[:, 1], c[:, 2], 1, cov=True)  # scaled by the residuals
     return float(y0), float(slope), float(np.sqrt(cov[1, 1])), float(np.sqrt(cov[0, 0])), c
-
-
-def _in_capsule(p: np.ndarray, p0: np.ndarray, p1: np.ndarray, radius: float) -> np.ndarray:
-    """Bool mask of the points ``p`` (..., 3) within ``radius`` of the segment p0-p1."""
-    d = p1 - p0
-    t = np.clip(np.nan_to_num((p - p0) @ d / max(d @ d, 1e-12), nan=0.0), 0.0, 1.0)
-    dist = np.linalg.norm(p - p0 - t[..., None] * d, axis=-1)
-    return np.nan_to_num(dist, nan=np.inf) < radius
