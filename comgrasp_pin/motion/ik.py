@@ -10,6 +10,8 @@ the seed), ``solve_top_down`` tries both and keeps the best.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pinocchio as pin
 
@@ -19,6 +21,7 @@ from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.workcell import GRIPPER, Q_HOME, TABLE_Z
 
 FINGERTIP_CLEARANCE = 0.002  # fingertips kept this far above the table (m)
+_LOCAL = pin.ReferenceFrame.LOCAL
 
 
 def top_down_frame(x: float, y: float, z: float, yaw: float) -> np.ndarray:
@@ -73,20 +76,20 @@ def solve_ik(
     goal = pin.SE3(np.asarray(T_world_goal, dtype=float))
     lo, hi = robot.q_lower, robot.q_upper
     model, data, fid = robot.model, robot.data, robot.ee_frame_id
+    damping_eye = damping**2 * np.eye(6)
     err = np.full(6, np.inf)
     for _ in range(max_iter):
         pin.forwardKinematics(model, data, q)
-        T_ee = pin.updateFramePlacement(model, data, fid)
-        err = pin.log6(T_ee.actInv(goal)).vector
-        if np.linalg.norm(err) < tol:
+        T_ee_goal = pin.updateFramePlacement(model, data, fid).actInv(goal)
+        err = pin.log6(T_ee_goal).vector
+        if math.sqrt(err @ err) < tol:  # np.linalg.norm's value, without its checks
             break
-        J = pin.computeFrameJacobian(model, data, q, fid, pin.ReferenceFrame.LOCAL)
-        J = pin.Jlog6(T_ee.actInv(goal)) @ J
-        dq = J.T @ np.linalg.solve(J @ J.T + damping**2 * np.eye(6), err)
-        step = np.max(np.abs(dq))
+        J = pin.Jlog6(T_ee_goal) @ pin.computeFrameJacobian(model, data, q, fid, _LOCAL)
+        dq = J.T @ np.linalg.solve(J @ J.T + damping_eye, err)
+        step = np.abs(dq).max()
         if step > 0.5:
             dq *= 0.5 / step
-        q = np.clip(q + dq, lo, hi)
+        q = np.minimum(np.maximum(q + dq, lo), hi)  # np.clip's values
     else:
         raise IKError(
             f"IK did not converge: pose error {np.linalg.norm(err):.2e} > {tol:.0e} "
