@@ -192,3 +192,23 @@ def test_held_candidates_of_a_side_cameras_view_to_the_bit():
         assert np.count_nonzero(expected) > 100
         assert np.array_equal(candidate, expected)
         assert np.array_equal(p[candidate], p_plain[candidate])
+
+
+@settings(max_examples=100, deadline=None)
+@given(
+    rotvec=st.lists(st.floats(-3.0, 3.0), min_size=3, max_size=3),
+    shift=st.lists(st.floats(-2.0, 2.0), min_size=3, max_size=3),
+    lost=st.floats(0.0, 0.9),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_points_in_is_depth_to_points_then_the_transform_to_the_bit(rotvec, shift, lost, seed):
+    """Both views' whole-image lifting, the rays' slopes once per column and row."""
+    from comgrasp_pin.camera import transform_points
+
+    depth = _depth(seed, lost)
+    T = _pose(rotvec, shift)
+    valid = np.isfinite(depth) & (depth > 0)
+    plain = CAMERA.depth_to_points(np.where(valid, depth, 1.0))
+    plain = transform_points(T, plain.reshape(-1, 3)).reshape(plain.shape)
+    plain[~valid] = np.nan
+    np.testing.assert_array_equal(points_in(T, depth, CAMERA), plain)

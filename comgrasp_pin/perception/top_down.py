@@ -27,7 +27,7 @@ from comgrasp_pin.errors import (
     PerceptionError,
 )
 from comgrasp_pin.geometry import GraspPose
-from comgrasp_pin.perception._points import check_images, largest_component
+from comgrasp_pin.perception._points import check_images, largest_component, pixel_slopes
 from comgrasp_pin.perception.rod_shape import check_ends_seen, check_one_object, check_one_rod
 from comgrasp_pin.perception.table_view import TableView, differs_in_colour, in_area, view_table
 
@@ -188,7 +188,10 @@ def _on_the_rods_axis(view: TableView, mask, unmeasured, camera, T_world_cam) ->
     """
     lift = mask & unmeasured
     z_top = 0.5 * (view.table_z + float(np.median(view.points[mask][:, 2])))
-    rays = camera.depth_to_points(np.ones((camera.height, camera.width)))[lift]
+    row, col = np.nonzero(lift)  # each pixel's ray at unit depth, as depth_to_points has it
+    x_per_z = pixel_slopes(camera.width, camera.cx, camera.fx)[col]
+    y_per_z = pixel_slopes(camera.height, camera.cy, camera.fy)[row]
+    rays = np.column_stack([x_per_z, y_per_z, np.ones(len(row))])
     rays = rays @ T_world_cam[:3, :3].T
     origin = T_world_cam[:3, 3]
     points = view.points.copy()
