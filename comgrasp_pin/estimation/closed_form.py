@@ -1,38 +1,45 @@
 """The least squares through its normal equations: ``estimate_com``'s fast closed form.
 
 For k poses the regression of the observable unknowns is Yr (k n, p): for one pose
-w = (m, m c_wy, -m c_wx) (p = 3, ``regressor.one_pose_basis``), for several theta itself
-(p = 4). Its Gram matrix N = Yr^T Yr (p, p) gives everything the estimate needs:
+w = (m, m c_wx, m c_wy), the mass and the CoM's horizontal offset in the world (p = 3), for
+several theta = (m, m c_ee) itself (p = 4). Its Gram matrix N = Yr^T Yr (p, p) gives all
+the estimate needs:
 
 - its eigenvalues are the squared singular values of Yr (observability, condition number);
 - its inverse, with Yr^T b, gives the least-squares solution and the covariance
   (2 sigma^2 N^-1, or N_w^-1 with per-joint weights).
 
 The normal equations lose digits as eps * cond^2: where Yr's condition number exceeds
-MAX_CONDITION (or where the observability threshold ``rcond`` is within a factor 2 of
-the smallest singular value), ``gram_solution`` returns None and the caller takes the SVD
-path (``np.linalg.lstsq``), which also decides rank-deficient pose sets. Below it, the
-results equal the SVD path's to ~1e-13 relative (tests/test_closed_form.py).
+MAX_CONDITION (or the observability threshold ``rcond`` is within a factor 2 of the
+smallest singular value), ``estimate`` returns None and the caller takes the SVD path
+(``np.linalg.lstsq``), which also decides rank-deficient pose sets. Below it, the results
+equal the SVD path's to ~1e-13 relative (tests/test_closed_form.py).
+
+Every step is one NumPy call on small arrays (a few hundred ns each): a call costs about
+10 us, of which the kinematics (one Pinocchio Jacobian per pose) is 1 us per pose.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 import pinocchio as pin
 
+from comgrasp_pin.estimation import one_pose
 from comgrasp_pin.estimation.estimate import ComEstimate, new_estimate, refuse_empty_gripper
-from comgrasp_pin.estimation.regressor import G0, stacked_regressor
+from comgrasp_pin.estimation.regressor import G0
 from comgrasp_pin.robot import RobotModel
 
-try:  # the gufuncs behind np.linalg.eigvalsh / inv, without its 3 us of argument checks
+_eigvalsh: Callable[[np.ndarray], np.ndarray] = np.linalg.eigvalsh
+_inv: Callable[[np.ndarray], np.ndarray] = np.linalg.inv
+try:  # the gufuncs behind np.linalg.eigvalsh / inv, without their 3 us of argument checks
     from numpy.linalg import _umath_linalg
 
-    _eigvalsh = _umath_linalg.eigvalsh_lo
-    _inv = _umath_linalg.inv
+    _eigvalsh, _inv = _umath_linalg.eigvalsh_lo, _umath_linalg.inv
 except (ImportError, AttributeError):  # pragma: no cover - another NumPy layout
-    _eigvalsh, _inv = np.linalg.eigvalsh, np.linalg.inv
+    pass
 
 MAX_CONDITION = 100.0
 """Largest condition number of Yr (weights included) solved through the normal equations:
@@ -41,67 +48,102 @@ NOISE_FLOOR = 1e-6
 """No torque difference is taken as known better than this (N m): the noise estimated from
 the residuals of noise-free data is floored here, so its weights stay finite."""
 
+WEIGHT_ROWS = G0 * np.array(
+    [[0, 0, 1, 0, 0, 0], [0, 0, 0, 0, -1, 0], [0, 0, 0, 1, 0, 0]], dtype=float
+)
+"""(3, 6) picks from a world-aligned ee Jacobian (rows linear xyz, angular xyz) the torques
+per unit of (m, m c_wx, m c_wy): G0 (J_lin_z, -J_ang_y, J_ang_x). From the regressor
+Y = G0 [J_lin_z, J_ang_x R[1] - J_ang_y R[0]] with R[0] . (m c_ee) = m c_wx (world x)."""
 _WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+_EYE3 = np.eye(3)
+_FLOOR = 1.0 / MAX_CONDITION**2
 
 
-def one_pose_regression(robot: RobotModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(Yr^T (3, n), T_world_ee (1, 4, 4)) for w = (m, m c_wy, -m c_wx) at ``q`` (n,).
+def regression(robot: RobotModel, Q: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """([Yr^T; b^T] (p + 1, k n), T_world_ee (k, 4, 4)) at the k configurations ``Q``.
 
-    Yr = Y B with ``one_pose_basis``: the columns are G0 times the Jacobian's rows
-    (linear z, angular x, angular y), world-aligned at the ee.
+    One pose: Yr (n, 3) of w = (m, m c_wx, m c_wy) is ``WEIGHT_ROWS @ J``^T. Several: Yr
+    (k n, 4) of theta; pose i's block is (WEIGHT_ROWS J_i)^T [[1, 0], [0, R_i[:2]]], the
+    world's x and y rows of R_world_ee turning (m c_wx, m c_wy) into m c_ee.
+    The torque differences ``b`` (k n,) ride along as the last row: one product then gives
+    the Gram matrix, Yr^T b and b^T b.
     """
-    fid = robot.ee_frame_id
-    J = pin.computeFrameJacobian(robot.model, robot.data, q, fid, _WORLD_ALIGNED)
-    return G0 * J[2:5], robot.data.oMf[fid].homogeneous[None]
+    k, n = Q.shape
+    model, data, fid = robot.model, robot.data, robot.ee_frame_id
+    if k == 1:
+        Xb = np.empty((4, n))
+        J = pin.computeFrameJacobian(model, data, Q[0], fid, _WORLD_ALIGNED)
+        np.matmul(WEIGHT_ROWS, J, out=Xb[:3])
+        Xb[3] = b
+        return Xb, data.oMf[fid].homogeneous[None]
+    J = np.empty((k, 6, n))
+    T = np.empty((k, 4, 4))
+    oMf = data.oMf
+    for i in range(k):
+        J[i] = pin.computeFrameJacobian(model, data, Q[i], fid, _WORLD_ALIGNED)
+        T[i] = oMf[fid].homogeneous
+    Bt = np.zeros((k, 4, 3))  # [[1, 0], [0, R_i[:2]]]^T
+    Bt[:, 0, 0] = 1.0
+    Bt[:, 1:, 1:] = T[:, :2, :3].transpose(0, 2, 1)
+    Xb = np.empty((5, k * n))
+    np.matmul(Bt, WEIGHT_ROWS @ J, out=Xb[:4].reshape(4, k, n).transpose(1, 0, 2))
+    Xb[4] = b
+    return Xb, T
 
 
-def gram_solution(
-    Xt: np.ndarray, b: np.ndarray, sigma: float | np.ndarray | None, rcond: float
-) -> tuple | None:
-    """Least squares of b (rows,) on Yr = Xt^T through the normal equations, or None.
+def gram_solution(Xb: np.ndarray, sigma: float | np.ndarray | None, rcond: float) -> tuple | None:
+    """Least squares of b on Yr through the normal equations, or None.
 
     Args:
-        Xt: (p, rows) the regression, transposed.
-        b: (rows,) torque differences (N m), pose-major.
+        Xb: (p + 1, rows) [Yr^T; b^T], b the torque differences (N m), pose-major.
         sigma: std of each torque reading: a float, (n,) per joint, or None (the noise is
             then estimated from the residuals where rows > p).
         rcond: the observability threshold on the singular values of Yr.
 
     Returns:
-        (w (p,), cov_w (p, p) or None, residuals (rows,), singular values (4,) descending,
-        condition number, noise_std or None), or None where Yr is too ill-conditioned for
-        the normal equations (the caller then solves by SVD).
+        (w (p,), N_inv (p, p), var, residuals (rows,), their sum of squares, singular
+        values (4,) descending, condition number, noise_std or None), or None where Yr is
+        too ill-conditioned for the normal equations (the caller then solves by SVD). The
+        covariance of w is var * N_inv (var None: unknown, no more readings than unknowns).
     """
-    p, rows = Xt.shape
-    N = Xt @ Xt.T
+    p1, rows = Xb.shape
+    p = p1 - 1
+    Xt, b = Xb[:p], Xb[p]
+    P = Xb @ Xb.T
+    N = P[:p, :p]
     lam = _eigvalsh(N)  # ascending: squared singular values of Yr
     low, high = float(lam[0]), float(lam[-1])
-    weighted = sigma is not None and not isinstance(sigma, float)
-    # per joint weights: cond(Yr_w) <= cond(Yr) * sigma_max / sigma_min
-    spread = float(sigma.max() / sigma.min()) if weighted else 1.0
-    if not low > max(spread * spread / MAX_CONDITION**2, 4.0 * rcond * rcond) * high:
+    per_joint = sigma if isinstance(sigma, np.ndarray) else None
+    floor = max(_FLOOR, 4.0 * rcond * rcond)
+    if per_joint is not None:  # cond(W Yr) <= cond(Yr) * sigma_max / sigma_min
+        spread = float(per_joint.max() / per_joint.min())
+        floor = max(_FLOOR * spread * spread, 4.0 * rcond * rcond)
+    if not low > floor * high:
         return None
-    if weighted:
-        Xw = Xt * np.tile(0.5 / (sigma * sigma), rows // len(sigma))  # Yr^T W, W = 1/var
-        cov_w = _inv(Xw @ Xt.T)
-        w = cov_w @ (Xw @ b)
+    if per_joint is not None:
+        row_var = 2.0 * per_joint * per_joint  # of a difference of two readings
+        Xw = Xt / np.tile(row_var, rows // len(row_var))  # Yr^T W, W = 1 / var
+        N_inv = _inv(Xw @ Xt.T)  # the covariance itself
+        w = N_inv @ (Xw @ b)
     else:
         N_inv = _inv(N)
-        w = N_inv @ (Xt @ b)
+        w = N_inv @ P[:p, p]
     residuals = b - w @ Xt
+    rss = float(residuals @ residuals)
     noise_std = None
-    if sigma is None:
-        dof = rows - p
-        cov_w = None
-        if dof > 0:
-            rss = float(residuals @ residuals)
-            noise_std = max(math.sqrt(rss) / math.sqrt(dof), NOISE_FLOOR)
-            cov_w = (noise_std * noise_std) * N_inv
-    elif not weighted:
-        cov_w = (2.0 * sigma * sigma) * N_inv
+    var: float | None
+    if per_joint is not None:
+        var = 1.0
+    elif isinstance(sigma, float):
+        var = 2.0 * sigma * sigma  # of a difference of two readings
+    elif rows > p:
+        noise_std = max(math.sqrt(rss) / math.sqrt(rows - p), NOISE_FLOOR)
+        var = noise_std * noise_std
+    else:
+        var = None
     sv = np.zeros(4)  # padded with 0 for one pose: the direction along gravity
-    sv[:p] = np.sqrt(lam[::-1])
-    return w, cov_w, residuals, sv, math.sqrt(high / low), noise_std
+    np.sqrt(lam[::-1], out=sv[:p])
+    return w, N_inv, var, residuals, rss, sv, math.sqrt(high / low), noise_std
 
 
 def estimate(
@@ -126,35 +168,33 @@ def estimate(
         EmptyGripperError, UnobservableError, InvalidInputError as ``estimate_com``.
     """
     k, n = Q.shape
-    if k == 1:
-        Xt, T = one_pose_regression(robot, Q[0])
-    else:
-        Y, T = stacked_regressor(robot, Q)
-        Xt = Y.T
-    solution = gram_solution(Xt, dtau.ravel(), sigma, rcond)
+    if k == 1 and (sigma is None or type(sigma) is float):
+        floor = max(_FLOOR, 4.0 * rcond * rcond)
+        return one_pose.estimate(robot, Q[0], dtau[0], sigma, floor, NOISE_FLOOR)
+    Xb, T = regression(robot, Q, dtau.ravel())
+    solution = gram_solution(Xb, sigma, rcond)
     if solution is None:
         return None
-    w, cov_w, residuals, sv, cond, noise_std = solution
+    w, N_inv, var, residuals, rss, sv, cond, noise_std = solution
     mass = float(w[0])
-    refuse_empty_gripper(mass, None if cov_w is None else float(cov_w[0, 0]), cond)
-    # theta = B w and the delta method's D = d(m, c)/dw = G B, G = d(m, c)/dtheta
+    refuse_empty_gripper(mass, None if var is None else var * float(N_inv[0, 0]), cond)
+    inv_mass = 1.0 / mass
+    # the delta method: cov = D (var N_inv) D^T for D = d(m, c_ee)/dw, sqrt(var) folded in D
+    r = 1.0 if var is None else math.sqrt(var)
     D = np.zeros((4, len(w)))
-    D[0, 0] = 1.0
+    D[0, 0] = r
     if k == 1:
-        R = T[0, :3, :3]
-        B_com = np.empty((3, 2))  # the CoM rows of one_pose_basis
-        B_com[:, 0] = R[1]
-        B_com[:, 1] = -R[0]
-        com = (B_com @ w[1:]) / mass
-        D[1:, 1:] = B_com / mass
-        u = -R[2]  # gravity in the ee frame
+        R_xy = T[0, :2, :3].T  # (3, 2): the world's x and y axes in the ee frame
+        com = (R_xy @ w[1:]) * inv_mass
+        u = T[0, 2, :3] * -1.0  # gravity in the ee frame
+        D[1:, 1:] = R_xy * (r * inv_mass)
     else:
-        com = w[1:] / mass
-        D[1:, 1:] = np.eye(3) / mass
+        com = w[1:] * inv_mass
         u = None
+        D[1:, 1:] = _EYE3 * (r * inv_mass)
     cov = None
-    if cov_w is not None:
-        D[1:, 0] = com / -mass
-        cov = D @ cov_w @ D.T
-    return new_estimate(com, mass, cov, u, residuals.reshape(k, n), sv, cond, "lstsq",
-                        "closed_form", 0, T, noise_std)  # fmt: skip
+    if var is not None:
+        D[1:, 0] = com * (-r * inv_mass)
+        cov = D @ N_inv @ D.T
+    return new_estimate(com, mass, cov, u, residuals.reshape(k, n), math.sqrt(rss / len(residuals)),
+                        sv, cond, "lstsq", "closed_form", 0, T, noise_std)  # fmt: skip

@@ -193,12 +193,14 @@ def assemble_estimate(
     """
     m = float(mass)
     refuse_empty_gripper(m, None if cov is None else float(cov[0, 0]), float(cond))
+    residuals = np.array(residuals, dtype=float)
     return new_estimate(
         np.array(com_ee, dtype=float),
         m,
         None if cov is None else np.array(cov, dtype=float),
         None if u is None else np.array(u, dtype=float),
-        np.array(residuals, dtype=float),
+        residuals,
+        math.sqrt(float(residuals.ravel() @ residuals.ravel()) / residuals.size),
         np.array(sv, dtype=float),
         float(cond),
         method,
@@ -215,6 +217,7 @@ def new_estimate(
     cov: np.ndarray | None,
     u: np.ndarray | None,
     residuals: np.ndarray,
+    rms: float,
     sv: np.ndarray,
     cond: float,
     method: str,
@@ -225,37 +228,41 @@ def new_estimate(
 ) -> ComEstimate:
     """The ``ComEstimate`` of arrays this package owns (made read-only here, not copied).
 
-    Refuses non-finite results (InvalidInputError). The dataclass's own ``__init__`` sets
-    each of its 15 fields through ``object.__setattr__`` (frozen), 2 us of a 10 us estimate;
-    the instance dictionary is filled in one step instead, with the same fields.
+    ``rms`` is that of ``residuals`` (k, n). Refuses non-finite results (InvalidInputError).
+    The dataclass's own ``__init__`` sets each of its 15 fields through
+    ``object.__setattr__`` (it is frozen), 2 us of a 10 us estimate; the instance
+    dictionary is filled in one step instead, with the same fields.
     """
-    rms = math.sqrt(float(residuals.ravel() @ residuals.ravel()) / residuals.size)
     # Python float sums never warn: NaN or inf anywhere (or an overflowing sum) shows here,
     # and check_finite_result then names what is not finite
     screen = mass + rms + sum(com_ee.tolist())
     if cov is not None:
         screen += sum(cov.ravel().tolist())
+        cov.setflags(write=False)
     if not math.isfinite(screen):
         check_finite_result(mass=mass, com_ee=com_ee, cov=cov, residual_rms=rms)
-    for a in (com_ee, u, cov, residuals, sv, T):
-        if a is not None:
-            a.setflags(write=False)
+    if u is not None:
+        u.setflags(write=False)
+    com_ee.setflags(write=False)
+    residuals.setflags(write=False)
+    sv.setflags(write=False)
+    T.setflags(write=False)
     est = object.__new__(ComEstimate)
-    est.__dict__.update(
-        com_ee=com_ee,
-        mass=mass,
-        weight=mass * G0,
-        unobservable_ee=u,
-        cov=cov,
-        residual_rms=rms,
-        residuals=residuals,
-        condition_number=cond,
-        singular_values=sv,
-        method=method,
-        solver_status=status,
-        iterations=iters,
-        n_poses=residuals.shape[0],
-        T_world_ee=T,
-        noise_std=noise_std,
-    )
+    object.__setattr__(est, "__dict__", {
+        "com_ee": com_ee,
+        "mass": mass,
+        "weight": mass * G0,
+        "unobservable_ee": u,
+        "cov": cov,
+        "residual_rms": rms,
+        "residuals": residuals,
+        "condition_number": cond,
+        "singular_values": sv,
+        "method": method,
+        "solver_status": status,
+        "iterations": iters,
+        "n_poses": residuals.shape[0],
+        "T_world_ee": T,
+        "noise_std": noise_std,
+    })  # fmt: skip
     return est

@@ -8,6 +8,7 @@ import numpy as np
 
 from comgrasp_pin import validate
 from comgrasp_pin.errors import InvalidInputError
+from comgrasp_pin.estimation.prior import AxisPrior
 from comgrasp_pin.robot import RobotModel
 
 METHODS = ("lstsq", "ipopt")
@@ -31,8 +32,6 @@ def check_options(
     torque_std: object,
 ) -> None:
     """Raise InvalidInputError for an option estimate_com does not accept."""
-    from comgrasp_pin.estimation.prior import AxisPrior
-
     if method not in METHODS:
         raise InvalidInputError(f"unknown method {method!r}; valid methods are {METHODS}")
     if not (type(rcond) is float and 0.0 < rcond < 1.0):  # the usual case in 50 ns
@@ -74,7 +73,7 @@ def validate_inputs(
     """
     if not isinstance(robot, RobotModel):
         raise InvalidInputError(f"robot must be a RobotModel, got {type(robot).__name__}")
-    n = robot.nq
+    n = robot.model.nq
     q_arr = _numeric(q, "q")
     tb_arr = _numeric(tau_before, "tau_before")
     ta_arr = _numeric(tau_after, "tau_after")
@@ -84,20 +83,31 @@ def validate_inputs(
             f"q must have shape ({n},) for one pose or (k, {n}) for k >= 1 poses (the robot "
             f"has {n} joints), got {shape}"
         )
-    for name, a, limit in (
-        ("q", q_arr, MAX_ABS_Q),
-        ("tau_before", tb_arr, MAX_ABS_TORQUE),
-        ("tau_after", ta_arr, MAX_ABS_TORQUE),
+    # The quick screen: sums of |values| within the limits clear every value (NaN and inf
+    # included) in Python floats, which never warn. Where it does not clear them, the
+    # checks in order name the first bad shape or entry.
+    if not (
+        tb_arr.shape == shape
+        and ta_arr.shape == shape
+        and q_arr.size <= _SCREEN_SIZE
+        and sum(map(abs, q_arr.ravel().tolist())) <= MAX_ABS_Q
+        and sum(map(abs, tb_arr.ravel().tolist() + ta_arr.ravel().tolist())) <= MAX_ABS_TORQUE
     ):
-        if a.shape != shape:
-            raise InvalidInputError(f"{name} has shape {a.shape} but q has shape {shape}")
-        # a sum of |values| within the limit clears every value (NaN and inf included) in
-        # Python floats, which never warn; otherwise _check_values names the bad entries
-        if a.size > _SCREEN_SIZE or not sum(map(abs, a.ravel().tolist())) <= limit:
+        for name, a, limit in (
+            ("q", q_arr, MAX_ABS_Q),
+            ("tau_before", tb_arr, MAX_ABS_TORQUE),
+            ("tau_after", ta_arr, MAX_ABS_TORQUE),
+        ):
+            if a.shape != shape:
+                raise InvalidInputError(f"{name} has shape {a.shape} but q has shape {shape}")
             _check_values(name, a.reshape(-1, n), limit)
-    Q = q_arr.reshape(-1, n)
-    dtau = (ta_arr - tb_arr).reshape(-1, n)
-    return Q, dtau, _torque_std(torque_std, n)
+    low, high = TORQUE_STD_RANGE
+    sigma: float | np.ndarray | None
+    if type(torque_std) is float and low <= torque_std <= high:  # the usual case, fast
+        sigma = torque_std
+    else:
+        sigma = _torque_std(torque_std, n)
+    return q_arr.reshape(-1, n), (ta_arr - tb_arr).reshape(-1, n), sigma
 
 
 _SCREEN_SIZE = 64
@@ -133,8 +143,6 @@ def _torque_std(torque_std: float | np.ndarray | None, n: int) -> float | np.nda
     if torque_std is None:
         return None
     low, high = TORQUE_STD_RANGE
-    if type(torque_std) is float and low <= torque_std <= high:  # the usual case, fast
-        return torque_std
     try:
         value = np.asarray(torque_std, dtype=float)
         sigma = np.broadcast_to(value, (n,)).copy()
