@@ -19,7 +19,9 @@ from comgrasp_pin.perception.held_region import (
     REACH,
     SLAB_HALF_WIDTH,
     TABLE_MARGIN,
+    gripper_volume,
     held_candidates,
+    in_capsule,
     robot_volume,
     slab_pixels,
 )
@@ -51,6 +53,26 @@ def _depth(seed: int, lost: float) -> np.ndarray:
     gone = rng.random(depth.shape) < lost
     depth[gone] = np.where(rng.random(depth.shape) < 0.5, 0.0, np.inf)[gone]
     return depth
+
+
+def plain_in_capsule(p, p0, p1, radius):
+    """Within ``radius`` of the segment p0-p1: every point measured."""
+    d = p1 - p0
+    t = np.clip(np.nan_to_num((p - p0) @ d / max(d @ d, 1e-12), nan=0.0), 0.0, 1.0)
+    dist = np.linalg.norm(p - p0 - t[..., None] * d, axis=-1)
+    return np.nan_to_num(dist, nan=np.inf) < radius
+
+
+def plain_excluded(capsules):
+    """The robot's volume with every point measured against every capsule."""
+
+    def excluded(pts):
+        inside = gripper_volume(pts)
+        for p0, p1, radius in capsules:
+            inside |= plain_in_capsule(pts, p0, p1, radius)
+        return inside
+
+    return excluded
 
 
 def plain_candidates(depth, T_ee_cam, T_world_ee, table_z, excluded):
@@ -98,8 +120,8 @@ def test_held_candidates_are_the_whole_images_to_the_bit(rotvec, shift, lost, ta
     T_ee_cam = _pose(rotvec, shift)
     T_world_ee = _pose([0.1, 3.0, 0.2], [0.5, 0.0, 0.4]) if table else None
     capsules = [(np.array([0.0, 0.0, -0.2]), np.array([0.1, 0.05, -0.3]), 0.06)] if capsule else []
-    excluded = robot_volume(capsules)
-    p_plain, expected = plain_candidates(depth, T_ee_cam, T_world_ee, 0.02, excluded)
+    plain, excluded = plain_excluded(capsules), robot_volume(capsules)
+    p_plain, expected = plain_candidates(depth, T_ee_cam, T_world_ee, 0.02, plain)
     p, candidate = held_candidates(depth, CAMERA, T_ee_cam, T_world_ee, 0.02, excluded)
     assert np.array_equal(candidate, expected)
     assert np.array_equal(p[candidate], p_plain[candidate])
@@ -184,12 +206,14 @@ def test_held_candidates_of_a_side_cameras_view_to_the_bit():
     T_ee_cam[:3, :3] = [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]]
     T_ee_cam[:3, 3] = [0.0, -0.31, -0.05]
     T_world_ee = _pose([np.pi, 0.0, 0.0], [0.5, 0.0, 0.3])
-    excluded = robot_volume([(np.array([0.0, 0.0, -0.2]), np.array([0.0, 0.0, -0.4]), 0.06)])
+    capsules = [(np.array([-0.05, 0.0, 0.0]), np.array([-0.05, 0.05, -0.2]), 0.03)]
+    excluded, plain = robot_volume(capsules), plain_excluded(capsules)
     for seed in range(20):
         depth = _depth(seed, 0.05 * (seed % 4))
-        p_plain, expected = plain_candidates(depth, T_ee_cam, T_world_ee, -0.2, excluded)
+        p_plain, expected = plain_candidates(depth, T_ee_cam, T_world_ee, -0.2, plain)
         p, candidate = held_candidates(depth, CAMERA, T_ee_cam, T_world_ee, -0.2, excluded)
         assert np.count_nonzero(expected) > 100
+        assert np.count_nonzero(plain(p_plain[np.isfinite(p_plain[..., 0])])) > 10
         assert np.array_equal(candidate, expected)
         assert np.array_equal(p[candidate], p_plain[candidate])
 
@@ -212,3 +236,21 @@ def test_points_in_is_depth_to_points_then_the_transform_to_the_bit(rotvec, shif
     plain = transform_points(T, plain.reshape(-1, 3)).reshape(plain.shape)
     plain[~valid] = np.nan
     np.testing.assert_array_equal(points_in(T, depth, CAMERA), plain)
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    n=st.integers(0, 300),
+    ends=st.lists(st.floats(-0.3, 0.3), min_size=6, max_size=6),
+    radius=st.floats(0.0, 0.2),
+    lost=st.floats(0.0, 0.3),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_in_capsule_measures_only_its_box_to_the_same_answer(n, ends, radius, lost, seed):
+    rng = np.random.default_rng(seed)
+    p0, p1 = np.array(ends[:3]), np.array(ends[3:])
+    pts = rng.uniform(-0.5, 0.5, (n, 3))
+    pts[rng.random(n) < lost] = np.nan  # pixels with no depth
+    assert np.array_equal(in_capsule(pts, p0, p1, radius), plain_in_capsule(pts, p0, p1, radius))
+    one = pts[:1]  # a single point (an end's peek beyond the rod)
+    assert np.array_equal(in_capsule(one, p0, p1, radius), plain_in_capsule(one, p0, p1, radius))

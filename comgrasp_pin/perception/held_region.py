@@ -65,11 +65,28 @@ def gripper_volume(p: np.ndarray) -> np.ndarray:
 
 
 def in_capsule(p: np.ndarray, p0: np.ndarray, p1: np.ndarray, radius: float) -> np.ndarray:
-    """Bool mask of the points ``p`` (..., 3) within ``radius`` of the segment p0-p1."""
+    """Bool mask of the points ``p`` (..., 3) within ``radius`` of the segment p0-p1.
+
+    Only the points inside the capsule's box (widened by SLAB_SLACK) are measured; those
+    outside it lie farther than ``radius`` from every point of the segment.
+    """
+    rows = p.reshape(-1, 3)
+    lo, hi = np.minimum(p0, p1) - radius - SLAB_SLACK, np.maximum(p0, p1) + radius + SLAB_SLACK
+    in_box = np.flatnonzero(((rows > lo) & (rows < hi)).all(axis=-1))
+    inside = np.zeros(len(rows), dtype=bool)
+    if len(in_box) == 1 and len(rows) > 1:  # one row alone would take another BLAS path
+        inside[in_box] = _capsule_distance(rows[np.r_[in_box, in_box]], p0, p1)[:1] < radius
+    elif len(in_box):
+        inside[in_box] = _capsule_distance(rows[in_box], p0, p1) < radius
+    return inside.reshape(p.shape[:-1])
+
+
+def _capsule_distance(p: np.ndarray, p0: np.ndarray, p1: np.ndarray) -> np.ndarray:
+    """(N,) distance of the points ``p`` (N, 3) from the segment p0-p1 (inf for NaN)."""
     d = p1 - p0
     t = np.clip(np.nan_to_num((p - p0) @ d / max(d @ d, 1e-12), nan=0.0), 0.0, 1.0)
     dist = np.linalg.norm(p - p0 - t[..., None] * d, axis=-1)
-    return np.nan_to_num(dist, nan=np.inf) < radius
+    return np.nan_to_num(dist, nan=np.inf)
 
 
 def robot_volume(capsules: Capsules) -> Callable[[np.ndarray], np.ndarray]:
