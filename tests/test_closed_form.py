@@ -17,7 +17,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import comgrasp_pin as cg
-from comgrasp_pin.estimation import closed_form, estimator
+from comgrasp_pin.estimation import batch, closed_form, estimator, observability
 from comgrasp_pin.estimation.inputs import validate_inputs
 from comgrasp_pin.estimation.regressor import stacked_regressor
 
@@ -61,6 +61,15 @@ def reference(robot, Q, dtau, sigma):
     return m, c, cov, (b - Y @ theta).reshape(k, n), sv
 
 
+def svd_path(robot, Q, dtau, sigma, method="lstsq", rcond=estimator.RCOND, **kwargs):
+    """``estimate_com``'s general path with the Gram reduction switched off: SVD, lstsq."""
+    options = {"loss": "l2", "huber_delta": 3.0, "com_prior": None, **kwargs}
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(observability, "by_gram", lambda *args: None)
+        return estimator._estimate(robot, Q, dtau, sigma, method, rcond, options["loss"],
+                                   options["huber_delta"], options["com_prior"], None)  # fmt: skip
+
+
 def wrist_poses(robot, q, k, rng):
     offsets = np.zeros((k, robot.nq))
     offsets[1:, -3:] = rng.uniform(-0.8, 0.8, size=(k - 1, 3))
@@ -99,16 +108,14 @@ def test_fast_closed_form_is_plain_least_squares(robots, seed, robot_name, k, st
         fast = closed_form.estimate(robot, Qc, dtau, sig, estimator.RCOND)
     except cg.ComGraspError as exc:  # a light payload under noise: the SVD path agrees
         with pytest.raises(type(exc)):
-            estimator._estimate(robot, Qc, dtau, sig, "lstsq", estimator.RCOND, "l2", 3.0,
-                                None, None)  # fmt: skip
+            svd_path(robot, Qc, dtau, sig)
         return
     if fast is None:  # ill-conditioned: left to the SVD path, which must still answer
         spread = 1.0 if std != "per_joint" else sigma.max() / sigma.min()
         assert closed_form_condition(robot, Qc) * spread > closed_form.MAX_CONDITION / 2
         return
     assert_same(fast, reference(robot, Qc, dtau, sigma))
-    svd = estimator._estimate(robot, Qc, dtau, sig, "lstsq", estimator.RCOND, "l2", 3.0,
-                              None, None)  # fmt: skip
+    svd = svd_path(robot, Qc, dtau, sig)
     assert fast.condition_number == pytest.approx(svd.condition_number, rel=1e-11)
     assert fast.residual_rms == pytest.approx(svd.residual_rms, rel=1e-9, abs=1e-15)
     assert (fast.noise_std is None) == (svd.noise_std is None)
@@ -151,8 +158,7 @@ def same_as_svd(robot, q, tb, ta, torque_std, rcond):
     """estimate_com raises what the SVD path raises, or gives its estimate."""
     Q, dtau, sigma = validate_inputs(robot, q, tb, ta, torque_std)
     try:
-        expected = estimator._estimate(robot, Q, dtau, sigma, "lstsq", rcond, "l2", 3.0, None,
-                                       None)  # fmt: skip
+        expected = svd_path(robot, Q, dtau, sigma, rcond=rcond)
     except cg.ComGraspError as exc:
         with pytest.raises(type(exc)):
             cg.estimate_com(robot, q, tb, ta, torque_std=torque_std, rcond=rcond)
@@ -200,3 +206,78 @@ def test_empty_gripper_and_bad_readings_raise_the_same_errors(robots):
     big = np.full(6, 9e5)
     est = cg.estimate_com(ur5, q, tb + big, ta + big, torque_std=0.01)
     assert est.mass == pytest.approx(0.7, rel=1e-6)
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    k=st.sampled_from([1, 3]),
+    kind=st.sampled_from(["prior", "l2", "huber"]),
+)
+def test_ipopt_through_the_gram_reduction_is_the_svd_paths(robots, seed, k, kind):
+    """IPOPT's problem, warm start and covariance from the Gram reduction equal the SVD's."""
+    ur5 = robots["ur5"]
+    rng = np.random.default_rng(seed)
+    Q = wrist_poses(ur5, ur5.random_configuration(rng), k, rng)
+    com = np.array([0.01, 0.0, 0.08]) + rng.uniform(-0.02, 0.02, 3)
+    tb, ta = payload_torques(ur5, Q, 0.5, com)
+    ta = ta + rng.normal(scale=0.01, size=Q.shape)
+    kwargs = {
+        "prior": {"com_prior": cg.AxisPrior(com, [1.0, 0.0, 0.0], 0.005)},
+        "l2": {},
+        "huber": {"loss": "huber"},
+    }[kind]
+    Qc, dtau, sigma = validate_inputs(ur5, Q, tb, ta, 0.01)
+    try:
+        expected = svd_path(ur5, Qc, dtau, sigma, "ipopt", **kwargs)
+    except cg.ComGraspError as exc:
+        with pytest.raises(type(exc)):
+            cg.estimate_com(ur5, Q, tb, ta, method="ipopt", torque_std=0.01, **kwargs)
+        return
+    est = cg.estimate_com(ur5, Q, tb, ta, method="ipopt", torque_std=0.01, **kwargs)
+    assert est.mass == pytest.approx(expected.mass, rel=1e-9)
+    np.testing.assert_allclose(est.com_ee, expected.com_ee, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(est.cov, expected.cov, rtol=1e-7, atol=1e-16)
+    np.testing.assert_allclose(est.singular_values, expected.singular_values, rtol=1e-11)
+    assert est.condition_number == pytest.approx(expected.condition_number, rel=1e-11)
+    assert (est.unobservable_ee is None) == (expected.unobservable_ee is None)
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), log_cond=st.floats(0.0, 7.0))
+def test_batch_closed_forms_are_lapacks_where_well_conditioned(seed, log_cond):
+    """The batch's vectorised eigenvalues and adjugate inverses against LAPACK."""
+    rng = np.random.default_rng(seed)
+    V = np.linalg.qr(rng.normal(size=(50, 3, 3)))[0]
+    lam = np.exp(rng.uniform(-log_cond, 0.0, size=(50, 3))) * 10 ** rng.uniform(-3, 3, (50, 1))
+    N = V @ (lam[:, :, None] * V.transpose(0, 2, 1))
+    N = 0.5 * (N + N.transpose(0, 2, 1))
+    got_lam, got_inv = batch._eigenvalues_and_inverse(N)
+    ref_lam = np.linalg.eigvalsh(N)
+    well = ref_lam[:, 0] > closed_form.MIN_EIGEN_RATIO * ref_lam[:, 2]
+    scale = ref_lam[well, 2:]
+    assert np.all(np.abs(got_lam[well] - ref_lam[well]) <= 2e-12 * scale)  # (near-)double ones
+    ref_inv = np.linalg.inv(N[well])
+    tol = 1e-11 * np.abs(ref_inv).max(axis=(1, 2))[:, None, None]
+    assert np.all(np.abs(got_inv[well] - ref_inv) <= tol)
+
+
+def test_batch_near_a_singularity_equals_single_estimates(robots):
+    """Grasps near the UR5's upright singularity go to LAPACK in the batch: the same
+    estimates and refusals as one at a time."""
+    ur5 = robots["ur5"]
+    rng = np.random.default_rng(8)
+    Q = np.array([ur5.random_configuration(rng) for _ in range(20)])
+    Q[::4] = [0.0, -np.pi / 2 + 1e-2, 0.0, -np.pi / 2, 0.0, 0.0]  # cond(Yr) ~ 1e2 - 1e3
+    tb, ta = payload_torques(ur5, Q, 0.8, np.array([0.01, 0.0, 0.05]))
+    ta = ta + rng.normal(scale=1e-4, size=Q.shape)
+    got = cg.estimate_com_batch(ur5, Q, tb, ta, torque_std=1e-4)
+    for i in range(len(Q)):
+        one = cg.estimate_com(ur5, Q[i], tb[i], ta[i], torque_std=1e-4)
+        assert got.mass[i] == pytest.approx(one.mass, rel=1e-10)
+        np.testing.assert_allclose(got.cov[i], one.cov, rtol=1e-8, atol=1e-18)
+        assert got.condition_number[i] == pytest.approx(one.condition_number, rel=1e-8)
+    Q[3] = [0.0, -np.pi / 2 + 1e-9, 0.0, -np.pi / 2, 0.0, 0.0]
+    tb, ta = payload_torques(ur5, Q, 0.8, np.array([0.01, 0.0, 0.05]))
+    with pytest.raises(cg.ComGraspError):
+        cg.estimate_com_batch(ur5, Q, tb, ta, torque_std=1e-4, rcond=1e-3)

@@ -32,12 +32,12 @@ from comgrasp_pin.estimation.estimate import ComEstimate, new_estimate, refuse_e
 from comgrasp_pin.estimation.regressor import G0
 from comgrasp_pin.robot import RobotModel
 
-_eigvalsh: Callable[[np.ndarray], np.ndarray] = np.linalg.eigvalsh
-_inv: Callable[[np.ndarray], np.ndarray] = np.linalg.inv
+eigvalsh: Callable[[np.ndarray], np.ndarray] = np.linalg.eigvalsh
+inv: Callable[[np.ndarray], np.ndarray] = np.linalg.inv
 try:  # the gufuncs behind np.linalg.eigvalsh / inv, without their 3 us of argument checks
     from numpy.linalg import _umath_linalg
 
-    _eigvalsh, _inv = _umath_linalg.eigvalsh_lo, _umath_linalg.inv
+    eigvalsh, inv = _umath_linalg.eigvalsh_lo, _umath_linalg.inv
 except (ImportError, AttributeError):  # pragma: no cover - another NumPy layout
     pass
 
@@ -56,7 +56,8 @@ per unit of (m, m c_wx, m c_wy): G0 (J_lin_z, -J_ang_y, J_ang_x). From the regre
 Y = G0 [J_lin_z, J_ang_x R[1] - J_ang_y R[0]] with R[0] . (m c_ee) = m c_wx (world x)."""
 _WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 _EYE3 = np.eye(3)
-_FLOOR = 1.0 / MAX_CONDITION**2
+MIN_EIGEN_RATIO = 1.0 / MAX_CONDITION**2
+"""Smallest ratio of the Gram matrix's extreme eigenvalues solved through it."""
 
 
 def regression(robot: RobotModel, Q: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -111,22 +112,22 @@ def gram_solution(Xb: np.ndarray, sigma: float | np.ndarray | None, rcond: float
     Xt, b = Xb[:p], Xb[p]
     P = Xb @ Xb.T
     N = P[:p, :p]
-    lam = _eigvalsh(N)  # ascending: squared singular values of Yr
+    lam = eigvalsh(N)  # ascending: squared singular values of Yr
     low, high = float(lam[0]), float(lam[-1])
     per_joint = sigma if isinstance(sigma, np.ndarray) else None
-    floor = max(_FLOOR, 4.0 * rcond * rcond)
+    floor = max(MIN_EIGEN_RATIO, 4.0 * rcond * rcond)
     if per_joint is not None:  # cond(W Yr) <= cond(Yr) * sigma_max / sigma_min
         spread = float(per_joint.max() / per_joint.min())
-        floor = max(_FLOOR * spread * spread, 4.0 * rcond * rcond)
+        floor = max(MIN_EIGEN_RATIO * spread * spread, 4.0 * rcond * rcond)
     if not low > floor * high:
         return None
     if per_joint is not None:
         row_var = 2.0 * per_joint * per_joint  # of a difference of two readings
         Xw = Xt / np.tile(row_var, rows // len(row_var))  # Yr^T W, W = 1 / var
-        N_inv = _inv(Xw @ Xt.T)  # the covariance itself
+        N_inv = inv(Xw @ Xt.T)  # the covariance itself
         w = N_inv @ (Xw @ b)
     else:
-        N_inv = _inv(N)
+        N_inv = inv(N)
         w = N_inv @ P[:p, p]
     residuals = b - w @ Xt
     rss = float(residuals @ residuals)
@@ -169,7 +170,7 @@ def estimate(
     """
     k, n = Q.shape
     if k == 1 and (sigma is None or type(sigma) is float):
-        floor = max(_FLOOR, 4.0 * rcond * rcond)
+        floor = max(MIN_EIGEN_RATIO, 4.0 * rcond * rcond)
         return one_pose.estimate(robot, Q[0], dtau[0], sigma, floor, NOISE_FLOOR)
     Xb, T = regression(robot, Q, dtau.ravel())
     solution = gram_solution(Xb, sigma, rcond)

@@ -26,49 +26,25 @@ negative log posterior at the optimum (Laplace), prior and robust loss included.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import numpy as np
 
 from comgrasp_pin.errors import InvalidInputError, UnobservableError
-from comgrasp_pin.estimation import closed_form, ipopt
+from comgrasp_pin.estimation import closed_form, ipopt, observability
 from comgrasp_pin.estimation.closed_form import NOISE_FLOOR
 from comgrasp_pin.estimation.estimate import (
     ComEstimate,
-    assemble_estimate,
     delta_method,
+    new_estimate,
+    refuse_empty_gripper,
 )
 from comgrasp_pin.estimation.inputs import check_options, validate_inputs
 from comgrasp_pin.estimation.prior import AxisPrior
-from comgrasp_pin.estimation.regressor import (
-    gravity_in_ee,
-    one_pose_basis,
-    perpendicular_basis,
-    stacked_regressor,
-)
 from comgrasp_pin.estimation.rod_axis import MIN_AXIS_GRAVITY_ANGLE
 from comgrasp_pin.robot import RobotModel
 
 RCOND = 1e-6
 """Singular values of Y below RCOND * (largest) count as unobservable directions."""
-MASS_NULL_TOL = 1e-3
-"""A lost direction whose mass component exceeds this (unit null vector) makes m unobservable."""
-
-
-@dataclass(frozen=True)
-class _Reduced:
-    """The torque regression and what of theta it observes: theta = B w.
-
-    Y (rows, 4), T (k, 4, 4), B (4, p), u the unobservable direction (ee) or None, sv the
-    singular values of Y (padded with 0 for one pose), cond the condition number of Y B.
-    """
-
-    Y: np.ndarray
-    T: np.ndarray
-    B: np.ndarray
-    u: np.ndarray | None
-    sv: np.ndarray
-    cond: float
 
 
 def estimate_com(
@@ -128,40 +104,53 @@ def estimate_com(
 
 
 def _estimate(robot, Q, dtau, sigma, method, rcond, loss, huber_delta, com_prior, motion):
-    """The general path: SVD observability and ``np.linalg.lstsq`` (any pose set), IPOPT."""
-    red = _reduce(robot, Q, rcond, _motion_maps(motion, len(Q)))
+    """The general path: any pose set (SVD observability, ``np.linalg.lstsq``) and IPOPT.
+
+    Well-conditioned pose sets without payload motion are reduced through the Gram matrix
+    (``observability.by_gram``), and their uniformly weighted least squares solved by it.
+    """
     k, n = Q.shape
     b = dtau.ravel()
-    Yr = red.Y @ red.B
+    red = None if motion is not None else observability.by_gram(robot, Q, b, rcond)
+    if red is None:
+        red = observability.by_svd(robot, Q, rcond, observability.motion_maps(motion, k))
+    Yr = red.Yr
+    uniform = not isinstance(sigma, np.ndarray)
+    if red.gram_inv is not None and uniform:  # uniform weights: the plain least squares
+        w_plain = red.gram_inv @ red.Yr_b
+    else:
+        w_plain = np.linalg.lstsq(Yr, b, rcond=None)[0] if sigma is None else None
     # Row weights: 1 / std of each torque difference, given or estimated from the residuals.
     noise_std = None
-    if sigma is not None:
-        rows_w = np.tile(1.0 / (math.sqrt(2.0) * np.broadcast_to(sigma, (n,))), k)
-    else:
-        w_plain = np.linalg.lstsq(Yr, b, rcond=None)[0]
-        dof = len(b) - Yr.shape[1]
-        rows_w = None
-        if dof > 0:
-            noise_std = max(float(np.linalg.norm(b - Yr @ w_plain)) / math.sqrt(dof), NOISE_FLOOR)
-            rows_w = np.full(len(b), 1.0 / noise_std)
+    rows_w = None
+    if isinstance(sigma, float):
+        rows_w = np.full(len(b), 1.0 / (math.sqrt(2.0) * sigma))
+    elif sigma is not None:
+        rows_w = np.tile(1.0 / (math.sqrt(2.0) * sigma), k)
+    elif len(b) > Yr.shape[1]:
+        residual_norm = float(np.linalg.norm(b - Yr @ w_plain))
+        noise_std = max(residual_norm / math.sqrt(len(b) - Yr.shape[1]), NOISE_FLOOR)
+        rows_w = np.full(len(b), 1.0 / noise_std)
     weights = np.ones(len(b)) if rows_w is None else rows_w
-    w_ls = np.linalg.lstsq(Yr * weights[:, None], b * weights, rcond=None)[0]
+    if w_plain is not None and uniform:
+        w_ls = w_plain  # equal weights do not move the least squares
+    else:
+        w_ls = np.linalg.lstsq(Yr * weights[:, None], b * weights, rcond=None)[0]
     if method == "lstsq":
         cov = None
         if rows_w is not None:
             Yw = Yr * rows_w[:, None]
             cov = delta_method(red.B @ w_ls, red.B @ np.linalg.inv(Yw.T @ Yw) @ red.B.T)
         theta = red.B @ w_ls
-        return _finish(red, *_split(theta), cov, red.u, b, theta, k, n,
-                       "lstsq", "closed_form", 0, noise_std)  # fmt: skip
+        return _finish(red, theta, cov, red.u, b, k, n, "lstsq", "closed_form", 0, noise_std)
     if com_prior is None:
         res = ipopt.solve(Yr, b, weights, w_ls, loss, huber_delta)
         theta = red.B @ res.x
         cov = None
         if rows_w is not None:
             cov = delta_method(theta, red.B @ _inverse(res.hessian) @ red.B.T)
-        return _finish(red, *_split(theta), cov, red.u, b, theta, k, n,
-                       "ipopt", res.return_status, res.iterations, noise_std)  # fmt: skip
+        return _finish(red, theta, cov, red.u, b, k, n, "ipopt", res.return_status,
+                       res.iterations, noise_std)  # fmt: skip
     if rows_w is None:
         raise InvalidInputError(
             "a com_prior needs torque_std when the readings do not outnumber the unknowns "
@@ -177,9 +166,11 @@ def _with_prior(red, b, rows_w, w_ls, loss, delta, prior: AxisPrior, k, n, noise
     nearest the prior's axis.
     """
     theta0 = red.B @ w_ls
-    m0, c0 = _split(theta0)  # m0 = 0: refused after the solve
+    m0 = float(theta0[0])  # m0 = 0: refused after the solve
+    c0 = theta0[1:] / m0 if m0 != 0.0 else np.zeros(3)
     if red.u is not None:
-        cos_angle = abs(float(prior.direction_ee @ red.u))
+        u = red.u
+        cos_angle = abs(float(prior.direction_ee @ u))
         if cos_angle > math.cos(MIN_AXIS_GRAVITY_ANGLE):
             raise UnobservableError(
                 f"the prior's axis is {math.degrees(math.acos(min(cos_angle, 1.0))):.2f} deg "
@@ -187,95 +178,39 @@ def _with_prior(red, b, rows_w, w_ls, loss, delta, prior: AxisPrior, k, n, noise
                 f"{math.degrees(MIN_AXIS_GRAVITY_ANGLE):.2f} deg): it cannot settle the CoM "
                 "along it; measure at a pose where the rod is not vertical, or at two poses"
             )
-        P = prior.across()
-        Pu = P @ red.u
-        c0 = c0 - red.u * float(Pu @ (P @ (c0 - prior.point_ee))) / float(Pu @ Pu)
-    res = ipopt.solve(red.Y, b, rows_w, np.r_[m0, c0], loss, delta, prior)
-    m, com = res.x[0], res.x[1:]
-    theta = np.r_[m, m * com]
-    return _finish(red, m, com, _inverse(res.hessian), None, b, theta, k, n, "ipopt",
-                   res.return_status, res.iterations, noise_std)  # fmt: skip
+        # the point of the line c0 + t u nearest the axis: P (c0 + t u - p) _|_ P u, with
+        # P = I - d d^T; P u . P v = u . v - (u . d)(v . d)
+        d, v = prior.direction_ee, c0 - prior.point_ee
+        ud = float(u @ d)
+        t = (float(u @ v) - ud * float(v @ d)) / (1.0 - ud * ud)
+        c0 = c0 - t * u
+    res = ipopt.solve(red.Y, b, rows_w, np.concatenate(([m0], c0)), loss, delta, prior)
+    theta = res.x * res.x[0]
+    theta[0] = res.x[0]
+    return _finish(red, theta, _inverse(res.hessian), None, b, k, n, "ipopt",
+                   res.return_status, res.iterations, noise_std, res.x[1:])  # fmt: skip
 
 
-def _split(theta: np.ndarray) -> tuple[float, np.ndarray]:
-    """(m, c) from theta = (m, m c); c is NaN for m = 0 (refused as an empty gripper)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return float(theta[0]), theta[1:] / theta[0]
-
-
-def _finish(red, m, com, cov, u, b, theta, k, n, method, status, iters, noise_std):
-    residuals = (b - red.Y @ theta).reshape(k, n)
-    return assemble_estimate(m, com, cov, u, residuals, red.sv, red.cond, method, status,
-                             iters, red.T, noise_std)  # fmt: skip
+def _finish(red, theta, cov, u, b, k, n, method, status, iters, noise_std, com=None):
+    """The estimate of theta = (m, m c_ee) and its covariance (of (m, c_ee)), or a refusal."""
+    m = float(theta[0])
+    refuse_empty_gripper(m, None if cov is None else float(cov[0, 0]), red.cond)
+    if com is None:
+        com = theta[1:] / m
+    r = b - red.Y @ theta
+    rms = math.sqrt(float(r @ r) / r.size)
+    u = None if u is None else np.array(u)
+    return new_estimate(np.array(com), m, cov, u, r.reshape(k, n), rms, red.sv, red.cond,
+                        method, status, iters, red.T, noise_std)  # fmt: skip
 
 
 def _inverse(H: np.ndarray) -> np.ndarray:
     """The covariance from the posterior's Hessian; UnobservableError where it is singular."""
-    eig = np.linalg.eigvalsh(0.5 * (H + H.T))
+    eig = closed_form.eigvalsh(0.5 * (H + H.T))
     if not eig[0] > RCOND * RCOND * eig[-1]:
         raise UnobservableError(
             f"the posterior is flat in some direction (Hessian eigenvalues "
             f"{np.array2string(eig, precision=3)}): the data and the prior do not determine "
             "the estimate"
         )
-    return np.linalg.inv(H)
-
-
-def _motion_maps(motion: np.ndarray | None, k: int) -> np.ndarray | None:
-    """(k, 4, 4) maps A_i: theta at pose i = A_i theta (theta at the first pose).
-
-    From the payload's rigid motions M_i = (R_i, p_i): m c_i = R_i (m c) + m p_i.
-    """
-    if motion is None:
-        return None
-    M = np.asarray(motion, dtype=float)
-    if M.shape != (k, 4, 4) or not np.all(np.isfinite(M)):
-        raise InvalidInputError(
-            f"payload_motion_ee must be ({k}, 4, 4) finite transforms (one per pose), got "
-            f"shape {M.shape}"
-        )
-    A = np.zeros((k, 4, 4))
-    A[:, 0, 0] = 1.0
-    A[:, 1:, 0] = M[:, :3, 3]
-    A[:, 1:, 1:] = M[:, :3, :3]
-    return A
-
-
-def _reduce(
-    robot: RobotModel, Q: np.ndarray, rcond: float, maps: np.ndarray | None = None
-) -> _Reduced:
-    """The regression and the observable combination of theta, or UnobservableError."""
-    k = len(Q)
-    Y, T = stacked_regressor(robot, Q)
-    if maps is not None:
-        n = Q.shape[1]
-        Y = np.concatenate([Y[i * n : (i + 1) * n] @ maps[i] for i in range(k)])
-    if k == 1:
-        u, B = gravity_in_ee(T[0, :3, :3]), one_pose_basis(T[0, :3, :3])
-        s_full = None
-    else:
-        _, s_full, Vt = np.linalg.svd(Y, full_matrices=False)
-        rank = int(np.sum(s_full > rcond * s_full[0])) if s_full[0] > 0 else 0
-        if rank == 4:
-            u, B = None, np.eye(4)
-        elif rank == 3 and abs(Vt[3, 0]) <= MASS_NULL_TOL:
-            u = Vt[3, 1:] / np.linalg.norm(Vt[3, 1:])
-            u = u if u @ gravity_in_ee(T[0, :3, :3]) >= 0 else -u
-            B = np.zeros((4, 3))
-            B[0, 0] = 1.0
-            B[1:, 1:] = perpendicular_basis(u)
-        else:
-            raise UnobservableError(
-                f"the {k} poses leave the mass unobservable: singular values of the "
-                f"regression {np.array2string(s_full, precision=3)} (rank {rank} of 4 at "
-                f"rcond={rcond}); use poses where the joints bear the payload's weight"
-            )
-    S = np.linalg.svd(Y @ B, compute_uv=False)
-    if not S[-1] > rcond * S[0]:
-        raise UnobservableError(
-            "the pose set leaves the mass unobservable: singular values of the regression "
-            f"for (mass, CoM across gravity) are {np.array2string(S, precision=3)}, below "
-            f"rcond={rcond}; no joint torque separates mass from CoM offset at this q"
-        )
-    sv = np.append(S, 0.0) if s_full is None else s_full
-    return _Reduced(Y, T, B, u, sv, float(S[0] / S[-1]))
+    return closed_form.inv(H)

@@ -13,13 +13,17 @@ Residuals, one per joint and pose, in standard deviations of a torque difference
 - with an ``AxisPrior`` (point p, unit direction d, std s, ee frame) the unknowns are
   ``x = (m, c_ee)`` and theta = (m, m c_ee): the prior settles what the torques cannot see.
 
-One ``nlpsol`` and one Hessian function are built per (rows, unknowns, loss, prior) and
-cached: building costs milliseconds, a solve a fraction of one. ``cov`` is the inverse of
-the objective's Hessian at the optimum (the Laplace approximation of the posterior).
+One ``nlpsol`` is built per (rows, unknowns, loss, prior) and cached, folded with the
+objective's derivatives into one CasADi Function: a call gives the optimum, the Hessian,
+gradient and value there in one array (building costs milliseconds, a solve a fraction of
+one, and each extra call from Python or conversion of its outputs some 20 us after IPOPT
+has run). ``cov`` is the inverse of the objective's Hessian at the optimum (the Laplace
+approximation of the posterior).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import cache
 
@@ -67,12 +71,22 @@ class IpoptResult:
     iterations: int
 
 
-@cache
-def build(rows: int, p: int, loss: str, prior: bool) -> tuple[ca.Function, ca.Function]:
-    """The cached (solver, derivatives) pair for ``rows`` residuals and ``p`` unknowns.
+@dataclass(frozen=True)
+class IpoptProblem:
+    """The cached problem: ``solve(x0, params)`` -> (x; vec(H); grad; f) at IPOPT's optimum.
 
-    derivatives(x, params) gives the objective's Hessian, gradient and value. The parameter
-    vector is (vec(Y) column-major, b, w, delta, point, direction, 1/std):
+    ``nlpsol`` is the bare IPOPT solver inside it (x0=..., p=...), for benchmarks.
+    """
+
+    nlpsol: ca.Function
+    solve: ca.Function
+
+
+@cache
+def build(rows: int, p: int, loss: str, prior: bool) -> IpoptProblem:
+    """The cached problem for ``rows`` residuals and ``p`` unknowns.
+
+    The parameter vector is (vec(Y) column-major, b, w, delta, point, direction, 1/std):
     Y is (rows, p) without a prior (theta = x) and (rows, 4) with one (theta = (m, m c)).
     """
     x = ca.SX.sym("x", p)
@@ -98,7 +112,30 @@ def build(rows: int, p: int, loss: str, prior: bool) -> tuple[ca.Function, ca.Fu
     solver = ca.nlpsol(name, "ipopt", {"x": x, "p": params, "f": f}, options)
     H, g = ca.hessian(f, x)
     derivatives = ca.Function(f"{name}_derivatives", [x, params], [H, g, f])
-    return solver, derivatives
+    x0_in, p_in = ca.MX.sym("x0", p), ca.MX.sym("p", params.shape[0])
+    x_opt = solver(x0=x0_in, p=p_in)["x"]
+    H_opt, g_opt, f_opt = derivatives(x_opt, p_in)
+    out = ca.vertcat(x_opt, ca.vec(H_opt), g_opt, f_opt)
+    return IpoptProblem(solver, ca.Function(f"{name}_solve", [x0_in, p_in], [out]))
+
+
+def parameters(
+    Y: np.ndarray, b: np.ndarray, w: np.ndarray, loss: str, delta: float, prior
+) -> tuple[np.ndarray, float]:
+    """(The parameter vector of ``build``, the objective's scale 1 / max(w)^2).
+
+    IPOPT sees the objective scaled by 1 / max(w)^2 (the same minimiser, well scaled even
+    for weights of 1e6); the caller scales the Hessian back.
+    """
+    root = 1.0 / float(w.max())
+    if loss == "huber":  # e = w r: scaling w scales e; keep the threshold in the same units
+        delta = delta * root
+    if prior is None:
+        tail = [delta, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+    else:
+        point, direction = prior.point_ee.tolist(), prior.direction_ee.tolist()
+        tail = [delta, *point, *direction, root / prior.std]
+    return np.concatenate([Y.ravel(order="F"), b, w * root, tail]), root * root
 
 
 def solve(
@@ -124,31 +161,20 @@ def solve(
     Raises:
         SolverError: IPOPT did not converge (its status is kept).
     """
-    rows = len(b)
     p = len(x0)
-    solver, derivatives = build(rows, p, loss, prior is not None)
-    if prior is None:
-        point, direction, inv_std = np.zeros(3), np.zeros(3), 0.0
-    else:
-        point, direction, inv_std = prior.point_ee, prior.direction_ee, 1.0 / prior.std
-    # IPOPT sees the objective scaled by 1 / max(w)^2 (the same minimiser, well scaled even
-    # for weights of 1e6); the Hessian is scaled back.
-    root = 1.0 / float(np.max(w))
-    w_s = w * root
-    if loss == "huber":  # e = w r: scaling w scales e; keep the threshold in the same units
-        delta_s = delta * root
-    else:
-        delta_s = delta
-    params = np.concatenate(
-        [Y.ravel(order="F"), b, w_s, [delta_s], point, direction, [inv_std * root]]
-    )
-    sol = solver(x0=x0, p=params)
-    stats = solver.stats()
+    problem = build(len(b), p, loss, prior is not None)
+    params, scale = parameters(Y, b, w, loss, delta, prior)
+    out = problem.solve(x0, params).full().ravel()
+    stats = problem.solve.stats()
     status = str(stats.get("return_status", "unknown"))
     iterations = int(stats.get("iter_count", -1))
-    x = np.asarray(sol["x"], dtype=float).ravel()
-    H, g, f = (np.asarray(v, dtype=float) for v in derivatives(x, params))
-    stalled_at_optimum = status == _STALLED and np.linalg.norm(g) <= GRADIENT_TOL * (1 + abs(f))
-    if not (status in _ACCEPTED or stalled_at_optimum) or not np.all(np.isfinite(x)):
-        raise SolverError("IPOPT failed on the CoM estimate", status, iterations)
-    return IpoptResult(x, H / root**2, status, iterations)
+    x, H = out[:p], out[p : p + p * p].reshape(p, p)
+    if status not in _ACCEPTED or not math.isfinite(sum(x.tolist())):
+        # IPOPT's step may stall at an optimum it started at: accepted where |grad f| is 0
+        grad, f = out[p + p * p : -1], float(out[-1])
+        stalled_at_optimum = status == _STALLED and float(np.linalg.norm(grad)) <= (
+            GRADIENT_TOL * (1 + abs(f))
+        )
+        if not (status in _ACCEPTED or stalled_at_optimum) or not np.all(np.isfinite(x)):
+            raise SolverError("IPOPT failed on the CoM estimate", status, iterations)
+    return IpoptResult(x, H / scale, status, iterations)
