@@ -39,11 +39,11 @@ def points_in(T_frame_cam: np.ndarray, depth: np.ndarray, camera: PinholeCamera)
         raise InvalidDepthError(f"depth image {depth.shape} does not match the camera")
     valid = np.isfinite(depth) & (depth > 0)
     z = np.where(valid, depth, 1.0)
-    points = np.empty((*depth.shape, 3))
-    np.multiply(pixel_slopes(camera.width, camera.cx, camera.fx), z, out=points[..., 0])
-    np.multiply(pixel_slopes(camera.height, camera.cy, camera.fy)[:, None], z, out=points[..., 1])
-    points[..., 2] = z
-    points = transform_points(T_frame_cam, points.reshape(-1, 3)).reshape(points.shape)
+    in_cam = np.empty((*depth.shape, 3))
+    np.multiply(pixel_slopes(camera.width, camera.cx, camera.fx), z, out=in_cam[..., 0])
+    np.multiply(pixel_slopes(camera.height, camera.cy, camera.fy)[:, None], z, out=in_cam[..., 1])
+    in_cam[..., 2] = z
+    points = transform_points(T_frame_cam, in_cam.reshape(-1, 3)).reshape(in_cam.shape)
     points[~valid] = np.nan
     return points
 
