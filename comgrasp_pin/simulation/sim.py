@@ -9,7 +9,7 @@ import mujoco
 import numpy as np
 
 from comgrasp_pin.config import TorqueSensorConfig, WorldConfig
-from comgrasp_pin.errors import UnstablePhysicsError
+from comgrasp_pin.errors import InvalidInputError, UnstablePhysicsError
 from comgrasp_pin.procedures.cell import TorqueMeasurement
 from comgrasp_pin.simulation.servo import ArmServo
 from comgrasp_pin.simulation.torque_sensor import make_torque_sensor
@@ -216,5 +216,8 @@ class Simulation:
 def _contiguous(index: np.ndarray, what: str) -> slice:
     """The arm's contiguous ``index`` array as a slice (indexing by a slice is a view)."""
     if len(index) == 0 or not np.array_equal(index, np.arange(index[0], index[0] + len(index))):
-        raise ValueError(f"the arm's {what} addresses {index} are not contiguous in the model")
+        raise InvalidInputError(
+            f"the arm's {what} addresses {index} are not contiguous in the model: its six "
+            "joints, actuators and torque sensors must each be declared in one block"
+        )
     return slice(int(index[0]), int(index[0]) + len(index))

@@ -94,7 +94,10 @@ class JointTorqueSensor:
         """Advance over ``steps`` control steps whose samples nobody reads (noise stream and
         drift as ``steps`` calls of ``read`` would leave them)."""
         if self.needs_velocity:
-            raise RuntimeError("a velocity-dependent reading cannot skip samples")
+            raise InvalidInputError(
+                "a current-based reading depends on every step's joint velocities: read each "
+                "step (skip is for link-side sensors only)"
+            )
         if steps > 0:
             draws = self._take(steps)
             if self.config.drift_std > 0:
