@@ -55,7 +55,7 @@ WEIGHT_ROWS = G0 * np.array(
 per unit of (m, m c_wx, m c_wy): G0 (J_lin_z, -J_ang_y, J_ang_x). From the regressor
 Y = G0 [J_lin_z, J_ang_x R[1] - J_ang_y R[0]] with R[0] . (m c_ee) = m c_wx (world x)."""
 _WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-_EYE3 = np.eye(3)
+_EYE4 = np.eye(4)
 MIN_EIGEN_RATIO = 1.0 / MAX_CONDITION**2
 """Smallest ratio of the Gram matrix's extreme eigenvalues solved through it."""
 
@@ -77,17 +77,16 @@ def regression(robot: RobotModel, Q: np.ndarray, b: np.ndarray) -> tuple[np.ndar
         np.matmul(WEIGHT_ROWS, J, out=Xb[:3])
         Xb[3] = b
         return Xb, data.oMf[fid].homogeneous[None]
-    J = np.empty((k, 6, n))
-    T = np.empty((k, 4, 4))
-    oMf = data.oMf
-    for i in range(k):
-        J[i] = pin.computeFrameJacobian(model, data, Q[i], fid, _WORLD_ALIGNED)
-        T[i] = oMf[fid].homogeneous
-    Bt = np.zeros((k, 4, 3))  # [[1, 0], [0, R_i[:2]]]^T
-    Bt[:, 0, 0] = 1.0
-    Bt[:, 1:, 1:] = T[:, :2, :3].transpose(0, 2, 1)
+    jacobian, oMf = pin.computeFrameJacobian, data.oMf
+    frames = [(jacobian(model, data, q, fid, _WORLD_ALIGNED), oMf[fid].homogeneous) for q in Q]
+    A = WEIGHT_ROWS @ np.array([f[0] for f in frames])  # (k, 3, n)
+    T = np.array([f[1] for f in frames])
     Xb = np.empty((5, k * n))
-    np.matmul(Bt, WEIGHT_ROWS @ J, out=Xb[:4].reshape(4, k, n).transpose(1, 0, 2))
+    Xb[0].reshape(k, n)[:] = A[:, 0]
+    # rows 1-3, pose by pose: R_i[:2]^T (m c_wx, m c_wy) rows -> m c_ee rows
+    np.matmul(
+        T[:, :2, :3].transpose(0, 2, 1), A[:, 1:], out=Xb[1:4].reshape(3, k, n).transpose(1, 0, 2)
+    )
     Xb[4] = b
     return Xb, T
 
@@ -182,17 +181,17 @@ def estimate(
     inv_mass = 1.0 / mass
     # the delta method: cov = D (var N_inv) D^T for D = d(m, c_ee)/dw, sqrt(var) folded in D
     r = 1.0 if var is None else math.sqrt(var)
-    D = np.zeros((4, len(w)))
-    D[0, 0] = r
     if k == 1:
         R_xy = T[0, :2, :3].T  # (3, 2): the world's x and y axes in the ee frame
         com = (R_xy @ w[1:]) * inv_mass
         u = T[0, 2, :3] * -1.0  # gravity in the ee frame
+        D = np.zeros((4, 3))
         D[1:, 1:] = R_xy * (r * inv_mass)
     else:
         com = w[1:] * inv_mass
         u = None
-        D[1:, 1:] = _EYE3 * (r * inv_mass)
+        D = _EYE4 * (r * inv_mass)
+    D[0, 0] = r
     cov = None
     if var is not None:
         D[1:, 0] = com * (-r * inv_mass)

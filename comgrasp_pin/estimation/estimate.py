@@ -229,24 +229,29 @@ def new_estimate(
     """The ``ComEstimate`` of arrays this package owns (made read-only here, not copied).
 
     ``rms`` is that of ``residuals`` (k, n). Refuses non-finite results (InvalidInputError).
-    The dataclass's own ``__init__`` sets each of its 15 fields through
-    ``object.__setattr__`` (it is frozen), 2 us of a 10 us estimate; the instance
-    dictionary is filled in one step instead, with the same fields.
     """
     # Python float sums never warn: NaN or inf anywhere (or an overflowing sum) shows here,
     # and check_finite_result then names what is not finite
     screen = mass + rms + sum(com_ee.tolist())
     if cov is not None:
         screen += sum(cov.ravel().tolist())
-        cov.setflags(write=False)
     if not math.isfinite(screen):
         check_finite_result(mass=mass, com_ee=com_ee, cov=cov, residual_rms=rms)
-    if u is not None:
-        u.setflags(write=False)
-    com_ee.setflags(write=False)
-    residuals.setflags(write=False)
-    sv.setflags(write=False)
-    T.setflags(write=False)
+    for a in (com_ee, u, cov, residuals, sv, T):
+        if a is not None:
+            a.setflags(write=False)
+    return construct(com_ee, mass, cov, u, residuals, rms, sv, cond, method, status, iters, T,
+                     noise_std)  # fmt: skip
+
+
+def construct(com_ee, mass, cov, u, residuals, rms, sv, cond, method, status, iters, T,
+              noise_std) -> ComEstimate:  # fmt: skip
+    """The ``ComEstimate`` of checked, read-only fields (``new_estimate``'s last step).
+
+    The dataclass's own ``__init__`` sets each of its 15 fields through
+    ``object.__setattr__`` (it is frozen), 2 us of a 10 us estimate; the instance
+    dictionary is filled in one step instead, with the same fields.
+    """
     est = object.__new__(ComEstimate)
     object.__setattr__(est, "__dict__", {
         "com_ee": com_ee,

@@ -30,7 +30,7 @@ import math
 import numpy as np
 
 from comgrasp_pin.errors import InvalidInputError, UnobservableError
-from comgrasp_pin.estimation import closed_form, ipopt, observability
+from comgrasp_pin.estimation import closed_form, ipopt, observability, one_pose
 from comgrasp_pin.estimation.closed_form import NOISE_FLOOR
 from comgrasp_pin.estimation.estimate import (
     ComEstimate,
@@ -38,7 +38,7 @@ from comgrasp_pin.estimation.estimate import (
     new_estimate,
     refuse_empty_gripper,
 )
-from comgrasp_pin.estimation.inputs import check_options, validate_inputs
+from comgrasp_pin.estimation.inputs import check_arrays, check_options
 from comgrasp_pin.estimation.prior import AxisPrior
 from comgrasp_pin.estimation.rod_axis import MIN_AXIS_GRAVITY_ANGLE
 from comgrasp_pin.robot import RobotModel
@@ -88,14 +88,20 @@ def estimate_com(
         ComGraspError, a ValueError).
     """
     check_options(method, rcond, loss, huber_delta, com_prior, torque_std)
-    Q, dtau, sigma = validate_inputs(robot, q, tau_before, tau_after, torque_std)
+    q_arr, dtau, sigma = check_arrays(robot, q, tau_before, tau_after, torque_std)
+    n = q_arr.shape[-1]
     try:
         if method == "lstsq" and payload_motion_ee is None:
-            est = closed_form.estimate(robot, Q, dtau, sigma, rcond)
+            if q_arr.ndim == 1 and not isinstance(sigma, np.ndarray):  # the common case
+                floor = max(closed_form.MIN_EIGEN_RATIO, 4.0 * rcond * rcond)
+                est = one_pose.estimate(robot, q_arr, dtau, sigma, floor, NOISE_FLOOR)
+            else:
+                Q, dtau_k = q_arr.reshape(-1, n), dtau.reshape(-1, n)
+                est = closed_form.estimate(robot, Q, dtau_k, sigma, rcond)
             if est is not None:
                 return est
-        return _estimate(robot, Q, dtau, sigma, method, rcond, loss, huber_delta, com_prior,
-                         payload_motion_ee)  # fmt: skip
+        return _estimate(robot, q_arr.reshape(-1, n), dtau.reshape(-1, n), sigma, method, rcond,
+                         loss, huber_delta, com_prior, payload_motion_ee)  # fmt: skip
     except np.linalg.LinAlgError as exc:
         raise UnobservableError(
             f"the regression is numerically singular ({exc}): the poses do not determine the "

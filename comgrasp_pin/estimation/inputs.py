@@ -71,12 +71,30 @@ def validate_inputs(
     sigma, the std of each torque reading (N m): a float where ``torque_std`` is a scalar,
     an (n,) array where it is given per joint, None where it is not given.
     """
+    q_arr, dtau, sigma = check_arrays(robot, q, tau_before, tau_after, torque_std)
+    n = q_arr.shape[-1]
+    return q_arr.reshape(-1, n), dtau.reshape(-1, n), sigma
+
+
+def check_arrays(
+    robot: RobotModel,
+    q: np.ndarray,
+    tau_before: np.ndarray,
+    tau_after: np.ndarray,
+    torque_std: float | np.ndarray | None,
+) -> tuple[np.ndarray, np.ndarray, float | np.ndarray | None]:
+    """``validate_inputs`` with q and dtau in the shape given: (n,) or (k, n)."""
     if not isinstance(robot, RobotModel):
         raise InvalidInputError(f"robot must be a RobotModel, got {type(robot).__name__}")
     n = robot.model.nq
-    q_arr = _numeric(q, "q")
-    tb_arr = _numeric(tau_before, "tau_before")
-    ta_arr = _numeric(tau_after, "tau_after")
+    try:
+        q_arr = np.asarray(q, dtype=float)
+        tb_arr = np.asarray(tau_before, dtype=float)
+        ta_arr = np.asarray(tau_after, dtype=float)
+    except (TypeError, ValueError):  # name the first that is not numeric
+        q_arr = _numeric(q, "q")
+        tb_arr = _numeric(tau_before, "tau_before")
+        ta_arr = _numeric(tau_after, "tau_after")
     shape = q_arr.shape
     if q_arr.ndim not in (1, 2) or shape[-1] != n or (len(shape) == 2 and shape[0] < 1):
         raise InvalidInputError(
@@ -107,7 +125,7 @@ def validate_inputs(
         sigma = torque_std
     else:
         sigma = _torque_std(torque_std, n)
-    return q_arr.reshape(-1, n), (ta_arr - tb_arr).reshape(-1, n), sigma
+    return q_arr, ta_arr - tb_arr, sigma
 
 
 _SCREEN_SIZE = 64

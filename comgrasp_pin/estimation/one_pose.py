@@ -12,11 +12,19 @@ z b and b^T b come out of one product; N's inverse (adjugate) and eigenvalues
 from __future__ import annotations
 
 import math
+import operator
 
 import numpy as np
 import pinocchio as pin
 
-from comgrasp_pin.estimation.estimate import ComEstimate, new_estimate, refuse_empty_gripper
+from comgrasp_pin.estimation.estimate import (
+    MASS_SIGMAS,
+    MIN_MASS_KG,
+    ComEstimate,
+    check_finite_result,
+    construct,
+    refuse_empty_gripper,
+)
 from comgrasp_pin.estimation.regressor import G0
 from comgrasp_pin.robot import RobotModel
 
@@ -83,9 +91,10 @@ def estimate(
     v0 = (i00 * r0 + i01 * r1 + i02 * r2) * s
     v1 = (i01 * r0 + i11 * r1 + i12 * r2) * s
     v2 = (i02 * r0 + i12 * r1 + i22 * r2) * s
-    residuals = np.array([-v0, -v1, -v2, 1.0]) @ Z  # dtau - z^T v
-    rss = float(residuals @ residuals)
-    n = len(residuals)
+    z0, z1, z2, dtau_list = Z.tolist()
+    n = len(dtau_list)
+    residuals = [t - (v0 * x + v1 * y + v2 * z) for x, y, z, t in zip(z0, z1, z2, dtau_list)]
+    rss = sum(map(operator.mul, residuals, residuals))
     noise_std = None
     if sigma is not None:
         var = 2.0 * sigma * sigma  # of a difference of two readings
@@ -97,27 +106,73 @@ def estimate(
     mass = v0 / G0
     # cov(w) = var N^-1 / G0^2 for w = v / G0 = (m, m c_wy, -m c_wx)
     k = None if var is None else var * s / (G0 * G0)
-    refuse_empty_gripper(mass, None if k is None else k * i00, math.sqrt(lam_max / lam_min))
+    threshold = MIN_MASS_KG if k is None else MASS_SIGMAS * math.sqrt(max(k * i00, 0.0))
+    if not mass > threshold:  # refused: the error says why
+        refuse_empty_gripper(mass, None if k is None else k * i00, math.sqrt(lam_max / lam_min))
     R0, R1, R2, _ = T.tolist()
     cy, mcx = v1 / v0, v2 / v0  # c_wy, -c_wx
     com = [cy * R1[0] - mcx * R0[0], cy * R1[1] - mcx * R0[1], cy * R1[2] - mcx * R0[2]]
-    # com_ee, gravity in the ee frame, the singular values of Yr = G0 z^T (and 0 along gravity)
     sv = [G0 * math.sqrt(lam_max), G0 * math.sqrt(max(lam_mid, 0.0)), G0 * math.sqrt(lam_min)]
-    out = np.array(com + [-R2[0], -R2[1], -R2[2]] + sv + [0.0])
-    cov = None
+    # One array of com_ee, gravity in the ee frame, the singular values of Yr = G0 z^T (and
+    # 0 along gravity), the residuals and the covariance: NumPy calls cost more than these
+    # few dozen products in Python floats.
+    values = com + [-R2[0], -R2[1], -R2[2]] + sv + [0.0] + residuals
     if k is not None:
-        inv_m = 1.0 / mass
-        # D = d(m, c_ee)/dw: row 0 (1, 0, 0); rows 1-3 (-c_ee, R1, -R0) / m
-        D = np.array(
-            [
-                [1.0, 0.0, 0.0],
-                [-com[0] * inv_m, R1[0] * inv_m, -R0[0] * inv_m],
-                [-com[1] * inv_m, R1[1] * inv_m, -R0[1] * inv_m],
-                [-com[2] * inv_m, R1[2] * inv_m, -R0[2] * inv_m],
-            ]
-        )
-        C = np.array([[i00, i01, i02], [i01, i11, i12], [i02, i12, i22]])
-        cov = (D * k) @ C @ D.T
-    return new_estimate(out[:3], mass, cov, out[3:6], residuals.reshape(1, n),
-                        math.sqrt(rss / n), out[6:], math.sqrt(lam_max / lam_min), "lstsq",
-                        "closed_form", 0, T.reshape(1, 4, 4), noise_std)  # fmt: skip
+        values += _delta_method(k * i00, k * i01, k * i02, k * i11, k * i12, k * i22,
+                                com, R0, R1, 1.0 / mass)  # fmt: skip
+    rms = math.sqrt(rss / n)
+    if not math.isfinite(mass + rms + sum(values)):  # Python floats never warn
+        cov_check = None if k is None else np.array(values[10 + n :]).reshape(4, 4)
+        check_finite_result(mass=mass, com_ee=np.array(com), cov=cov_check, residual_rms=rms)
+    out = np.array(values)
+    out.setflags(write=False)  # and so every view of it
+    T.setflags(write=False)
+    cov = None if k is None else out[10 + n :].reshape(4, 4)
+    return construct(out[:3], mass, cov, out[3:6], out[10 : 10 + n].reshape(1, n), rms,
+                     out[6:10], math.sqrt(lam_max / lam_min), "lstsq", "closed_form", 0,
+                     T.reshape(1, 4, 4), noise_std)  # fmt: skip
+
+
+def _delta_method(c00, c01, c02, c11, c12, c22, com, R0, R1, inv_m) -> list[float]:
+    """cov(m, c_ee) = D C D^T (4 x 4, row-major) for cov(w) = C (symmetric, 3 x 3).
+
+    D = d(m, c_ee)/dw for w = (m, m c_wy, -m c_wx) and c_ee = (w1 R[1] - w2 R[0]) / m:
+    row 0 is (1, 0, 0), row 1 + j is d_j = (-c_j, R1_j, -R0_j) / m. Written out: 75
+    products in Python floats cost less than the NumPy calls they replace.
+    """
+    x0, y0, z0 = -com[0] * inv_m, R1[0] * inv_m, -R0[0] * inv_m
+    x1, y1, z1 = -com[1] * inv_m, R1[1] * inv_m, -R0[1] * inv_m
+    x2, y2, z2 = -com[2] * inv_m, R1[2] * inv_m, -R0[2] * inv_m
+    # h_j = C d_j
+    a0, b0, e0 = (
+        c00 * x0 + c01 * y0 + c02 * z0,
+        c01 * x0 + c11 * y0 + c12 * z0,
+        c02 * x0 + c12 * y0 + c22 * z0,
+    )
+    a1, b1, e1 = (
+        c00 * x1 + c01 * y1 + c02 * z1,
+        c01 * x1 + c11 * y1 + c12 * z1,
+        c02 * x1 + c12 * y1 + c22 * z1,
+    )
+    a2, b2, e2 = (
+        c00 * x2 + c01 * y2 + c02 * z2,
+        c01 * x2 + c11 * y2 + c12 * z2,
+        c02 * x2 + c12 * y2 + c22 * z2,
+    )
+    # d_i . h_j
+    s00, s11, s22 = (
+        x0 * a0 + y0 * b0 + z0 * e0,
+        x1 * a1 + y1 * b1 + z1 * e1,
+        x2 * a2 + y2 * b2 + z2 * e2,
+    )
+    s01, s02, s12 = (
+        x0 * a1 + y0 * b1 + z0 * e1,
+        x0 * a2 + y0 * b2 + z0 * e2,
+        x1 * a2 + y1 * b2 + z1 * e2,
+    )
+    return [
+        c00, a0, a1, a2,
+        a0, s00, s01, s02,
+        a1, s01, s11, s12,
+        a2, s02, s12, s22,
+    ]  # fmt: skip
