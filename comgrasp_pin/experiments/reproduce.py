@@ -80,9 +80,6 @@ def run_settings(opts: RunOptions) -> dict:
 
 def _run(opts: RunOptions, fn, methods, name: str, columns) -> list[dict]:
     tasks = make_tasks(list(opts.objects), opts.trials, opts.seed, methods)
-    # The long regrasp episodes first, the short baselines last: at the end no worker waits
-    # alone for a long one (a trial's result does not depend on when it runs).
-    tasks.sort(key=lambda task: task["method"] == "baseline")
     for task in tasks:
         task["noise"] = opts.noise
         task["estimator"] = opts.estimator
