@@ -1,7 +1,7 @@
 """An episode's phases before and after a change, in one run: the older code against today's.
 
     python benchmarks/bench_speedup.py --before 49b14e3 [--objects obj1,obj3,obj5]
-        [--trials 1] [--rounds 2] [--sensors ideal,realistic]
+        [--trials 1] [--rounds 2] [--sensors ideal,realistic] [--threads 1]
         [--out benchmarks/results/speedup.json]
 
 The older code is checked out as a git worktree (``--before``, a commit) beside this one;
@@ -11,7 +11,8 @@ its own process with its own package on ``PYTHONPATH``. Per sensor preset and ki
 episode (accuracy trial, pick-and-place episode with the regrasp method) it writes the
 wall time per episode, the simulated time, the real-time factor (simulated / wall) and the
 seconds per phase of each version, and the ratios before / after. The rows themselves are
-compared by ``compare_runs.py``, not here.
+compared by ``compare_runs.py``, not here. ``--threads``: the libraries' threads in each
+process (``experiments.threads``; default 1, as each worker of ``--workers 2`` on 2 cores).
 """
 
 from __future__ import annotations
@@ -24,6 +25,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+from comgrasp_pin.experiments.threads import THREAD_VARIABLES
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -43,7 +46,8 @@ def worktree(ref: str) -> Path:
 
 def run_phases(root: Path, args: argparse.Namespace, sensors: str, out: Path) -> dict:
     """One ``bench_episode_phases.py`` run of the code in ``root``; its JSON."""
-    env = {**os.environ, "PYTHONPATH": str(root), "MUJOCO_GL": "egl"}
+    threads = {name: str(args.threads) for name in THREAD_VARIABLES}
+    env = {**os.environ, **threads, "PYTHONPATH": str(root), "MUJOCO_GL": "egl"}
     cmd = [sys.executable, str(root / "benchmarks" / "bench_episode_phases.py"),
            "--objects", args.objects, "--trials", str(args.trials), "--sensors", sensors,
            "--out", str(out)]  # fmt: skip
@@ -79,6 +83,7 @@ def main() -> None:
     parser.add_argument("--trials", type=int, default=1)
     parser.add_argument("--rounds", type=int, default=2)
     parser.add_argument("--sensors", default="ideal,realistic")
+    parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--out", default=str(HERE / "results" / "speedup.json"))
     args = parser.parse_args()
     before_root = worktree(args.before)
@@ -107,7 +112,7 @@ def main() -> None:
             }
             result["presets"][sensors] = both
     result["settings"] = {"objects": args.objects, "trials": args.trials,
-                          "rounds": args.rounds}  # fmt: skip
+                          "rounds": args.rounds, "threads": args.threads}  # fmt: skip
     result["environment"] = {"cpus": os.cpu_count(), "load_avg_1min": os.getloadavg()[0],
                              "date": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())}  # fmt: skip
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
