@@ -11,7 +11,10 @@ include the kinematics (the estimator's own Jacobians) unless a key says ``solve
 problem is reported apart. The peer is mujoco-sysid's joint-body regressor on the MuJoCo world
 (the same URDF) solved by NumPy least squares; it is skipped with a message when mujoco-sysid
 is not installed (``pip install mujoco-sysid``: a benchmark-only tool, not a dependency).
-Targets: lstsq <= 10 us per one-pose estimate, IPOPT with the axis prior <= 0.5 ms per solve.
+Targets (issue 24): lstsq <= 15 us for one pose and <= 25 us for four (kinematics and
+covariance included), >= 4x faster than the peer on the same four poses, IPOPT with the axis
+prior <= 0.6 ms per estimate of which <= 0.1 ms around the bare ``nlpsol`` call, batch
+>= 300 000 estimates/s. The machine is shared: the JSON keeps the load average.
 """
 
 from __future__ import annotations
@@ -43,7 +46,14 @@ PRIOR_STD = 0.005  # m
 HUBER_DELTA = 3.0
 N_BATCH = 10_000
 SEED = 0
-TARGETS = {"lstsq_one_pose_us": 10.0, "ipopt_prior_one_pose_solve_ms": 0.5}
+TARGETS = {  # key: (limit, "max" = at most / "min" = at least)
+    "lstsq_one_pose_us": (15.0, "max"),
+    "lstsq_four_poses_us": (25.0, "max"),
+    "peer_over_ours_four_poses": (4.0, "min"),
+    "ipopt_prior_one_pose_ms": (0.6, "max"),
+    "ipopt_prior_one_pose_around_nlpsol_ms": (0.1, "max"),
+    "batch_estimates_per_s": (300_000.0, "min"),
+}
 
 
 def payload_torques(robot: cg.RobotModel, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -208,6 +218,7 @@ def main() -> None:
     batch_blocks = 3 if args.quick else 7
     n_loop = 1000 if args.quick else N_BATCH
 
+    load_before = os.getloadavg()[0]  # other jobs on the 2 cores slow every figure
     robot = cg.RobotModel.ur5()
     rng = np.random.default_rng(SEED)
     q = robot.random_configuration(rng)
@@ -280,24 +291,16 @@ def main() -> None:
     c0 = closed.com_ee - u1 * float(Pu @ (P @ (closed.com_ee - prior.point_ee))) / float(Pu @ Pu)
     x0 = np.r_[closed.mass, c0]  # the warm start of estimate_com: on the line nearest the axis
     solve = partial(_ipopt.solve, Y1, b1, w1, x0, "l2", HUBER_DELTA, prior)
-    solver, _ = _ipopt.build(robot.nq, 4, "l2", True)
-    root = 1.0 / float(np.max(w1))  # the objective scaling of ipopt.solve
-    params = np.concatenate(
-        [
-            Y1.ravel(order="F"),
-            b1,
-            w1 * root,
-            [HUBER_DELTA],
-            prior.point_ee,
-            prior.direction_ee,
-            [root / prior.std],
-        ]
-    )
+    solver = _ipopt.build(robot.nq, 4, "l2", True).nlpsol
+    params = _ipopt.parameters(Y1, b1, w1, "l2", HUBER_DELTA, prior)[0]  # as ipopt.solve
     call = partial(solver, x0=x0, p=params)
     solve_s = record(
         "ipopt_prior_one_pose_solve", median_time(solve, ipopt_calls, ipopt_blocks), "ms"
     )
-    record("ipopt_prior_one_pose_nlpsol_call", median_time(call, ipopt_calls, ipopt_blocks), "ms")
+    call_s = record(
+        "ipopt_prior_one_pose_nlpsol_call", median_time(call, ipopt_calls, ipopt_blocks), "ms"
+    )
+    record("ipopt_prior_one_pose_around_nlpsol", ipopt_times["ipopt_prior_one_pose"] - call_s, "ms")
     res = solve()
     x_call = np.asarray(call()["x"]).ravel()
     via = cg.estimate_com(
@@ -359,8 +362,14 @@ def main() -> None:
         "batch_over_loop_throughput": results["batch"]["ratio_batch_over_loop_throughput"],
         "peer_over_ours_four_poses": None if peer is None else peer["ratio_peer_over_ours"],
     }
-    results["targets"] = TARGETS
-    results["meets_targets"] = {key: results[key] <= value for key, value in TARGETS.items()}
+    results["batch_estimates_per_s"] = results["batch"]["batch_estimates_per_s"]
+    results["peer_over_ours_four_poses"] = results["ratios"]["peer_over_ours_four_poses"]
+    results["targets"] = {key: {kind: limit} for key, (limit, kind) in TARGETS.items()}
+    results["meets_targets"] = {
+        key: results[key] is not None
+        and (results[key] <= limit if kind == "max" else results[key] >= limit)
+        for key, (limit, kind) in TARGETS.items()
+    }
     results["case"] = {
         "payload_mass_kg": MASS,
         "payload_com_ee_m": COM_EE.tolist(),
@@ -383,16 +392,21 @@ def main() -> None:
         "mujoco_sysid": importlib.metadata.version("mujoco-sysid") if peer is not None else None,
         "quick": args.quick,
         "date": time.strftime("%Y-%m-%dT%H:%M:%S"),
+        "load_avg_1min_before": load_before,
+        "load_avg_1min_after": os.getloadavg()[0],
     }
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(results, indent=2) + "\n")
 
-    targets = {key.rsplit("_", 1)[0]: value for key, value in TARGETS.items()}
-    print(f"{'case':36s} {'value':>12s} {'unit':6s} target")
+    print(f"{'case':40s} {'value':>12s} {'unit':6s}")
     for key, value, unit in table:
-        target = f"<= {targets[key]:g}" if key in targets else ""
-        print(f"{key:36s} {value:12.2f} {unit:6s} {target}")
+        print(f"{key:40s} {value:12.3f} {unit:6s}")
+    for key, (limit, kind) in TARGETS.items():
+        sign = "<=" if kind == "max" else ">="
+        verdict = "met" if results["meets_targets"][key] else "MISSED"
+        value = "n/a" if results[key] is None else f"{results[key]:.3f}"
+        print(f"target {key:40s} {value:>12s} {sign} {limit:g}: {verdict}")
     print(
         "ipopt build (ms):",
         ", ".join(f"{k.removeprefix('ipopt_')} {v:.1f}" for k, v in build_ms.items()),

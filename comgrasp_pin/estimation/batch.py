@@ -15,7 +15,7 @@ import numpy as np
 import pinocchio as pin
 
 from comgrasp_pin.errors import EmptyGripperError, InvalidInputError, UnobservableError
-from comgrasp_pin.estimation import closed_form
+from comgrasp_pin.estimation import closed_form, one_pose
 from comgrasp_pin.estimation.estimate import (
     MASS_SIGMAS,
     MIN_MASS_KG,
@@ -96,7 +96,10 @@ def estimate_com_batch(
     rhs = (Aw @ dtau[:, :, None])[:, :, 0]
     lam, N_inv = _eigenvalues_and_inverse(N)
     # ill-conditioned: the closed forms lose digits, and the observability decision is near
-    hard = np.flatnonzero(~(lam[:, 0] > max(closed_form.MIN_EIGEN_RATIO, 4 * rcond**2) * lam[:, 2]))
+    # and (near) double eigenvalues: the trigonometric formula loses digits (one_pose)
+    floor = max(closed_form.MIN_EIGEN_RATIO, 4 * rcond**2) * lam[:, 2]
+    gap = np.minimum(lam[:, 2] - lam[:, 1], lam[:, 1] - lam[:, 0])
+    hard = np.flatnonzero(~((lam[:, 0] > floor) & (gap >= one_pose.MIN_GAP * lam[:, 2])))
     if hard.size:
         lam[hard] = np.linalg.eigvalsh(N[hard])
     bad = np.flatnonzero(~(lam[:, 0] > rcond * rcond * lam[:, 2]))

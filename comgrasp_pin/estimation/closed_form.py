@@ -56,6 +56,9 @@ per unit of (m, m c_wx, m c_wy): G0 (J_lin_z, -J_ang_y, J_ang_x). From the regre
 Y = G0 [J_lin_z, J_ang_x R[1] - J_ang_y R[0]] with R[0] . (m c_ee) = m c_wx (world x)."""
 _WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 _EYE4 = np.eye(4)
+_KT_TEMPLATE = np.zeros((6, 5))
+_KT_TEMPLATE[2, 0] = 1.0  # the mass: J_lin_z
+_KT_TEMPLATE[5, 4] = 1.0  # b, carried in row 5
 MIN_EIGEN_RATIO = 1.0 / MAX_CONDITION**2
 """Smallest ratio of the Gram matrix's extreme eigenvalues solved through it."""
 
@@ -64,8 +67,7 @@ def regression(robot: RobotModel, Q: np.ndarray, b: np.ndarray) -> tuple[np.ndar
     """([Yr^T; b^T] (p + 1, k n), T_world_ee (k, 4, 4)) at the k configurations ``Q``.
 
     One pose: Yr (n, 3) of w = (m, m c_wx, m c_wy) is ``WEIGHT_ROWS @ J``^T. Several: Yr
-    (k n, 4) of theta; pose i's block is (WEIGHT_ROWS J_i)^T [[1, 0], [0, R_i[:2]]], the
-    world's x and y rows of R_world_ee turning (m c_wx, m c_wy) into m c_ee.
+    (k n, 4) of theta, pose i's block the regressor G0 [J_lin_z, J_ang_x R[1] - J_ang_y R[0]].
     The torque differences ``b`` (k n,) ride along as the last row: one product then gives
     the Gram matrix, Yr^T b and b^T b.
     """
@@ -79,15 +81,17 @@ def regression(robot: RobotModel, Q: np.ndarray, b: np.ndarray) -> tuple[np.ndar
         return Xb, data.oMf[fid].homogeneous[None]
     jacobian, oMf = pin.computeFrameJacobian, data.oMf
     frames = [(jacobian(model, data, q, fid, _WORLD_ALIGNED), oMf[fid].homogeneous) for q in Q]
-    A = WEIGHT_ROWS @ np.array([f[0] for f in frames])  # (k, 3, n)
+    J = np.array([f[0] for f in frames])  # (k, 6, n)
     T = np.array([f[1] for f in frames])
-    Xb = np.empty((5, k * n))
-    Xb[0].reshape(k, n)[:] = A[:, 0]
-    # rows 1-3, pose by pose: R_i[:2]^T (m c_wx, m c_wy) rows -> m c_ee rows
-    np.matmul(
-        T[:, :2, :3].transpose(0, 2, 1), A[:, 1:], out=Xb[1:4].reshape(3, k, n).transpose(1, 0, 2)
-    )
-    Xb[4] = b
+    J[:, 5] = b.reshape(k, n)  # the unused rows J_ang_z carry b
+    # Kt_i^T (5, 6) maps J_i to [Yr_i^T / G0; b_i^T]: row 0 J_lin_z, row 1 + j (the CoM's
+    # ee coordinate j) R1_j J_ang_x - R0_j J_ang_y; G0 is applied to the Gram matrix after
+    Kt = np.empty((k, 6, 5))
+    Kt[:] = _KT_TEMPLATE
+    Kt[:, 3, 1:4] = T[:, 1, :3]
+    np.negative(T[:, 0, :3], out=Kt[:, 4, 1:4])
+    Xb = (Kt.transpose(0, 2, 1) @ J).transpose(1, 0, 2).reshape(5, k * n)
+    Xb[:4] *= G0
     return Xb, T
 
 

@@ -30,7 +30,13 @@ import math
 import numpy as np
 
 from comgrasp_pin.errors import InvalidInputError, UnobservableError
-from comgrasp_pin.estimation import closed_form, ipopt, observability, one_pose
+from comgrasp_pin.estimation import (
+    closed_form,
+    ipopt,
+    observability,
+    one_pose,
+    several_poses,
+)
 from comgrasp_pin.estimation.closed_form import NOISE_FLOOR
 from comgrasp_pin.estimation.estimate import (
     ComEstimate,
@@ -92,12 +98,16 @@ def estimate_com(
     n = q_arr.shape[-1]
     try:
         if method == "lstsq" and payload_motion_ee is None:
-            if q_arr.ndim == 1 and not isinstance(sigma, np.ndarray):  # the common case
-                floor = max(closed_form.MIN_EIGEN_RATIO, 4.0 * rcond * rcond)
-                est = one_pose.estimate(robot, q_arr, dtau, sigma, floor, NOISE_FLOOR)
-            else:
+            # the normal equations where well conditioned (None: the SVD path decides)
+            floor = max(closed_form.MIN_EIGEN_RATIO, 4.0 * rcond * rcond)
+            if isinstance(sigma, np.ndarray):  # per-joint weights
                 Q, dtau_k = q_arr.reshape(-1, n), dtau.reshape(-1, n)
                 est = closed_form.estimate(robot, Q, dtau_k, sigma, rcond)
+            elif q_arr.ndim == 1 or len(q_arr) == 1:
+                est = one_pose.estimate(robot, q_arr.reshape(n), dtau.reshape(n), sigma, floor,
+                                        NOISE_FLOOR)  # fmt: skip
+            else:
+                est = several_poses.estimate(robot, q_arr, dtau, sigma, floor, NOISE_FLOOR)
             if est is not None:
                 return est
         return _estimate(robot, q_arr.reshape(-1, n), dtau.reshape(-1, n), sigma, method, rcond,

@@ -26,16 +26,25 @@ from comgrasp_pin.estimation.estimate import (
     refuse_empty_gripper,
 )
 from comgrasp_pin.estimation.regressor import G0
+
+try:  # the gufunc behind np.linalg.eigvalsh (closed_form's), here without a cyclic import
+    from numpy.linalg._umath_linalg import eigvalsh_lo as closed_form_eigvalsh
+except ImportError:  # pragma: no cover - another NumPy layout
+    closed_form_eigvalsh = np.linalg.eigvalsh
 from comgrasp_pin.robot import RobotModel
 
 _WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+MIN_GAP = 1e-2
+"""The trigonometric formula's eigenvalues lose digits (1e-11 of the largest at a relative
+gap of 1e-6) where two nearly coincide: below this relative gap LAPACK computes them."""
 _TWO_THIRDS_PI = 2.0 * math.pi / 3.0
 
 
 def sym3_eigenvalues(a, b, c, d, e, f) -> tuple[float, float, float]:
     """Eigenvalues (largest, middle, smallest) of the symmetric 3x3 [[a, b, c], [b, d, e], ...].
 
-    The trigonometric formula; absolute accuracy ~1e-15 times the largest, as LAPACK's.
+    The trigonometric formula: accurate to ~1e-15 times the largest where the eigenvalues are
+    MIN_GAP apart (relative to the largest), as LAPACK's; less where two nearly coincide.
     """
     p1 = b * b + c * c + e * e
     q3 = (a + d + f) / 3.0
@@ -80,8 +89,11 @@ def estimate(
     T = data.oMf[fid].homogeneous
     J[5] = dtau  # J is ours and its last row (J_ang_z) is not needed: b rides along
     Z = J[2:6]  # (z0, z1, z2, b)
-    (a, b, c, r0), (_, d, e, r1), (_, _, f, r2), _ = (Z @ Z.T).tolist()
+    gram = Z @ Z.T
+    (a, b, c, r0), (_, d, e, r1), (_, _, f, r2), _ = gram.tolist()
     lam_max, lam_mid, lam_min = sym3_eigenvalues(a, b, c, d, e, f)
+    if min(lam_max - lam_mid, lam_mid - lam_min) < MIN_GAP * lam_max:  # (near) double: LAPACK
+        lam_min, lam_mid, lam_max = closed_form_eigvalsh(gram[:3, :3]).tolist()
     if not lam_min > floor * lam_max:
         return None
     # N^-1 = adj(N) / det(N), N = [[a, b, c], [b, d, e], [c, e, f]]
