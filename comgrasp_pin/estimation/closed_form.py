@@ -22,7 +22,6 @@ Every step is one NumPy call on small arrays (a few hundred ns each): a call cos
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 
 import numpy as np
 import pinocchio as pin
@@ -30,16 +29,8 @@ import pinocchio as pin
 from comgrasp_pin.estimation import one_pose
 from comgrasp_pin.estimation.estimate import ComEstimate, new_estimate, refuse_empty_gripper
 from comgrasp_pin.estimation.regressor import G0
+from comgrasp_pin.estimation.small_linalg import eigvalsh, inv
 from comgrasp_pin.robot import RobotModel
-
-eigvalsh: Callable[[np.ndarray], np.ndarray] = np.linalg.eigvalsh
-inv: Callable[[np.ndarray], np.ndarray] = np.linalg.inv
-try:  # the gufuncs behind np.linalg.eigvalsh / inv, without their 3 us of argument checks
-    from numpy.linalg import _umath_linalg
-
-    eigvalsh, inv = _umath_linalg.eigvalsh_lo, _umath_linalg.inv
-except (ImportError, AttributeError):  # pragma: no cover - another NumPy layout
-    pass
 
 MAX_CONDITION = 100.0
 """Largest condition number of Yr (weights included) solved through the normal equations:

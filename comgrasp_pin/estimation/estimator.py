@@ -36,6 +36,7 @@ from comgrasp_pin.estimation import (
     observability,
     one_pose,
     several_poses,
+    small_linalg,
 )
 from comgrasp_pin.estimation.closed_form import NOISE_FLOOR
 from comgrasp_pin.estimation.estimate import (
@@ -222,11 +223,11 @@ def _finish(red, theta, cov, u, b, k, n, method, status, iters, noise_std, com=N
 
 def _inverse(H: np.ndarray) -> np.ndarray:
     """The covariance from the posterior's Hessian; UnobservableError where it is singular."""
-    eig = closed_form.eigvalsh(0.5 * (H + H.T))
+    eig = small_linalg.eigvalsh(0.5 * (H + H.T))
     if not eig[0] > RCOND * RCOND * eig[-1]:
         raise UnobservableError(
             f"the posterior is flat in some direction (Hessian eigenvalues "
             f"{np.array2string(eig, precision=3)}): the data and the prior do not determine "
             "the estimate"
         )
-    return closed_form.inv(H)
+    return small_linalg.inv(H)

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from comgrasp_pin.errors import InvalidInputError, UnobservableError
-from comgrasp_pin.estimation import closed_form
+from comgrasp_pin.estimation import closed_form, small_linalg
 from comgrasp_pin.estimation.regressor import (
     gravity_in_ee,
     one_pose_basis,
@@ -61,7 +61,7 @@ def by_gram(robot: RobotModel, Q: np.ndarray, b: np.ndarray, rcond: float) -> Re
     Xb, T = closed_form.regression(robot, Q, b)
     p = Xb.shape[0] - 1
     P = Xb @ Xb.T
-    lam = closed_form.eigvalsh(P[:p, :p])
+    lam = small_linalg.eigvalsh(P[:p, :p])
     low, high = float(lam[0]), float(lam[-1])
     if not low > max(closed_form.MIN_EIGEN_RATIO, 4.0 * rcond * rcond) * high:
         return None
@@ -77,7 +77,7 @@ def by_gram(robot: RobotModel, Q: np.ndarray, b: np.ndarray, rcond: float) -> Re
         Y = Yr @ B.T  # exact: Y (0, u) = 0
     else:
         B, u, Y = np.eye(4), None, Yr
-    return Reduced(Y, T, B, u, sv, math.sqrt(high / low), Yr, closed_form.inv(P[:p, :p]),
+    return Reduced(Y, T, B, u, sv, math.sqrt(high / low), Yr, small_linalg.inv(P[:p, :p]),
                    P[:p, p])  # fmt: skip
 
 

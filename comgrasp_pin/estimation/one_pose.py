@@ -26,11 +26,7 @@ from comgrasp_pin.estimation.estimate import (
     refuse_empty_gripper,
 )
 from comgrasp_pin.estimation.regressor import G0
-
-try:  # the gufunc behind np.linalg.eigvalsh (closed_form's), here without a cyclic import
-    from numpy.linalg._umath_linalg import eigvalsh_lo as closed_form_eigvalsh
-except ImportError:  # pragma: no cover - another NumPy layout
-    closed_form_eigvalsh = np.linalg.eigvalsh
+from comgrasp_pin.estimation.small_linalg import eigvalsh
 from comgrasp_pin.robot import RobotModel
 
 _WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -93,7 +89,7 @@ def estimate(
     (a, b, c, r0), (_, d, e, r1), (_, _, f, r2), _ = gram.tolist()
     lam_max, lam_mid, lam_min = sym3_eigenvalues(a, b, c, d, e, f)
     if min(lam_max - lam_mid, lam_mid - lam_min) < MIN_GAP * lam_max:  # (near) double: LAPACK
-        lam_min, lam_mid, lam_max = closed_form_eigvalsh(gram[:3, :3]).tolist()
+        lam_min, lam_mid, lam_max = eigvalsh(gram[:3, :3]).tolist()
     if not lam_min > floor * lam_max:
         return None
     # N^-1 = adj(N) / det(N), N = [[a, b, c], [b, d, e], [c, e, f]]

@@ -18,7 +18,7 @@ import operator
 import numpy as np
 import pinocchio as pin
 
-from comgrasp_pin.estimation import closed_form
+from comgrasp_pin.estimation import small_linalg
 from comgrasp_pin.estimation.estimate import (
     MASS_SIGMAS,
     MIN_MASS_KG,
@@ -70,10 +70,10 @@ def estimate(
     Z = (K_t.transpose(0, 2, 1) @ J).transpose(1, 0, 2).reshape(5, k * n)
     P = Z @ Z.T
     N = P[:4, :4]
-    lam = closed_form.eigvalsh(N).tolist()  # ascending
+    lam = small_linalg.eigvalsh(N).tolist()  # ascending
     if not lam[0] > floor * lam[3]:
         return None
-    N_inv = closed_form.inv(N)
+    N_inv = small_linalg.inv(N)
     v = N_inv @ P[:4, 4]  # G0 theta
     residuals = Z[4] - v @ Z[:4]  # (k n,)
     r = residuals.tolist()
