@@ -8,21 +8,23 @@ from __future__ import annotations
 
 import numpy as np
 
-from comgrasp_pin.perception._points import fit_line, median, slice_medians
+from comgrasp_pin.perception._points import fit_line, slice_medians
+from comgrasp_pin.perception.cylinder_fit import (  # noqa: F401 - the fit's constants
+    FIT_DAMPING,
+    FIT_ITERATIONS,
+    FIT_OUTLIER_MARGIN,
+    FIT_STEPS,
+    MAX_FIT_POINTS,
+    MAX_Y_SHIFT,
+    fit_cylinders,
+)
 
-MAX_FIT_POINTS = 3000
 MAX_MISFIT = 5e-4  # a round handle's points lie this close to the fitted cylinder (m) ...
 MAX_MISFIT_PER_RADIUS = 0.03  # ... or this fraction of its radius (a flat bar: 0.15-0.2)
 MISFIT_NOISE = 1.0  # ... or, in a noisy image, this many times its depth noise (m)
 MAX_REFINE_TURN_DEG = 8.0  # a cylinder this far from the slice line locked on a wrong side
 MAX_REFINE_SHIFT = 0.01  # the same, for its offset (m)
 RADIUS_GIVE = np.arange(0.25, 2.01, 0.25) * 1e-3  # the handle's radius above the fingers' (m)
-FIT_ITERATIONS = 8  # Levenberg-Marquardt steps of the cylinder fit, each refitting the inliers
-FIT_STEPS = (1e-6, 1e-7, 1e-7, 1e-7)  # finite-difference steps: angle (rad), offset, radius,
-# y offset (m)
-MAX_Y_SHIFT = 0.003  # a camera's calibration error may move the handle's axis this far in y (m)
-FIT_DAMPING = (1e-6, 1e-3, 1e-1, 1.0)  # damping tried in turn until the cost falls
-FIT_OUTLIER_MARGIN = 0.002  # inliers: within 3 median residuals plus this (m)
 
 
 def centre_line(
@@ -124,51 +126,10 @@ def fit_cylinder(
     may lie off y = 0 (a camera whose calibrated pose is off moves all the points; the jaws
     still hold the rod at y = 0, so only its x-z line is kept).
     Returns (direction (2,), point nearest the TCP (2,)) in the x-z plane, and the median
-    distance of the points from the cylinder (m).
+    distance of the points from the cylinder (m). ``cylinder_fit.fit_cylinders`` with one
+    radius (it fits several at once).
     """
-    # Three parameters need no more than a few thousand points (a full-resolution view
-    # of a thick handle has tens of thousands): every k-th point, spread along the rod.
-    points = points[:: max(1, len(points) // MAX_FIT_POINTS)]
-    y2_all = None if free_y else points[:, 1] * points[:, 1]
-    angle = np.arctan2(direction[1], direction[0])
-    normal = np.array([-direction[1], direction[0]])
-    params = np.array([angle, point @ normal, 0.0, 0.0] if free_y else [angle, point @ normal, 0.0])
-    params[2] = np.median(_cylinder_residuals(params, points, y2_all)) if radius is None else radius
-    free = [0, 1] + ([] if radius is not None else [2]) + ([3] if free_y else [])
-    # Every residual is evaluated on all the points and the inliers' taken from it (a
-    # point's residual is its own, tests/test_fast_paths.py): the accepted trial's are the
-    # next iteration's, and no inlier copy of the points is made.
-    keep = np.ones(len(points), dtype=bool)
-    res_signed = _cylinder_residuals(params, points, y2_all)
-    res = res_signed
-    for _ in range(FIT_ITERATIONS):
-        jac = np.empty((len(res), len(free)))
-        for k, i in enumerate(free):
-            step = np.zeros(len(params))
-            step[i] = FIT_STEPS[i]
-            stepped = _cylinder_residuals(params + step, points, y2_all)[keep]
-            jac[:, k] = (stepped - res) / FIT_STEPS[i]
-        # Levenberg-Marquardt step: damped, accepted only if it lowers the inliers' cost.
-        jtj, jtr = jac.T @ jac, jac.T @ res
-        cost = np.sum(res**2)
-        for damping in FIT_DAMPING:
-            delta = np.linalg.solve(jtj + damping * np.diag(np.diag(jtj)), jtr)
-            trial = params.copy()
-            trial[free] -= delta
-            trial_signed = _cylinder_residuals(trial, points, y2_all)
-            if np.sum(trial_signed[keep] ** 2) < cost:
-                params, res_signed = trial, trial_signed
-                break
-        res_all = np.abs(res_signed)
-        keep = res_all < 3.0 * median(res_all[keep]) + FIT_OUTLIER_MARGIN
-        res = res_signed[keep]  # each point's residual is its own: those of the kept points
-    u = np.array([np.cos(params[0]), np.sin(params[0])])
-    if u[0] < 0:
-        u = -u
-    n = np.array([-np.sin(params[0]), np.cos(params[0])])
-    if free_y and abs(params[3]) > MAX_Y_SHIFT:
-        return u, params[1] * n, float("inf")  # more than a calibration error: no fit
-    return u, params[1] * n, float(median(res_all))
+    return fit_cylinders(points, direction, point, [radius], free_y)[0]
 
 
 def refine_axis(
@@ -191,14 +152,15 @@ def refine_axis(
     """
     fits = [fit_cylinder(points, direction, point, radius)]
     if radius and fits[0][2] >= MAX_MISFIT:
-        fits += [fit_cylinder(points, direction, point, radius + dr) for dr in RADIUS_GIVE]
+        fits += fit_cylinders(points, direction, point, [radius + dr for dr in RADIUS_GIVE])
     x_fit, offset_fit, misfit = min(fits, key=lambda fit: fit[2])
     limit = max(MAX_MISFIT, MAX_MISFIT_PER_RADIUS * radius) if radius else MAX_MISFIT
     limit = max(limit, MISFIT_NOISE * noise)
     if radius and misfit >= limit:  # the camera's pose may be off: the axis off y = 0
+        radii = [radius + dr for dr in (0.0, *RADIUS_GIVE)]
         x_fit, offset_fit, misfit = min(
-            (fit_cylinder(points, direction, point, radius + dr, free_y=True)
-             for dr in (0.0, *RADIUS_GIVE)), key=lambda fit: fit[2])  # fmt: skip
+            fit_cylinders(points, direction, point, radii, free_y=True), key=lambda fit: fit[2]
+        )
     near = (
         x_fit @ direction > np.cos(np.radians(MAX_REFINE_TURN_DEG))
         and np.linalg.norm(offset_fit - point) < MAX_REFINE_SHIFT
