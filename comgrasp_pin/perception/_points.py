@@ -172,6 +172,9 @@ def noise_level(heights: np.ndarray) -> float:
     return float(1.4826 * np.median(np.abs(heights - np.median(heights))))
 
 
+_RING = np.array([[1, 1, 1], [1, 0, 1], [1, 1, 1]], np.uint8)  # a pixel's 8 neighbours
+
+
 def drop_flying(depth: np.ndarray, tolerance: float) -> np.ndarray:
     """``depth`` with its flying pixels lost (set to 0).
 
@@ -180,26 +183,26 @@ def drop_flying(depth: np.ndarray, tolerance: float) -> np.ndarray:
     than ``tolerance`` (m), and none is within it. A pixel of a surface agrees with some
     neighbour; one at an edge whose own side was lost is not between. Lost pixels (0, inf)
     stay lost and are no one's neighbours: they count as infinitely far for the nearest
-    neighbour and infinitely near for the farthest (minima and maxima are exact, so this is
-    the NaN-aware reduction over the 8 neighbours, without stacking them).
+    neighbour and infinitely near for the farthest. The nearest and farthest neighbours are
+    an erosion and a dilation over the 8 neighbours (minima and maxima are exact: the
+    NaN-aware reductions to the bit); the closest one is looked for only at the pixels
+    between their neighbours.
     """
     valid = np.isfinite(depth) & (depth > 0)
-    h, w = depth.shape
-    d = np.where(valid, depth, np.nan)
-    for_min = np.pad(np.where(valid, depth, np.inf), 1, constant_values=np.inf)
-    for_max = np.pad(np.where(valid, depth, -np.inf), 1, constant_values=-np.inf)
-    near, far, closest = np.full((h, w), np.inf), np.full((h, w), -np.inf), np.full((h, w), np.inf)
-    gap = np.empty((h, w))
-    with np.errstate(invalid="ignore"):  # inf - inf where a lost pixel meets a lost neighbour
-        for dy, dx in ((dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if dy or dx):
-            neighbour = for_min[1 + dy : 1 + dy + h, 1 + dx : 1 + dx + w]
-            np.minimum(near, neighbour, out=near)
-            np.maximum(far, for_max[1 + dy : 1 + dy + h, 1 + dx : 1 + dx + w], out=far)
-            np.abs(np.subtract(neighbour, d, out=gap), out=gap)
-            np.fmin(closest, gap, out=closest)
-        flying = (d - near > tolerance) & (far - d > tolerance) & (closest > tolerance)
+    for_min = np.where(valid, depth, np.inf)
+    border = {"borderType": cv2.BORDER_CONSTANT}
+    near = cv2.erode(for_min, _RING, borderValue=np.inf, **border)
+    far = cv2.dilate(np.where(valid, depth, -np.inf), _RING, borderValue=-np.inf, **border)
+    with np.errstate(invalid="ignore"):  # inf - inf where a lost pixel has no valid neighbour
+        between = valid & (depth - near > tolerance) & (far - depth > tolerance)
+    row, col = np.nonzero(between)
+    padded = np.pad(for_min, 1, constant_values=np.inf)
+    d = depth[row, col]
+    closest = np.full(len(row), np.inf)
+    for dy, dx in ((dy, dx) for dy in (-1, 0, 1) for dx in (-1, 0, 1) if dy or dx):
+        np.fmin(closest, np.abs(padded[row + 1 + dy, col + 1 + dx] - d), out=closest)
     out = depth.copy()
-    out[valid & flying] = 0.0
+    out[row[closest > tolerance], col[closest > tolerance]] = 0.0
     return out
 
 
