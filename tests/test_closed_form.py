@@ -234,9 +234,11 @@ def test_empty_gripper_and_bad_readings_raise_the_same_errors(robots):
     seed=st.integers(0, 2**32 - 1),
     k=st.sampled_from([1, 3]),
     kind=st.sampled_from(["prior", "l2", "huber"]),
+    given_std=st.booleans(),
 )
-def test_ipopt_through_the_gram_reduction_is_the_svd_paths(robots, seed, k, kind):
-    """IPOPT's problem, warm start and covariance from the Gram reduction equal the SVD's."""
+def test_ipopt_through_the_gram_reduction_is_the_svd_paths(robots, seed, k, kind, given_std):
+    """IPOPT's problem, warm start and covariance from the Gram reduction (or, one pose with
+    a prior, map_one_pose's Python floats) equal the SVD path's."""
     ur5 = robots["ur5"]
     rng = np.random.default_rng(seed)
     Q = wrist_poses(ur5, ur5.random_configuration(rng), k, rng)
@@ -248,14 +250,21 @@ def test_ipopt_through_the_gram_reduction_is_the_svd_paths(robots, seed, k, kind
         "l2": {},
         "huber": {"loss": "huber"},
     }[kind]
-    Qc, dtau, sigma = validate_inputs(ur5, Q, tb, ta, 0.01)
+    std = 0.01 if given_std or kind == "huber" else None
+    Qc, dtau, sigma = validate_inputs(ur5, Q, tb, ta, std)
+    Q = Q[0] if k == 1 else Q  # one pose as (n,): the lean MAP path
     try:
         expected = svd_path(ur5, Qc, dtau, sigma, "ipopt", **kwargs)
     except cg.ComGraspError as exc:
         with pytest.raises(type(exc)):
-            cg.estimate_com(ur5, Q, tb, ta, method="ipopt", torque_std=0.01, **kwargs)
+            cg.estimate_com(ur5, Q, tb.reshape(Q.shape), ta.reshape(Q.shape), method="ipopt",
+                            torque_std=std, **kwargs)  # fmt: skip
         return
-    est = cg.estimate_com(ur5, Q, tb, ta, method="ipopt", torque_std=0.01, **kwargs)
+    est = cg.estimate_com(ur5, Q, tb.reshape(Q.shape), ta.reshape(Q.shape), method="ipopt",
+                          torque_std=std, **kwargs)  # fmt: skip
+    if kind == "prior":  # the same unknowns and start: the same IPOPT run
+        assert (est.solver_status, est.iterations) == (expected.solver_status, expected.iterations)
+    assert (est.noise_std is None) == (expected.noise_std is None)
     assert est.mass == pytest.approx(expected.mass, rel=1e-9)
     np.testing.assert_allclose(est.com_ee, expected.com_ee, rtol=0, atol=1e-10)
     np.testing.assert_allclose(est.cov, expected.cov, rtol=1e-7, atol=1e-16)

@@ -33,10 +33,10 @@ from comgrasp_pin.errors import InvalidInputError, UnobservableError
 from comgrasp_pin.estimation import (
     closed_form,
     ipopt,
+    map_one_pose,
     observability,
     one_pose,
     several_poses,
-    small_linalg,
 )
 from comgrasp_pin.estimation.closed_form import NOISE_FLOOR
 from comgrasp_pin.estimation.estimate import (
@@ -111,6 +111,13 @@ def estimate_com(
                 est = several_poses.estimate(robot, q_arr, dtau, sigma, floor, NOISE_FLOOR)
             if est is not None:
                 return est
+        elif com_prior is not None and payload_motion_ee is None and q_arr.ndim == 1:
+            if not isinstance(sigma, np.ndarray):  # the MAP estimate at one pose, lean
+                floor = max(closed_form.MIN_EIGEN_RATIO, 4.0 * rcond * rcond)
+                est = map_one_pose.estimate(robot, q_arr, dtau, sigma, floor, NOISE_FLOOR, loss,
+                                            huber_delta, com_prior)  # fmt: skip
+                if est is not None:
+                    return est
         return _estimate(robot, q_arr.reshape(-1, n), dtau.reshape(-1, n), sigma, method, rcond,
                          loss, huber_delta, com_prior, payload_motion_ee)  # fmt: skip
     except np.linalg.LinAlgError as exc:
@@ -221,13 +228,4 @@ def _finish(red, theta, cov, u, b, k, n, method, status, iters, noise_std, com=N
                         method, status, iters, red.T, noise_std)  # fmt: skip
 
 
-def _inverse(H: np.ndarray) -> np.ndarray:
-    """The covariance from the posterior's Hessian; UnobservableError where it is singular."""
-    eig = small_linalg.eigvalsh(0.5 * (H + H.T))
-    if not eig[0] > RCOND * RCOND * eig[-1]:
-        raise UnobservableError(
-            f"the posterior is flat in some direction (Hessian eigenvalues "
-            f"{np.array2string(eig, precision=3)}): the data and the prior do not determine "
-            "the estimate"
-        )
-    return small_linalg.inv(H)
+_inverse = ipopt.laplace_covariance

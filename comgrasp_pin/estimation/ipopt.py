@@ -30,7 +30,8 @@ from functools import cache
 import casadi as ca
 import numpy as np
 
-from comgrasp_pin.errors import SolverError
+from comgrasp_pin.errors import SolverError, UnobservableError
+from comgrasp_pin.estimation import small_linalg
 
 LOSSES = ("l2", "huber")
 
@@ -161,9 +162,17 @@ def solve(
     Raises:
         SolverError: IPOPT did not converge (its status is kept).
     """
-    p = len(x0)
-    problem = build(len(b), p, loss, prior is not None)
     params, scale = parameters(Y, b, w, loss, delta, prior)
+    return run(build(len(b), len(x0), loss, prior is not None), x0, params, scale)
+
+
+def run(problem: IpoptProblem, x0, params: np.ndarray, scale: float) -> IpoptResult:
+    """``solve`` on a built problem and its parameter vector (``parameters``).
+
+    Raises:
+        SolverError: IPOPT did not converge (its status is kept).
+    """
+    p = len(x0)
     out = problem.solve(x0, params).full().ravel()
     stats = problem.solve.stats()
     status = str(stats.get("return_status", "unknown"))
@@ -178,3 +187,20 @@ def solve(
         if not (status in _ACCEPTED or stalled_at_optimum) or not np.all(np.isfinite(x)):
             raise SolverError("IPOPT failed on the CoM estimate", status, iterations)
     return IpoptResult(x, H / scale, status, iterations)
+
+
+FLAT_RCOND = 1e-6
+"""The posterior is flat where the Hessian's eigenvalues span more than 1 / FLAT_RCOND^2
+(as the estimator's RCOND on singular values)."""
+
+
+def laplace_covariance(H: np.ndarray) -> np.ndarray:
+    """The covariance from the posterior's Hessian; UnobservableError where it is singular."""
+    eig = small_linalg.eigvalsh(0.5 * (H + H.T))
+    if not eig[0] > FLAT_RCOND * FLAT_RCOND * eig[-1]:
+        raise UnobservableError(
+            f"the posterior is flat in some direction (Hessian eigenvalues "
+            f"{np.array2string(eig, precision=3)}): the data and the prior do not determine "
+            "the estimate"
+        )
+    return small_linalg.inv(H)
