@@ -104,9 +104,10 @@ def estimate_com(
             if isinstance(sigma, np.ndarray):  # per-joint weights
                 Q, dtau_k = q_arr.reshape(-1, n), dtau.reshape(-1, n)
                 est = closed_form.estimate(robot, Q, dtau_k, sigma, rcond)
-            elif q_arr.ndim == 1 or len(q_arr) == 1:
-                est = one_pose.estimate(robot, q_arr.reshape(n), dtau.reshape(n), sigma, floor,
-                                        NOISE_FLOOR)  # fmt: skip
+            elif q_arr.ndim == 1:
+                est = one_pose.estimate(robot, q_arr, dtau, sigma, floor, NOISE_FLOOR)
+            elif len(q_arr) == 1:
+                est = one_pose.estimate(robot, q_arr[0], dtau[0], sigma, floor, NOISE_FLOOR)
             else:
                 est = several_poses.estimate(robot, q_arr, dtau, sigma, floor, NOISE_FLOOR)
             if est is not None:

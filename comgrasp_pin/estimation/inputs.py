@@ -108,8 +108,10 @@ def check_arrays(
         tb_arr.shape == shape
         and ta_arr.shape == shape
         and q_arr.size <= _SCREEN_SIZE
-        and sum(map(abs, q_arr.ravel().tolist())) <= MAX_ABS_Q
-        and sum(map(abs, tb_arr.ravel().tolist() + ta_arr.ravel().tolist())) <= MAX_ABS_TORQUE
+        # sum|q| <= MAX_ABS_Q and sum|tau| <= MAX_ABS_TORQUE, in one sum
+        and (MAX_ABS_TORQUE / MAX_ABS_Q) * sum(map(abs, q_arr.ravel().tolist()))
+        + sum(map(abs, tb_arr.ravel().tolist() + ta_arr.ravel().tolist()))
+        <= MAX_ABS_TORQUE
     ):
         for name, a, limit in (
             ("q", q_arr, MAX_ABS_Q),
