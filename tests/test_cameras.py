@@ -102,12 +102,14 @@ def test_a_reused_renderer_draws_the_new_world_exactly():
     model_a, data_a = world("obj1", (0.5, 0.1, 0.3))
     model_b, data_b = world("obj6", (0.6, -0.1, -0.7))
     first = CameraRig(model_a, 160, 120)
-    renderer = first._renderer
     first.rgb(data_a, TOP_CAMERA)
+    first.depth(data_a, TOP_CAMERA)
+    colour, depth = first._renderer(False), first._renderer(True)
     first.close()
     reused = CameraRig(model_b, 160, 120)
-    fresh = CameraRig(model_b, 160, 120)  # the pool is empty now: a new renderer
-    assert reused._renderer is renderer and fresh._renderer is not renderer
+    fresh = CameraRig(model_b, 160, 120)  # the pool is empty now: new renderers
+    assert reused._renderer(False) is colour and fresh._renderer(False) is not colour
+    assert reused._renderer(True) is depth and fresh._renderer(True) is not depth
     try:
         for camera in (TOP_CAMERA, SIDE_CAMERA):
             for image in ("rgb", "depth", "segmentation"):
@@ -121,3 +123,37 @@ def test_a_reused_renderer_draws_the_new_world_exactly():
         fresh.close()
         reused.close()
     assert len(cameras._IDLE_RENDERERS[cameras._assets_key(model_b, 160, 120)]) >= 2
+    key = cameras._assets_key(model_b, 160, 120, cameras.DEPTH_SAMPLES)
+    assert len(cameras._IDLE_RENDERERS[key]) >= 2
+
+
+def test_depth_without_multisampling_is_the_multisampled_depth_to_the_bit():
+    """Depth is drawn by a renderer without multisampling (half the read-back time): its
+    images must be what the model's multisampled renderer resolves, rod edges included, and
+    the model's own setting must be left as it was."""
+    import mujoco
+
+    from comgrasp_pin.simulation import build_model, cameras
+    from comgrasp_pin.simulation.objects import OBJECTS, add_object
+    from comgrasp_pin.simulation.world import SIDE_CAMERA, TOP_CAMERA
+
+    model = build_model(extras=[lambda spec: add_object(spec, OBJECTS["obj6"], (0.5, 0.0, 0.3))])
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    samples = int(model.vis.quality.offsamples)
+    assert samples > 0 and cameras.DEPTH_SAMPLES == 0
+    rig = CameraRig(model)
+    multisampled = CameraRig(model)
+    multisampled._renderers[True] = multisampled._renderer(False)  # depth drawn by it too
+    try:
+        for camera in (TOP_CAMERA, SIDE_CAMERA):
+            depth, expected = rig.depth(data, camera), multisampled.depth(data, camera)
+            assert np.isfinite(depth).sum() > 1000
+            np.testing.assert_array_equal(depth, expected)
+            np.testing.assert_array_equal(rig.depth(data, camera, 3), expected[::3, ::3])
+        assert rig._renderer(True).samples == 0 and rig._renderer(False).samples == samples
+        assert model.vis.quality.offsamples == samples
+    finally:
+        multisampled._renderers.pop(True)
+        multisampled.close()
+        rig.close()

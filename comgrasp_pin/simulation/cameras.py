@@ -16,35 +16,55 @@ from comgrasp_pin.simulation.depth_noise import DepthNoise
 _R_MJ_OPTICAL = np.diag([1.0, -1.0, -1.0])
 
 
-# Renderers not in use, by image size and the model's rendering assets. Building one costs
-# 0.2-0.3 s (uploading the robot's meshes to OpenGL), as much as a whole accuracy trial's
-# physics; the worlds of an experiment differ only in their rod (built from primitives, not
-# assets), so a process re-points a finished world's renderer at the next one.
+# Renderers not in use, by image size, multisampling and the model's rendering assets.
+# Building one costs 0.2-0.3 s (uploading the robot's meshes to OpenGL), as much as a whole
+# accuracy trial's physics; the worlds of an experiment differ only in their rod (built from
+# primitives, not assets), so a process re-points a finished world's renderer at the next one.
 _IDLE_RENDERERS: dict[tuple, list[mujoco.Renderer]] = {}
 
+# Depth is drawn without multisampling: the depth a multisampled buffer resolves to is the
+# same to the bit (Mesa llvmpipe; tests/test_cameras.py), and reading it back is about half
+# a render's time (14 -> 7 ms a 640 x 480 frame). Colour keeps the model's antialiasing.
+DEPTH_SAMPLES = 0
 
-def _assets_key(model: mujoco.MjModel, width: int, height: int) -> tuple:
-    return (width, height, model.nmesh, model.nmeshvert, model.nmeshface, model.ntex,
+
+def _assets_key(
+    model: mujoco.MjModel, width: int, height: int, samples: int | None = None
+) -> tuple:
+    samples = int(model.vis.quality.offsamples) if samples is None else samples
+    return (width, height, samples, model.nmesh, model.nmeshvert, model.nmeshface, model.ntex,
             model.ntexdata, model.nhfield, model.nskin, model.nflex)  # fmt: skip
 
 
-def _take_renderer(model: mujoco.MjModel, width: int, height: int) -> mujoco.Renderer:
-    """A renderer for ``model``: an idle one with the same assets, re-pointed at it (its
-    OpenGL context stays), or a new one."""
-    idle = _IDLE_RENDERERS.get(_assets_key(model, width, height))
+def _take_renderer(
+    model: mujoco.MjModel, width: int, height: int, samples: int | None = None
+) -> mujoco.Renderer:
+    """A renderer for ``model`` drawing with ``samples`` per pixel (None: the model's): an
+    idle one with the same assets, re-pointed at it (its OpenGL context stays), or a new one."""
+    idle = _IDLE_RENDERERS.get(_assets_key(model, width, height, samples))
     if idle:
         renderer = idle.pop()
         renderer._model = model  # the attributes mujoco.Renderer renders the model from
         renderer._scene = mujoco.MjvScene(model, maxgeom=renderer._scene.maxgeom)
         return renderer
-    return mujoco.Renderer(model, height, width)
+    model_samples = int(model.vis.quality.offsamples)
+    if samples is not None:  # read when the OpenGL context is made, not when drawing
+        model.vis.quality.offsamples = samples
+    try:
+        renderer = mujoco.Renderer(model, height, width)
+    finally:
+        model.vis.quality.offsamples = model_samples
+    renderer.samples = model_samples if samples is None else samples
+    return renderer
 
 
 class CameraRig:
     """Renders RGB, metric depth and ground-truth segmentation of the model's cameras.
 
-    One offscreen renderer per rig, handed back by ``close`` for the next rig of a model
-    with the same assets (tests/test_cameras.py checks that the images are the same).
+    Up to two offscreen renderers per rig, made when first needed: depth without
+    multisampling, colour and segmentation with the model's; handed back by ``close`` for
+    the next rig of a model with the same assets (tests/test_cameras.py checks that the
+    images are the same).
 
     Attributes:
         noise: the depth errors of each camera, by name (``DepthNoise``; none: the renders
@@ -66,14 +86,25 @@ class CameraRig:
         self.height = height
         self.noise = dict(noise or {})
         self.shadows = shadows
-        self._renderer = _take_renderer(model, width, height)
+        self._renderers: dict[bool, mujoco.Renderer] = {}  # by depth (True) or not
+        self._closed = False
 
     def close(self) -> None:
-        """Hand the renderer back for reuse; the rig must not render afterwards."""
-        if self._renderer is not None:
-            key = _assets_key(self.model, self.width, self.height)
-            _IDLE_RENDERERS.setdefault(key, []).append(self._renderer)
-            self._renderer = None
+        """Hand the renderers back for reuse; the rig must not render afterwards."""
+        for renderer in self._renderers.values():
+            key = _assets_key(self.model, self.width, self.height, renderer.samples)
+            _IDLE_RENDERERS.setdefault(key, []).append(renderer)
+        self._renderers.clear()
+        self._closed = True
+
+    def _renderer(self, depth: bool) -> mujoco.Renderer:
+        """The rig's renderer for depth (no multisampling) or for colour and segmentation."""
+        if self._closed:
+            raise RuntimeError("the camera rig was closed")
+        if depth not in self._renderers:
+            samples = DEPTH_SAMPLES if depth else None
+            self._renderers[depth] = _take_renderer(self.model, self.width, self.height, samples)
+        return self._renderers[depth]
 
     def intrinsics(self, camera: str) -> PinholeCamera:
         """Pinhole intrinsics of ``camera`` at the rig's image size."""
@@ -89,7 +120,7 @@ class CameraRig:
         return T
 
     def _render(self, data: mujoco.MjData, camera: str, depth=False, segmentation=False):
-        r = self._renderer
+        r = self._renderer(depth)
         r.disable_depth_rendering()
         r.disable_segmentation_rendering()
         if depth:
@@ -98,7 +129,7 @@ class CameraRig:
             r.enable_segmentation_rendering()
         r.update_scene(data, camera)
         r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = self.shadows  # renderers are shared
-        image = r.render().copy()
+        image = r.render()  # a new array each call
         r.disable_depth_rendering()
         r.disable_segmentation_rendering()
         return image
@@ -111,10 +142,13 @@ class CameraRig:
         """(H, W) float z-depth along the optical axis (m); ``inf`` where nothing is seen,
         and, with the camera's ``noise``, 0 or inf where the sensor lost the pixel.
         ``stride`` > 1: every stride-th pixel of each row and column of that image."""
-        depth = self._render(data, camera, depth=True).astype(float)
-        depth[depth >= self.model.vis.map.zfar * self.model.stat.extent * 0.999] = np.inf
+        rendered = self._render(data, camera, depth=True)  # float32 (H, W)
         noise = self.noise.get(camera)
-        return depth[::stride, ::stride] if noise is None else noise.apply(depth, stride)
+        if noise is None:  # only the pixels kept are converted
+            rendered = rendered[::stride, ::stride]
+        depth = rendered.astype(float)
+        depth[depth >= self.model.vis.map.zfar * self.model.stat.extent * 0.999] = np.inf
+        return depth if noise is None else noise.apply(depth, stride)
 
     def calibration_error(self, camera: str) -> np.ndarray:
         """(4, 4) T_cam_calibrated: the camera frame the robot's calibration gives, in the
