@@ -99,34 +99,50 @@ def _levenberg_marquardt(
     distance of all the points from its cylinder (K,) (m).
     """
     k_fits, n_free = len(params), len(free)
+    h = np.take(FIT_STEPS, free)  # (F,) finite-difference steps
     steps = np.zeros((n_free, params.shape[1]))
-    steps[np.arange(n_free), free] = np.take(FIT_STEPS, free)
+    steps[np.arange(n_free), free] = h
+    on_diagonal = (slice(None), np.arange(n_free), np.arange(n_free))
     keep = np.ones((k_fits, xz.shape[1]), dtype=bool)
     res_signed = cylinder_residuals(params, xz, y)
     for _ in range(FIT_ITERATIONS):
-        res = np.where(keep, res_signed, 0.0)  # (K, N): the inliers' residuals, 0 elsewhere
-        stepped = cylinder_residuals(params[:, None, :] + steps, xz, y)  # (K, F, N)
-        jac = (stepped - res_signed[:, None, :]) / np.take(FIT_STEPS, free)[:, None]
-        jac *= keep[:, None, :]
+        res = res_signed * keep  # (K, N): the inliers' residuals, 0 elsewhere
+        jac = cylinder_residuals(params[:, None, :] + steps, xz, y)  # (K, F, N)
+        jac -= res_signed[:, None, :]
+        jac *= keep[:, None, :] / h[:, None]
         jtj = jac @ jac.transpose(0, 2, 1)  # (K, F, F)
         jtr = (jac @ res[:, :, None])[..., 0]  # (K, F)
         cost = np.einsum("kn,kn->k", res, res)
-        diag = jtj[:, np.arange(n_free), np.arange(n_free)]
+        diag = jtj[on_diagonal]
         todo = np.arange(k_fits)  # the fits whose cost has not fallen yet
         for damping in FIT_DAMPING:
-            damped = jtj[todo].copy()
-            damped[:, np.arange(n_free), np.arange(n_free)] += damping * diag[todo]
+            damped = jtj[todo]
+            damped[on_diagonal] += damping * diag[todo]
             delta = np.linalg.solve(damped, jtr[todo][:, :, None])[..., 0]
-            trial = params[todo].copy()
+            trial = params[todo]
             trial[:, free] -= delta
             trial_signed = cylinder_residuals(trial, xz, y)
-            kept_trial = np.where(keep[todo], trial_signed, 0.0)
+            kept_trial = trial_signed * keep[todo]
             better = np.einsum("kn,kn->k", kept_trial, kept_trial) < cost[todo]
             params[todo[better]], res_signed[todo[better]] = trial[better], trial_signed[better]
             todo = todo[~better]
             if not len(todo):
                 break
         res_all = np.abs(res_signed)
-        for k in range(k_fits):
-            keep[k] = res_all[k] < 3.0 * median(res_all[k][keep[k]]) + FIT_OUTLIER_MARGIN
-    return params, np.array([median(row) for row in res_all])
+        keep = res_all < 3.0 * _row_medians(res_all, keep)[:, None] + FIT_OUTLIER_MARGIN
+    return params, _row_medians(res_all, np.ones_like(keep))
+
+
+def _row_medians(values: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """(K,) the median of each row of ``values`` (K, N) over its ``mask``ed entries.
+
+    ``np.median(values[k][mask[k]])``, the same numbers, from one sort; NaN if none.
+    """
+    count = mask.sum(axis=1)
+    ordered = np.sort(np.where(mask, values, np.inf), axis=1)
+    rows = np.arange(len(values))
+    upper = ordered[rows, np.minimum(count // 2, values.shape[1] - 1)]
+    lower = ordered[rows, np.maximum(count - 1, 0) // 2]
+    out = np.where(count % 2, upper, (lower + upper) / 2.0)
+    out[count == 0] = np.nan
+    return out
