@@ -12,6 +12,7 @@ from __future__ import annotations
 import warnings
 from dataclasses import replace
 
+import cv2
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -153,3 +154,35 @@ def test_transform_points_is_the_plain_product_to_the_bit(n, rotvec, shift, seed
     np.testing.assert_array_equal(transform_points(T, p), p @ T[:3, :3].T + T[:3, 3])
     image = np.random.default_rng(seed).uniform(0.1, 2.0, (480 * 640, 3))  # a whole image
     np.testing.assert_array_equal(transform_points(T, image), image @ T[:3, :3].T + T[:3, 3])
+
+
+def plain_differs_in_colour(rgb: np.ndarray, area: np.ndarray) -> np.ndarray:
+    """The colour test as it was: CIELAB distances in floats, thresholds on the norms."""
+    from comgrasp_pin.perception.table_view import COLOUR_DE, SHADOW_CHROMA
+
+    lab = cv2.cvtColor(np.ascontiguousarray(rgb, dtype=np.uint8), cv2.COLOR_RGB2LAB).astype(float)
+    table = np.median(lab[area], axis=0)
+    distance = np.linalg.norm(lab - table, axis=2)
+    chroma = np.linalg.norm(lab[..., 1:] - table[1:], axis=2)
+    shadow = (chroma < SHADOW_CHROMA) & (lab[..., 0] < table[0])
+    return (distance > COLOUR_DE) & ~shadow
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    h=st.integers(2, 40),
+    w=st.integers(2, 40),
+    spread=st.integers(0, 80),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_differs_in_colour_is_the_plain_norms_to_the_bit(h, w, spread, seed):
+    """Integer distances in half units against the float norms: the same pixels, also
+    those exactly at a threshold (small spreads put many there)."""
+    from comgrasp_pin.perception.table_view import differs_in_colour
+
+    rng = np.random.default_rng(seed)
+    base = rng.integers(0, 256, 3)
+    rgb = np.clip(base + rng.integers(-spread, spread + 1, (h, w, 3)), 0, 255).astype(np.uint8)
+    area = rng.random((h, w)) < 0.7
+    area.flat[0] = True
+    assert np.array_equal(differs_in_colour(rgb, area), plain_differs_in_colour(rgb, area))
