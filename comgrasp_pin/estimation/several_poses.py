@@ -13,7 +13,6 @@ to ~1e-13 relative (tests/test_closed_form.py).
 from __future__ import annotations
 
 import math
-import operator
 
 import numpy as np
 import pinocchio as pin
@@ -34,6 +33,7 @@ _WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 _K_T = np.zeros((6, 5))  # K_i^T without R_i: J_lin_z -> the mass row, J_ang_z (b) -> b
 _K_T[2, 0] = 1.0
 _K_T[5, 4] = 1.0
+_SWAP = np.array([[0.0, 1.0], [-1.0, 0.0]])  # [R0; R1] -> [R1; -R0]
 
 
 def estimate(
@@ -58,14 +58,15 @@ def estimate(
     k, n = Q.shape
     model, data, fid = robot.model, robot.data, robot.ee_frame_id
     jacobian, oMf = pin.computeFrameJacobian, data.oMf
-    frames = [(jacobian(model, data, q, fid, _WORLD_ALIGNED), oMf[fid].homogeneous) for q in Q]
-    J = np.array([f[0] for f in frames])  # (k, 6, n)
-    T = np.array([f[1] for f in frames])  # (k, 4, 4) T_world_ee
+    J = np.empty((k, 6, n))  # world-aligned ee Jacobians
+    T = np.empty((k, 4, 4))  # T_world_ee
+    for i, q in enumerate(Q):
+        J[i] = jacobian(model, data, q, fid, _WORLD_ALIGNED)
+        T[i] = oMf[fid].homogeneous
     J[:, 5] = dtau
-    J[:, 4] *= -1.0  # J_ang_x R[1] + (-J_ang_y) R[0]
     K_t = np.empty((k, 6, 5))
     K_t[:] = _K_T
-    K_t[:, 3:5, 1:4] = T[:, 1::-1, :3]  # rows J_ang_x, -J_ang_y -> the m c_ee rows
+    K_t[:, 3:5, 1:4] = _SWAP @ T[:, :2, :3]  # rows J_ang_x, J_ang_y -> (R[1], -R[0])
     # [Y^T / G0; b^T] (5, k n), pose-major columns
     Z = (K_t.transpose(0, 2, 1) @ J).transpose(1, 0, 2).reshape(5, k * n)
     P = Z @ Z.T
@@ -76,8 +77,7 @@ def estimate(
     N_inv = small_linalg.inv(N)
     v = N_inv @ P[:4, 4]  # G0 theta
     residuals = Z[4] - v @ Z[:4]  # (k n,)
-    r = residuals.tolist()
-    rss = sum(map(operator.mul, r, r))
+    rss = float(residuals @ residuals)
     rows = k * n
     noise_std = None
     if sigma is not None:
