@@ -72,7 +72,10 @@ def in_capsule(p: np.ndarray, p0: np.ndarray, p1: np.ndarray, radius: float) -> 
     """
     rows = p.reshape(-1, 3)
     lo, hi = np.minimum(p0, p1) - radius - SLAB_SLACK, np.maximum(p0, p1) + radius + SLAB_SLACK
-    in_box = np.flatnonzero(((rows > lo) & (rows < hi)).all(axis=-1))
+    in_box = np.arange(len(rows))
+    for axis in range(3):  # one coordinate at a time, each on the rows still in the box
+        c = rows[in_box, axis] if axis else rows[:, 0]
+        in_box = in_box[(c > lo[axis]) & (c < hi[axis])]
     inside = np.zeros(len(rows), dtype=bool)
     if len(in_box) == 1 and len(rows) > 1:  # one row alone would take another BLAS path
         inside[in_box] = _capsule_distance(rows[np.r_[in_box, in_box]], p0, p1)[:1] < radius
