@@ -313,3 +313,22 @@ def test_in_capsule_measures_only_its_box_to_the_same_answer(n, ends, radius, lo
     assert np.array_equal(in_capsule(pts, p0, p1, radius), plain_in_capsule(pts, p0, p1, radius))
     one = pts[:1]  # a single point (an end's peek beyond the rod)
     assert np.array_equal(in_capsule(one, p0, p1, radius), plain_in_capsule(one, p0, p1, radius))
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    k=st.integers(1, 12),
+    n=st.integers(1, 300),
+    keep=st.floats(0.0, 1.0),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_row_medians_are_each_rows_median_to_the_bit(k, n, keep, seed):
+    from comgrasp_pin.perception.cylinder_fit import _row_medians
+
+    rng = np.random.default_rng(seed)
+    values = np.abs(rng.normal(0.0, 1e-3, (k, n)))
+    values[:, : n // 3] = values[0, 0]  # ties
+    mask = rng.random((k, n)) < keep
+    got = _row_medians(values, mask)
+    for row, m, g in zip(values, mask, got, strict=True):
+        assert (np.isnan(g) and not m.any()) or g == np.median(row[m])

@@ -108,10 +108,10 @@ def _levenberg_marquardt(
     for _ in range(FIT_ITERATIONS):
         res = res_signed * keep  # (K, N): the inliers' residuals, 0 elsewhere
         jac = cylinder_residuals(params[:, None, :] + steps, xz, y)  # (K, F, N)
-        jac -= res_signed[:, None, :]
-        jac *= keep[:, None, :] / h[:, None]
-        jtj = jac @ jac.transpose(0, 2, 1)  # (K, F, F)
-        jtr = (jac @ res[:, :, None])[..., 0]  # (K, F)
+        jac -= res_signed[:, None, :]  # the Jacobian times each parameter's step h
+        jtr = (jac @ res[:, :, None])[..., 0] / h  # (K, F): res is 0 off the inliers
+        jtj = (jac * keep[:, None, :]) @ jac.transpose(0, 2, 1)  # (K, F, F)
+        jtj /= h[:, None] * h
         cost = np.einsum("kn,kn->k", res, res)
         diag = jtj[on_diagonal]
         todo = np.arange(k_fits)  # the fits whose cost has not fallen yet
@@ -136,13 +136,15 @@ def _levenberg_marquardt(
 def _row_medians(values: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """(K,) the median of each row of ``values`` (K, N) over its ``mask``ed entries.
 
-    ``np.median(values[k][mask[k]])``, the same numbers, from one sort; NaN if none.
+    ``np.median(values[k][mask[k]])``, the same numbers, from one partition of the rows at
+    their middle ranks (the entries left out last, as inf); NaN if none.
     """
     count = mask.sum(axis=1)
-    ordered = np.sort(np.where(mask, values, np.inf), axis=1)
+    upper = np.minimum(count // 2, values.shape[1] - 1)
+    lower = np.maximum(count - 1, 0) // 2
+    ordered = np.partition(np.where(mask, values, np.inf), np.union1d(lower, upper), axis=1)
     rows = np.arange(len(values))
-    upper = ordered[rows, np.minimum(count // 2, values.shape[1] - 1)]
-    lower = ordered[rows, np.maximum(count - 1, 0) // 2]
-    out = np.where(count % 2, upper, (lower + upper) / 2.0)
+    high, low = ordered[rows, upper], ordered[rows, lower]
+    out = np.where(count % 2, high, (low + high) / 2.0)
     out[count == 0] = np.nan
     return out
