@@ -186,3 +186,36 @@ def test_differs_in_colour_is_the_plain_norms_to_the_bit(h, w, spread, seed):
     area = rng.random((h, w)) < 0.7
     area.flat[0] = True
     assert np.array_equal(differs_in_colour(rgb, area), plain_differs_in_colour(rgb, area))
+
+
+def plain_fill_holes(depth: np.ndarray, max_gap_px: float = 2.5) -> np.ndarray:
+    """Holes filled from the nearest valid pixel, each label's depth looked up by label."""
+    valid = np.isfinite(depth) & (depth > 0)
+    if valid.all():
+        return depth
+    dist, labels = cv2.distanceTransformWithLabels(
+        (~valid).astype(np.uint8), cv2.DIST_L2, 5, labelType=cv2.DIST_LABEL_PIXEL
+    )
+    values = np.zeros(int(labels.max()) + 1)
+    values[labels[valid]] = depth[valid]
+    filled = np.where(valid, depth, np.inf)
+    near = ~valid & (dist <= max_gap_px)
+    filled[near] = values[labels[near]]
+    return filled
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    h=st.integers(1, 60),
+    w=st.integers(1, 60),
+    lost=st.floats(0.0, 1.0),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_fill_holes_is_the_label_lookup_to_the_bit(h, w, lost, seed):
+    from comgrasp_pin.perception._points import fill_holes
+
+    rng = np.random.default_rng(seed)
+    depth = rng.uniform(0.2, 2.0, (h, w))
+    gone = rng.random((h, w)) < lost
+    depth[gone] = np.where(rng.random((h, w)) < 0.5, 0.0, np.inf)[gone]
+    assert np.array_equal(fill_holes(depth), plain_fill_holes(depth))

@@ -145,8 +145,9 @@ def fill_holes(depth: np.ndarray, max_gap_px: float = 2.5) -> np.ndarray:
     dist, labels = cv2.distanceTransformWithLabels(
         (~valid).astype(np.uint8), cv2.DIST_L2, 5, labelType=cv2.DIST_LABEL_PIXEL
     )
-    values = np.zeros(int(labels.max()) + 1)
-    values[labels[valid]] = depth[valid]
+    # OpenCV numbers the valid (zero) pixels 1, 2, ... in raster order, the order of a
+    # boolean index: label k's depth is the k-th valid pixel's (tests/test_fast_paths.py).
+    values = np.concatenate([[0.0], depth[valid]])
     filled = np.where(valid, depth, np.inf)
     near = ~valid & (dist <= max_gap_px)
     filled[near] = values[labels[near]]
