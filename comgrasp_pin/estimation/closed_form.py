@@ -15,8 +15,11 @@ smallest singular value), ``estimate`` returns None and the caller takes the SVD
 (``np.linalg.lstsq``), which also decides rank-deficient pose sets. Below it, the results
 equal the SVD path's to ~1e-13 relative (tests/test_closed_form.py).
 
-Every step is one NumPy call on small arrays (a few hundred ns each): a call costs about
-10 us, of which the kinematics (one Pinocchio Jacobian per pose) is 1 us per pose.
+This module is the general form (any k, per-joint weights) and the Gram reduction that
+``observability.by_gram`` gives IPOPT. The common cases have leaner copies of the same
+algebra: ``one_pose`` (one pose, one std for all joints, 3x3 in Python floats) and
+``several_poses`` (several poses, one std); ``estimator.estimate_com`` picks the path.
+Every step is one NumPy call on small arrays (0.3-0.7 us each).
 """
 
 from __future__ import annotations

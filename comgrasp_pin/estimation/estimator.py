@@ -21,6 +21,12 @@ inverse Fisher information (the Cramer-Rao bound); (m, c_ee) = (theta_0, theta_1
 gets it by the delta method. Without torque_std the noise is estimated from the residuals
 where readings outnumber unknowns. With IPOPT the covariance is the inverse Hessian of the
 negative log posterior at the optimum (Laplace), prior and robust loss included.
+
+Paths (the same results to ~1e-12, tests/test_closed_form.py): the closed form by the
+normal equations where the regression is well conditioned (``one_pose``, ``several_poses``,
+``closed_form`` for per-joint weights), else by SVD (``_estimate`` with
+``observability.by_svd``); IPOPT after the Gram reduction (``observability.by_gram``) or,
+one pose with a prior, ``map_one_pose``.
 """
 
 from __future__ import annotations

@@ -1,12 +1,13 @@
-"""The one-pose closed form in Python floats: 3x3 normal equations without LAPACK calls.
+"""The one-pose closed form in Python floats: the 3x3 normal equations without LAPACK.
 
 One pose observes v = G0 (m, m c_wy, -m c_wx) (the mass and the CoM's horizontal offset
 c_w in the world; ``regressor.one_pose_basis``) through the rows z = (J_lin_z, J_ang_x,
 J_ang_y) of the world-aligned ee Jacobian: dtau = z^T v. The 3x3 normal matrix N = z z^T,
 z b and b^T b come out of one product; N's inverse (adjugate) and eigenvalues
 (trigonometric formula) take a microsecond in Python floats, where each NumPy call on a
-3x3 costs about as much. The results are those of ``closed_form.gram_solution`` (and of
-``np.linalg.lstsq``) to ~1e-13 relative (tests/test_closed_form.py).
+3x3 costs about as much (LAPACK only where two eigenvalues nearly coincide, MIN_GAP). The
+results are those of ``closed_form.gram_solution`` (and of ``np.linalg.lstsq``) to ~1e-13
+relative (tests/test_closed_form.py).
 """
 
 from __future__ import annotations
