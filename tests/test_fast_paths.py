@@ -219,3 +219,23 @@ def test_fill_holes_is_the_label_lookup_to_the_bit(h, w, lost, seed):
     gone = rng.random((h, w)) < lost
     depth[gone] = np.where(rng.random((h, w)) < 0.5, 0.0, np.inf)[gone]
     assert np.array_equal(fill_holes(depth), plain_fill_holes(depth))
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    n=st.integers(0, 200),
+    zeros=st.floats(0.0, 1.0),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_noise_level_of_mostly_zero_heights_is_the_plain_mad(n, zeros, seed):
+    """The shortcut for more than half exactly 0 (clean renders) gives np.median's MAD."""
+    from comgrasp_pin.perception._points import noise_level
+
+    rng = np.random.default_rng(seed)
+    heights = rng.normal(0.0, 1e-3, n)
+    heights[rng.random(n) < zeros] = 0.0
+    heights[rng.random(n) < 0.05] = -0.0
+    heights[rng.random(n) < 0.05] = np.inf
+    finite = heights[np.isfinite(heights)]
+    plain = float(1.4826 * np.median(np.abs(finite - np.median(finite)))) if len(finite) else 0.0
+    assert noise_level(heights) == plain

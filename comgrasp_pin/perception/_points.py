@@ -170,6 +170,10 @@ def noise_level(heights: np.ndarray) -> float:
     heights = heights[np.isfinite(heights)]
     if len(heights) == 0:
         return 0.0
+    if 2 * np.count_nonzero(heights) < len(heights):
+        # More than half exactly 0 (a clean render against its median): the median is 0,
+        # and so is the median of the absolute deviations.
+        return 0.0
     return float(1.4826 * np.median(np.abs(heights - np.median(heights))))
 
 
