@@ -14,6 +14,10 @@ advance it by the same number of 2 ms steps:
 
 Per step, median of 5 blocks; ``ratios`` compares them. The physics of the two bare variants
 is not the trials' (no servo): they bound what the lever could buy, they are not a result.
+``mj_step_stages_us``: where ``mj_step`` itself spends its time (MuJoCo's own timers, mean
+per step over the ``Simulation.step`` blocks): collision, constraint making and projection,
+the solver; nested stages are inside their parents (FORWARD inside STEP, COL_* inside
+POS_COLLISION inside POSITION).
 """
 
 from __future__ import annotations
@@ -60,10 +64,23 @@ def main() -> None:
     def nstep(n: int) -> None:
         mujoco.mj_step(m, d, nstep=n)
 
+    stages = [n for n in dir(mujoco.mjtTimer) if n.startswith("mjTIMER_")]
+    before = {n: (d.timer[getattr(mujoco.mjtTimer, n)].duration,
+                  d.timer[getattr(mujoco.mjtTimer, n)].number) for n in stages}  # fmt: skip
+    simulation_step_us = _per_step_us(sim.step, args.steps)
+    mj_stages = {}
+    for n in stages:
+        timer = d.timer[getattr(mujoco.mjtTimer, n)]
+        calls = timer.number - before[n][1]
+        if calls:
+            mj_stages[n.removeprefix("mjTIMER_").lower()] = (
+                1e6 * (timer.duration - before[n][0]) / calls
+            )
     result = {
-        "simulation_step_us": _per_step_us(sim.step, args.steps),
+        "simulation_step_us": simulation_step_us,
         "mj_step_loop_us": _per_step_us(bare_loop, args.steps),
         "mj_step_nstep_us": _per_step_us(nstep, args.steps),
+        "mj_step_stages_us": mj_stages,
         "steps": args.steps,
         "timestep_s": float(m.opt.timestep),
         "model": {"nv": int(m.nv), "ngeom": int(m.ngeom), "noslip_iterations":
