@@ -136,15 +136,16 @@ def _levenberg_marquardt(
 def _row_medians(values: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """(K,) the median of each row of ``values`` (K, N) over its ``mask``ed entries.
 
-    ``np.median(values[k][mask[k]])``, the same numbers, from one partition of the rows at
-    their middle ranks (the entries left out last, as inf); NaN if none.
+    ``np.median(values[k][mask[k]])``, the same numbers: one fit's from a partition, several
+    fits' from one sort of their rows (the entries left out last, as inf); NaN if none.
     """
     count = mask.sum(axis=1)
-    upper = np.minimum(count // 2, values.shape[1] - 1)
-    lower = np.maximum(count - 1, 0) // 2
-    ordered = np.partition(np.where(mask, values, np.inf), np.union1d(lower, upper), axis=1)
+    if len(values) == 1:
+        return np.array([median(values[0][mask[0]]) if count[0] else np.nan])
+    ordered = np.sort(np.where(mask, values, np.inf), axis=1)
     rows = np.arange(len(values))
-    high, low = ordered[rows, upper], ordered[rows, lower]
+    high = ordered[rows, np.minimum(count // 2, values.shape[1] - 1)]
+    low = ordered[rows, np.maximum(count - 1, 0) // 2]
     out = np.where(count % 2, high, (low + high) / 2.0)
     out[count == 0] = np.nan
     return out
