@@ -239,3 +239,21 @@ def test_noise_level_of_mostly_zero_heights_is_the_plain_mad(n, zeros, seed):
     finite = heights[np.isfinite(heights)]
     plain = float(1.4826 * np.median(np.abs(finite - np.median(finite)))) if len(finite) else 0.0
     assert noise_level(heights) == plain
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    h=st.integers(1, 30),
+    w=st.integers(1, 30),
+    stride=st.integers(1, 5),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_strided_uniform_draws_are_the_full_draws_and_leave_the_same_stream(h, w, stride, seed):
+    """The rows a strided frame leaves out are skipped by advancing the PCG64 stream: the
+    kept draws and every later draw (the episode's noise) are the full image's."""
+    config = sensor_preset("realistic").side_depth
+    strided, whole = DepthNoise(config, seed=seed), DepthNoise(config, seed=seed)
+    got = strided._uniform((h, w), stride)
+    assert np.array_equal(got, whole._rng.random((h, w))[::stride, ::stride])
+    assert np.array_equal(strided._rng.random(7), whole._rng.random(7))
+    assert strided._rng.standard_normal() == whole._rng.standard_normal()

@@ -53,7 +53,7 @@ class DepthNoise:
         ``apply(depth)[::stride, ::stride]`` to the bit (the edges, the correlated noise and
         the random draws are made over the whole image; the per-pixel arithmetic only where
         it is kept)."""
-        c, rng, k = self.config, self._rng, (slice(None, None, stride),) * 2
+        c, k = self.config, (slice(None, None, stride),) * 2
         finite = np.isfinite(depth) & (depth > 0)
         far = np.where(finite, depth, _FAR).astype(np.float32)
         near_side, far_side = cv2.erode(far, _KERNEL), cv2.dilate(far, _KERNEL)  # float32
@@ -62,8 +62,8 @@ class DepthNoise:
             size = 2 * c.edge_band_px - 1
             edge = cv2.dilate(edge.astype(np.uint8), np.ones((size, size), np.uint8)) > 0
         white = self._white(depth.shape)
-        u, mix = rng.random(depth.shape)[k], rng.random(depth.shape)[k]
-        dropped = ~edge[k] & (rng.random(depth.shape)[k] < c.dropout_prob)
+        u, mix = self._uniform(depth.shape, stride), self._uniform(depth.shape, stride)
+        dropped = ~edge[k] & (self._uniform(depth.shape, stride) < c.dropout_prob)
         depth, finite, edge = depth[k], finite[k], edge[k]
         near_side, far_side = near_side[k], far_side[k]
         out = np.where(finite, depth * self.scale, np.inf)
@@ -81,6 +81,22 @@ class DepthNoise:
             steps *= c.quantum
             np.copyto(out, steps, where=valid)
         return out
+
+    def _uniform(self, shape: tuple[int, int], stride: int) -> np.ndarray:
+        """``rng.random(shape)[::stride, ::stride]``, the generator left in the same state.
+
+        Each double takes one 64-bit draw of the PCG64 stream: the rows left out are
+        skipped by advancing the stream past them (tests/test_fast_paths.py).
+        """
+        if stride == 1:
+            return self._rng.random(shape)
+        h, w = shape
+        rows = np.empty(((h + stride - 1) // stride, w))
+        bits = self._rng.bit_generator
+        for i in range(len(rows)):
+            self._rng.random(out=rows[i])
+            bits.advance(min(stride - 1, h - 1 - i * stride) * w)
+        return rows[:, ::stride]
 
     def _white(self, shape: tuple[int, ...]) -> np.ndarray | None:
         """(H, W) float32 unit noise, correlated over ``noise_corr_px`` pixels; None
