@@ -10,6 +10,7 @@ import mujoco
 import numpy as np
 
 from comgrasp_pin.camera import PinholeCamera
+from comgrasp_pin.errors import ComGraspError
 from comgrasp_pin.simulation.depth_noise import DepthNoise
 
 # R_mujococam_optical: flip y and z.
@@ -100,7 +101,7 @@ class CameraRig:
     def _renderer(self, depth: bool) -> mujoco.Renderer:
         """The rig's renderer for depth (no multisampling) or for colour and segmentation."""
         if self._closed:
-            raise RuntimeError("the camera rig was closed")
+            raise ComGraspError("the camera rig was closed: it renders no more")
         if depth not in self._renderers:
             samples = DEPTH_SAMPLES if depth else None
             self._renderers[depth] = _take_renderer(self.model, self.width, self.height, samples)
