@@ -194,9 +194,10 @@ def _expected(params, misfit, free_y):
 
 
 # The batched fit sums over masked rows of a product and measures in the x-z plane: the
-# last digits move (issue 24 allows 1e-6 on every perception output); within FIT_TOLERANCE
-# of the plain loop's, in m and rad.
-FIT_TOLERANCE = 1e-9
+# last digits move, and an ill-posed fit (a free radius on a few dozen points, a third of
+# them outliers) amplifies them (1.2e-9 seen); within FIT_TOLERANCE of the plain loop's, in
+# m and rad: the issue's bound on every perception output (recorded views: 1.3e-9 at most).
+FIT_TOLERANCE = 1e-6
 
 
 @settings(max_examples=100, deadline=None)
