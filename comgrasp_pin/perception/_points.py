@@ -195,9 +195,10 @@ def drop_flying(depth: np.ndarray, tolerance: float) -> np.ndarray:
     """
     valid = np.isfinite(depth) & (depth > 0)
     for_min = np.where(valid, depth, np.inf)
-    border = {"borderType": cv2.BORDER_CONSTANT}
-    near = cv2.erode(for_min, _RING, borderValue=np.inf, **border)
-    far = cv2.dilate(np.where(valid, depth, -np.inf), _RING, borderValue=-np.inf, **border)
+    constant = cv2.BORDER_CONSTANT
+    near = cv2.erode(for_min, _RING, borderType=constant, borderValue=np.inf)
+    for_max = np.where(valid, depth, -np.inf)
+    far = cv2.dilate(for_max, _RING, borderType=constant, borderValue=-np.inf)
     with np.errstate(invalid="ignore"):  # inf - inf where a lost pixel has no valid neighbour
         between = valid & (depth - near > tolerance) & (far - depth > tolerance)
     row, col = np.nonzero(between)
