@@ -10,7 +10,12 @@ every call again in two fresh processes: this checkout's package and BEFORE_COMM
 (``git archive`` into a temporary folder). Reports CPU time per call (the best of
 ``--repeat``; one BLAS thread in both), the ratio before / after, and whether each side's
 outputs (every field, every array) and refusals (error type and words) are the recorded
-ones: ``identical`` counts equal to the bit, ``max_abs_difference`` the largest move.
+ones: ``identical`` counts equal to the bit, ``within_1e-6`` those whose every output is
+within 1e-6 (SI units; pixel outputs in px) with the same refusal, ``max_abs_difference``
+the largest move, ``max_deviation_by_output`` the largest move of each output (BEFORE's
+outputs against this checkout's, which recorded them). ``calls`` lists every call: its
+episode, index, kind, CPU ms before and after, and how far BEFORE's outputs are from this
+checkout's.
 """
 
 from __future__ import annotations
@@ -85,28 +90,33 @@ def _fields(x, path: str = ""):
         yield path, x
 
 
-def difference(a, b) -> float:
-    """The largest absolute difference between two outputs (inf: a different structure,
-    shape, mask or None)."""
+def deviations(a, b) -> dict[str, float]:
+    """The largest absolute difference of each output (leaf path) between two outputs (inf:
+    a different structure, shape, mask or None)."""
     fa, fb = list(_fields(a)), list(_fields(b))
     if [p for p, _ in fa] != [p for p, _ in fb]:
-        return float("inf")
-    worst = 0.0
-    for (_, x), (_, y) in zip(fa, fb, strict=True):
+        return {"": float("inf")}
+    out = {}
+    for (path, x), (_, y) in zip(fa, fb, strict=True):
         if x is None or y is None:
-            if x is not y:
-                return float("inf")
+            out[path] = 0.0 if x is y else float("inf")
             continue
         x, y = np.asarray(x), np.asarray(y)
         if x.shape != y.shape or (x.dtype == bool) != (y.dtype == bool):
-            return float("inf")
-        if x.dtype == bool:
-            worst = worst if np.array_equal(x, y) else float("inf")
-            continue
-        same = (x == y) | (np.isnan(x) & np.isnan(y))
-        if not same.all():
-            worst = max(worst, float(np.max(np.abs(x[~same].astype(float) - y[~same]))))
-    return worst
+            out[path] = float("inf")
+        elif x.dtype == bool:
+            out[path] = 0.0 if np.array_equal(x, y) else float("inf")
+        else:
+            same = (x == y) | (np.isnan(x) & np.isnan(y))
+            out[path] = (
+                0.0 if same.all() else float(np.max(np.abs(x[~same].astype(float) - y[~same])))
+            )
+    return out
+
+
+def difference(a, b) -> float:
+    """The largest absolute difference between two outputs (``deviations``' largest)."""
+    return max(deviations(a, b).values(), default=0.0)
 
 
 def time_frames(folder: Path, repeat: int) -> None:
@@ -116,7 +126,7 @@ def time_frames(folder: Path, repeat: int) -> None:
 
     rows = []
     for path in sorted(folder.glob("*.pkl")):
-        for call in pickle.loads(path.read_bytes()):
+        for index, call in enumerate(pickle.loads(path.read_bytes())):
             fn = getattr(perception, FUNCTIONS[call["kind"]])
             best, out = float("inf"), None
             for _ in range(repeat):
@@ -126,11 +136,14 @@ def time_frames(folder: Path, repeat: int) -> None:
                 except Exception as exc:  # noqa: BLE001 - compared with the recorded one
                     out = (None, (type(exc).__name__, str(exc)))
                 best = min(best, time.thread_time() - start)
-            same_error = out[1] == call["error"]
-            diff = difference(out[0], call["result"]) if same_error else float("inf")
+            same_error = (out[1] or ("",))[0] == (call["error"] or ("",))[0]
+            fields = deviations(out[0], call["result"]) if same_error else {"": float("inf")}
             watch = call["kind"] == "side" and call["args"][1].shape != (480, 640)
-            rows.append({"episode": path.stem, "kind": "side_watch" if watch else call["kind"],
-                         "ms": 1e3 * best, "difference": diff})  # fmt: skip
+            rows.append({"episode": path.stem, "call": index,
+                         "kind": "side_watch" if watch else call["kind"], "ms": 1e3 * best,
+                         "difference": max(fields.values(), default=0.0),
+                         "same_words": out[1] == call["error"],
+                         "fields": {k: v for k, v in fields.items() if v}})  # fmt: skip
     (folder / f"times-{os.getpid()}.json").write_text(json.dumps({"rows": rows, "package": str(
         Path(perception.__file__).parents[2])}))  # fmt: skip
 
@@ -154,6 +167,10 @@ def _summary(before: list[dict], after: list[dict]) -> dict:
         a = [r for r in after if r["kind"] == kind]
         if not a:
             continue
+        by_output: dict[str, float] = {}
+        for r in b:
+            for field, dev in r["fields"].items():
+                by_output[field] = max(by_output.get(field, 0.0), dev)
         out[kind] = {
             "calls": len(a),
             "median_ms": {"before": float(np.median([r["ms"] for r in b])),
@@ -163,10 +180,23 @@ def _summary(before: list[dict], after: list[dict]) -> dict:
             "speedup_total": sum(r["ms"] for r in b) / max(sum(r["ms"] for r in a), 1e-9),
             "identical": {"before": sum(r["difference"] == 0 for r in b),
                           "after": sum(r["difference"] == 0 for r in a)},
+            "within_1e-6": {"before": sum(r["difference"] <= 1e-6 for r in b),
+                            "after": sum(r["difference"] <= 1e-6 for r in a)},
+            "same_refusal_words": {"before": sum(r["same_words"] for r in b),
+                                   "after": sum(r["same_words"] for r in a)},
             "max_abs_difference": max(max(r["difference"] for r in a),
                                       max(r["difference"] for r in b)),
+            "max_deviation_by_output": dict(sorted(by_output.items())),
         }  # fmt: skip
     return out
+
+
+def _calls(before: list[dict], after: list[dict]) -> list[dict]:
+    """Every call: before and after CPU ms, BEFORE's deviation from this checkout's."""
+    return [{"episode": a["episode"], "call": a["call"], "kind": a["kind"],
+             "before_ms": round(b["ms"], 3), "after_ms": round(a["ms"], 3),
+             "deviation": b["difference"]}
+            for b, a in zip(before, after, strict=True)]  # fmt: skip
 
 
 def main() -> None:
@@ -191,7 +221,7 @@ def main() -> None:
         after = _run(frames, ROOT, args.repeat)
         before = _run(frames, old, args.repeat)
     result = {"before": args.before, "objects": args.objects, "repeat": args.repeat,
-              "summary": _summary(before, after),
+              "summary": _summary(before, after), "calls": _calls(before, after),
               "date": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()),
               "load_avg_1min": os.getloadavg()[0]}  # fmt: skip
     Path(args.out).write_text(json.dumps(result, indent=2) + "\n")
