@@ -175,10 +175,14 @@ def test_a_kept_pool_serves_several_runs_and_is_dropped_when_a_worker_dies(tmp_p
     from comgrasp_pin.experiments.runner import _KEPT, kept_pool
 
     with kept_pool(2):
+        pool = _KEPT[2]
         first = run_trials(_pid_or_death, _tasks(6), tmp_path / "a.csv", COLUMNS, workers=2)
         second = run_trials(_pid_or_death, _tasks(6), tmp_path / "b.csv", COLUMNS, workers=2)
+        # Both ran in the kept pool's processes (how the tasks spread over the two depends
+        # on the machine's load, so which of them ran a task is not asserted).
         pids = {r["value"] for r in first} | {r["value"] for r in second}
-        assert len(pids) == 2 and os.getpid() not in pids
+        assert _KEPT[2] is pool and pids <= set(pool._processes) and len(pool._processes) <= 2
+        assert os.getpid() not in pids
         dying = [{**t, "die": t["trial"] == 2} for t in _tasks(6)]
         third = run_trials(_pid_or_death, dying, tmp_path / "c.csv", COLUMNS, workers=2)
         assert 2 not in _KEPT  # the broken pool is not kept
