@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from comgrasp_pin import validate
 from comgrasp_pin._paths import example_robot_data_dir, urdf_path
 from comgrasp_pin.errors import InvalidInputError
 
@@ -114,10 +115,7 @@ class RobotModel:
 
     def check_q(self, q: np.ndarray) -> np.ndarray:
         """``q`` as a float (n,) array; ValueError for a wrong shape or non-finite values."""
-        try:
-            q = np.asarray(q, dtype=float)
-        except (TypeError, ValueError):
-            raise InvalidInputError(f"q must be {self.nq} numbers, got {q!r}") from None
+        q = validate.real_array(q, "q")
         if q.shape != (self.nq,):
             raise InvalidInputError(f"q must have shape ({self.nq},), got {q.shape}")
         if not np.all(np.isfinite(q)):

@@ -73,16 +73,41 @@ def optional_number(value: object, name: str, **limits) -> float | None:
     return None if value is None else number(value, name, **limits)
 
 
+REAL_KINDS = "iuf"
+"""NumPy dtype kinds taken as real numbers: signed and unsigned integers, floats. Complex
+(its imaginary part would be dropped), boolean, string, object and time arrays are refused
+rather than converted."""
+
+
+def real_array(value: object, name: str) -> np.ndarray:
+    """``value`` as a float array, refusing what is not real numbers.
+
+    A float64 array is returned as it is (no copy); integers and other floats are converted.
+
+    Raises:
+        InvalidInputError: naming ``name``: complex, boolean, string, object or ragged input.
+    """
+    if type(value) is np.ndarray and value.dtype == np.float64:  # the usual case, fast
+        return value
+    try:
+        a = np.asarray(value)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{name} is not a numeric array (ragged?)") from None
+    if a.dtype.kind not in REAL_KINDS:
+        raise InvalidInputError(
+            f"{name} is not a numeric array of real numbers (integers or floats), got dtype "
+            f"{a.dtype}: complex, boolean, string and object values are not converted"
+        )
+    return a.astype(float, copy=False)
+
+
 def finite_array(value: object, name: str, shape: tuple[int, ...]) -> np.ndarray:
     """``value`` as a float array of exactly ``shape``, every entry finite (a copy).
 
     Raises:
         InvalidInputError: not numeric, another shape, NaN or inf.
     """
-    try:
-        a = np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        raise InvalidInputError(f"{name} must be a numeric array of shape {shape}") from None
+    a = np.array(real_array(value, name), dtype=float)  # a copy
     if a.shape != shape:
         raise InvalidInputError(f"{name} must have shape {shape}, got {a.shape}")
     if not np.all(np.isfinite(a)):

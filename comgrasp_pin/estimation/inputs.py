@@ -87,14 +87,9 @@ def check_arrays(
     if not isinstance(robot, RobotModel):
         raise InvalidInputError(f"robot must be a RobotModel, got {type(robot).__name__}")
     n = robot.model.nq
-    try:
-        q_arr = np.asarray(q, dtype=float)
-        tb_arr = np.asarray(tau_before, dtype=float)
-        ta_arr = np.asarray(tau_after, dtype=float)
-    except (TypeError, ValueError):  # name the first that is not numeric
-        q_arr = _numeric(q, "q")
-        tb_arr = _numeric(tau_before, "tau_before")
-        ta_arr = _numeric(tau_after, "tau_after")
+    q_arr = validate.real_array(q, "q")
+    tb_arr = validate.real_array(tau_before, "tau_before")
+    ta_arr = validate.real_array(tau_after, "tau_after")
     shape = q_arr.shape
     if q_arr.ndim not in (1, 2) or shape[-1] != n or (len(shape) == 2 and shape[0] < 1):
         raise InvalidInputError(
@@ -134,13 +129,6 @@ _SCREEN_SIZE = 64
 """Arrays up to this size are screened by one sum in Python floats; larger ones by NumPy."""
 
 
-def _numeric(value: object, name: str) -> np.ndarray:
-    try:
-        return np.asarray(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise InvalidInputError(f"{name} is not a numeric array: {exc}") from None
-
-
 def _check_values(name: str, a: np.ndarray, limit: float) -> None:
     """InvalidInputError naming the (pose, joint) entries of ``a`` (k, n) out of range.
 
@@ -163,8 +151,8 @@ def _torque_std(torque_std: float | np.ndarray | None, n: int) -> float | np.nda
     if torque_std is None:
         return None
     low, high = TORQUE_STD_RANGE
+    value = validate.real_array(torque_std, "torque_std")
     try:
-        value = np.asarray(torque_std, dtype=float)
         sigma = np.broadcast_to(value, (n,)).copy()
     except (TypeError, ValueError):
         raise InvalidInputError(

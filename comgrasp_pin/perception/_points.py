@@ -15,9 +15,20 @@ def check_images(rgb: np.ndarray | None, depth: np.ndarray, camera: PinholeCamer
         raise InvalidDepthError(f"camera must be a PinholeCamera, got {type(camera).__name__}")
     shape = (camera.height, camera.width)
     try:
-        depth = np.asarray(depth, dtype=float)
+        depth_in = np.asarray(depth)
     except (TypeError, ValueError):
         raise InvalidDepthError("the depth image is not a numeric array") from None
+    if depth_in.dtype.kind in "iu":
+        raise InvalidDepthError(
+            f"the depth image must be float metres, got dtype {depth_in.dtype}: an integer "
+            "image in a camera's depth units (a RealSense's uint16) is depth * depth_scale "
+            "metres (the SDK's depth scale, e.g. 0.001 for millimetres)"
+        )
+    if depth_in.dtype.kind != "f":
+        raise InvalidDepthError(
+            f"the depth image is not a numeric array of float metres (dtype {depth_in.dtype})"
+        )
+    depth = depth_in.astype(float, copy=False)
     if depth.shape != shape:
         raise InvalidDepthError(f"depth image has shape {depth.shape}, the camera is {shape}")
     if rgb is not None and np.asarray(rgb).shape[:2] != shape:

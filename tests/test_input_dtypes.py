@@ -1,0 +1,95 @@
+"""Arrays that are not real numbers are refused, never converted (issue 27, item 3).
+
+NumPy would take a complex q with a warning and drop its imaginary part, a boolean q as
+0 and 1, and strings of digits as numbers: each a silent wrong answer. The public entry
+points refuse them with a ComGraspError that names the argument; real integers and floats
+of any width are taken. The dtypes are drawn by hypothesis.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from _payload import payload_torques
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import comgrasp_pin as cg
+from comgrasp_pin.camera import PinholeCamera
+from comgrasp_pin.errors import ComGraspError, InvalidDepthError, InvalidInputError
+from comgrasp_pin.geometry import closest_point_on_line
+from comgrasp_pin.perception import detect_rod_top_down, observe_held_rod
+
+Q = np.array([0.0, -1.2, 1.5, -1.9, -1.57, 0.0])
+REFUSED = [np.complex128, np.complex64, np.bool_, np.str_, np.object_]
+TAKEN = [np.float64, np.float32, np.float16, np.int64, np.int32, np.int8, np.uint16]
+
+
+def _as(a: np.ndarray, dtype) -> np.ndarray:
+    if dtype is np.str_:
+        return np.array([repr(float(x)) for x in a.ravel()]).reshape(a.shape)
+    if dtype is np.object_:
+        return np.array(list(a.ravel()), dtype=object).reshape(a.shape)
+    return a.astype(dtype)
+
+
+@pytest.fixture(scope="module")
+def one_pose(ur5):
+    tb, ta = payload_torques(ur5, Q, 0.5, np.array([0.05, 0.0, 0.1]))
+    return ur5, tb, ta
+
+
+@settings(max_examples=40, deadline=None)
+@given(which=st.sampled_from(["q", "tau_before", "tau_after", "torque_std"]),
+       dtype=st.sampled_from(REFUSED))  # fmt: skip
+def test_estimate_com_refuses_arrays_that_are_not_real_numbers(one_pose, which, dtype):
+    robot, tb, ta = one_pose
+    args = {"q": Q, "tau_before": tb, "tau_after": ta, "torque_std": np.full(6, 0.01)}
+    args[which] = _as(np.asarray(args[which]), dtype)
+    with pytest.raises(InvalidInputError, match=which):
+        cg.estimate_com(robot, **args)
+
+
+@settings(max_examples=30, deadline=None)
+@given(dtype=st.sampled_from(TAKEN))
+def test_real_integers_and_floats_of_any_width_are_taken(one_pose, dtype):
+    robot, tb, ta = one_pose
+    q = np.round(Q).astype(dtype) if np.dtype(dtype).kind in "iu" else Q.astype(dtype)
+    if np.dtype(dtype).kind == "u":
+        q = np.abs(q)
+    plain = robot.ee_pose(np.asarray(q, dtype=float))
+    np.testing.assert_array_equal(robot.ee_pose(q), plain)
+
+
+@pytest.mark.parametrize("dtype", REFUSED)
+def test_robot_and_geometry_refuse_what_is_not_real(ur5, dtype):
+    with pytest.raises(InvalidInputError, match="q"):
+        ur5.ee_pose(_as(Q, dtype))
+    x, z = np.array([1.0, 0, 0]), np.array([0, 0, 1.0])
+    with pytest.raises(InvalidInputError, match="p_line"):
+        closest_point_on_line(_as(np.zeros(3), dtype), z, np.ones(3), x)
+
+
+def test_a_complex_q_gives_no_warning_and_no_estimate(one_pose, recwarn):
+    robot, tb, ta = one_pose
+    with pytest.raises(InvalidInputError, match="complex"):
+        cg.estimate_com(robot, Q + 1e-3j, tb, ta, torque_std=0.01)
+    assert not [w for w in recwarn if issubclass(w.category, np.exceptions.ComplexWarning)]
+
+
+CAMERA = PinholeCamera.from_fovy(64, 48, 58.0)
+
+
+@pytest.mark.parametrize("dtype", [np.uint16, np.int32])
+def test_an_integer_depth_image_is_refused_and_the_message_names_depth_scale(dtype):
+    depth_mm = np.full((48, 64), 500, dtype=dtype)  # a RealSense frame: 0.5 m in millimetres
+    for look in (lambda d: observe_held_rod(None, d, CAMERA, np.eye(4)),
+                 lambda d: detect_rod_top_down(None, d, CAMERA, np.eye(4))):  # fmt: skip
+        with pytest.raises(InvalidDepthError, match="depth_scale"):
+            look(depth_mm)
+
+
+@pytest.mark.parametrize("dtype", [np.complex128, np.bool_, np.object_])
+def test_a_depth_image_that_is_not_real_is_refused(dtype):
+    with pytest.raises(ComGraspError, match="not a numeric array"):
+        observe_held_rod(None, _as(np.full((48, 64), 0.5), dtype), CAMERA, np.eye(4))
