@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from comgrasp_pin import validate
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.geometry import check_transform
 
@@ -56,7 +57,7 @@ class PinholeCamera:
 
     def project(self, p_cam: np.ndarray) -> np.ndarray:
         """(N, 2) pixels of (N, 3) points in the camera frame (m); points need z > 0."""
-        p_cam = np.atleast_2d(np.asarray(p_cam, dtype=float))
+        p_cam = np.atleast_2d(validate.real_array(p_cam, "p_cam"))
         z = p_cam[:, 2]
         if np.any(z <= 0):
             raise InvalidInputError("cannot project points behind the camera (z <= 0)")
@@ -64,8 +65,8 @@ class PinholeCamera:
 
     def backproject(self, uv: np.ndarray, depth: np.ndarray) -> np.ndarray:
         """(N, 3) points in the camera frame (m) of pixels ``uv`` (N, 2) at z-depths (N,) (m)."""
-        uv = np.atleast_2d(np.asarray(uv, dtype=float))
-        depth = np.asarray(depth, dtype=float).reshape(-1)
+        uv = np.atleast_2d(validate.real_array(uv, "uv"))
+        depth = validate.real_array(depth, "depth").reshape(-1)
         if uv.shape[0] != depth.shape[0]:
             raise InvalidInputError(f"{uv.shape[0]} pixels but {depth.shape[0]} depths")
         x = (uv[:, 0] - self.cx) / self.fx * depth
@@ -91,7 +92,7 @@ def transform_points(T_a_b: np.ndarray, p_b: np.ndarray) -> np.ndarray:
         InvalidInputError: T_a_b not a (4, 4) rigid transform, p_b not (N, 3) or (3,).
     """
     T_a_b = check_transform(T_a_b, "T_a_b")
-    p_b = np.atleast_2d(np.asarray(p_b, dtype=float))
+    p_b = np.atleast_2d(validate.real_array(p_b, "p_b"))
     if p_b.ndim != 2 or p_b.shape[1] != 3:
         raise InvalidInputError(f"points must have shape (N, 3), got {p_b.shape}")
     p_a = p_b @ T_a_b[:3, :3].T

@@ -32,7 +32,7 @@ class GraspPose:
 
 def check_transform(T: np.ndarray, name: str = "T", atol: float = 1e-6) -> np.ndarray:
     """``T`` as a (4, 4) float rigid transform; InvalidInputError otherwise."""
-    T = np.asarray(T, dtype=float)
+    T = validate.real_array(T, name)
     if T.shape != (4, 4):
         raise InvalidInputError(f"{name} must be a (4, 4) homogeneous transform, got {T.shape}")
     if not np.all(np.isfinite(T)):

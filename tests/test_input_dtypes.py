@@ -93,3 +93,34 @@ def test_an_integer_depth_image_is_refused_and_the_message_names_depth_scale(dty
 def test_a_depth_image_that_is_not_real_is_refused(dtype):
     with pytest.raises(ComGraspError, match="not a numeric array"):
         observe_held_rod(None, _as(np.full((48, 64), 0.5), dtype), CAMERA, np.eye(4))
+
+
+@pytest.mark.parametrize("dtype", REFUSED)
+def test_camera_transforms_and_planning_refuse_what_is_not_real(ur5, dtype):
+    from comgrasp_pin.camera import transform_points
+    from comgrasp_pin.estimation.pose_planning import best_next_pose
+    from comgrasp_pin.geometry import check_transform
+
+    points = np.array([[0.1, 0.2, 0.5], [0.0, 0.0, 1.0]])
+    with pytest.raises(InvalidInputError, match="p_b"):
+        transform_points(np.eye(4), _as(points, dtype))
+    with pytest.raises(InvalidInputError, match="T_a_b"):
+        transform_points(_as(np.eye(4), dtype), points)
+    with pytest.raises(InvalidInputError, match="p_cam"):
+        CAMERA.project(_as(points, dtype))
+    with pytest.raises(InvalidInputError, match="uv"):
+        CAMERA.backproject(_as(np.array([[3.0, 4.0]]), dtype), np.array([0.5]))
+    with pytest.raises(InvalidInputError, match="T_world_cam"):
+        check_transform(_as(np.eye(4), dtype), "T_world_cam")
+    with pytest.raises(InvalidInputError, match="candidates"):
+        best_next_pose(ur5, Q[None], _as(Q[None] + 0.1, dtype))
+
+
+def test_float32_points_are_transformed_as_float64_ones():
+    from comgrasp_pin.camera import transform_points
+
+    points = np.random.default_rng(3).normal(size=(50, 3)).astype(np.float32)
+    T = np.eye(4)
+    T[:3, 3] = [0.1, -0.2, 0.3]
+    expected = points.astype(float) + T[:3, 3]
+    np.testing.assert_array_equal(transform_points(T, points), expected)

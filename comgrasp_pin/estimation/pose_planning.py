@@ -157,8 +157,8 @@ def best_next_pose(robot: RobotModel, existing_q: np.ndarray, candidates: np.nda
     The one that most increases log det of the information of the poses ``existing_q``
     (k, n) for theta = (m, m c_ee).
     """
-    existing_q = np.atleast_2d(np.asarray(existing_q, dtype=float))
-    candidates = np.atleast_2d(np.asarray(candidates, dtype=float))
+    existing_q = np.atleast_2d(validate.real_array(existing_q, "existing_q"))
+    candidates = np.atleast_2d(validate.real_array(candidates, "candidates"))
     if len(candidates) == 0:
         raise InvalidInputError("best_next_pose needs at least one candidate configuration")
     info = sum(Y.T @ Y for Y in (pose_regressor(robot, q)[0] for q in existing_q))

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from comgrasp_pin import validate
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.robot import RobotModel
 
@@ -29,7 +30,7 @@ def load_robot(
     gravity_base: tuple[float, float, float] | np.ndarray = GRAVITY_FLOOR,
 ) -> RobotModel:
     """The arm of ``urdf_path`` up to ``ee_frame``, with gravity ``gravity_base`` (m/s^2)."""
-    g = np.asarray(gravity_base, dtype=float)
+    g = validate.real_array(gravity_base, "gravity_base")
     if g.shape != (3,) or not np.all(np.isfinite(g)) or not np.linalg.norm(g) > 0.1:
         raise InvalidInputError(
             f"gravity must be 3 finite numbers GX,GY,GZ in the robot's base frame (m/s^2) with "
