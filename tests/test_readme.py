@@ -1,5 +1,6 @@
-"""The README: its "Use it on your robot" section runs (its python blocks, exec'd in order),
-and its tables agree with the code (the objects) and with docs/results (the accuracy)."""
+"""The README: its "Use it on your robot" section runs (its python blocks, exec'd in order);
+docs/experiments.md's tables agree with the code (the objects) and with docs/results (the
+accuracy)."""
 
 import csv
 import inspect
@@ -17,6 +18,7 @@ from comgrasp_pin.simulation.scene import Scene
 
 README = Path(__file__).resolve().parents[1] / "README.md"
 RESULTS = README.parent / "docs" / "results"
+EXPERIMENTS = README.parent / "docs" / "experiments.md"
 HEADING = "## Use it on your robot"
 
 
@@ -49,9 +51,9 @@ def test_python_blocks_run(tmp_path, monkeypatch, capsys):
 
 
 def _table(heading: str, first_cell: str) -> list[list[str]]:
-    """The Markdown table under ``heading`` whose header row starts with ``first_cell``, as
-    rows of stripped cells (header and separator dropped)."""
-    text = README.read_text()
+    """The Markdown table of docs/experiments.md under ``heading`` whose header row starts
+    with ``first_cell``, as rows of stripped cells (header and separator dropped)."""
+    text = EXPERIMENTS.read_text()
     start = text.index(heading)
     lines = text[start:].splitlines()
     top = next(i for i, line in enumerate(lines) if line.startswith(f"| {first_cell} |"))
@@ -77,7 +79,7 @@ def _holds_level_mm(name: str) -> float:
 
 
 def test_the_objects_table_matches_the_code():
-    rows = _table("### The objects", "object")
+    rows = _table("## The objects", "object")
     assert [r[0].split()[0] for r in rows] == list(OBJECTS)
     com_regrasp = inspect.signature(Scene.sample).parameters["com_range"].default
     for cells in rows:
@@ -98,12 +100,12 @@ def test_the_objects_table_matches_the_code():
 
 @pytest.mark.parametrize(
     "heading, run",
-    [("### Results at the paper's size, realistic sensors", "."),
-     ("### The same with ideal sensors", "ideal")],
+    [("## Results at the paper's size, realistic sensors", "."),
+     ("## The same with ideal sensors", "ideal")],
 )  # fmt: skip
 def test_the_accuracy_table_matches_docs_results(heading, run):
-    """The README's per-bin numbers against docs/results[/ideal]/accuracy.csv, recomputed
-    here."""
+    """docs/experiments.md's per-bin numbers against docs/results[/ideal]/accuracy.csv,
+    recomputed here."""
     rows = _table(heading, "tilt in the jaws, 0–90° from level")
     by_name = {r[0]: r[1:] for r in rows}
     with open(RESULTS / run / "accuracy.csv", newline="") as f:

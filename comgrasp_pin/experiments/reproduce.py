@@ -150,7 +150,7 @@ def _ideal_section(opts: RunOptions, out: Path, acc: list, reg: list) -> str:
 
 This report's runs use the `{opts.sensors}` sensor preset (RealSense-class depth, its
 calibration error, the torque sensors' offsets and drift, the gripper's model error; see
-the README's "Sensors"). The same experiments with ideal sensors, the world the paper ran
+docs/experiments.md, "Sensors"). The same experiments with ideal sensors, the world the paper ran
 in, are in `ideal/`: same seeds, same scenes, the paper's measuring procedure. The paper's
 six objects; in brackets the 95 % interval (t for means, Wilson for rates).
 
