@@ -91,11 +91,17 @@ class Simulation:
     def tau_measured(self) -> np.ndarray:
         """(6,) the torque sensor's sample at the last control step (N m)."""
         if self._unread:
-            dt = self.model.opt.timestep
-            self.sensor.skip(self._unread - 1, dt)
-            self._tau = self.sensor.read(self._tau_true, dt)
-            self._unread = 0
+            self._catch_up(self._tau_true[None])
         return self._tau
+
+    def _catch_up(self, tau_true: np.ndarray) -> np.ndarray:
+        """(N, 6) the sensor's samples of the last N control steps, from their true torques
+        ``tau_true`` (N, 6); the unread steps before them only advance the sensor."""
+        dt = self.model.opt.timestep
+        self.sensor.skip(self._unread - len(tau_true), dt)
+        taus = self.sensor.read_many(tau_true, dt)
+        self._tau, self._unread = taus[-1].copy(), 0
+        return taus
 
     @property
     def q(self) -> np.ndarray:
@@ -206,9 +212,7 @@ class Simulation:
             taus[k] = self._tau_true if at_once else self.tau_measured
             qs[k] = self._q_arm
         if at_once:
-            self.sensor.skip(self._unread - n, dt)
-            taus = self.sensor.read_many(taus, dt)
-            self._tau, self._unread = taus[-1].copy(), 0
+            taus = self._catch_up(taus)
         std_error = taus.std(axis=0, ddof=1) / np.sqrt(n) if n > 1 else np.full(6, np.inf)
         return TorqueMeasurement(taus.mean(axis=0), std_error, qs.mean(axis=0), n, n * dt, start)
 
