@@ -27,7 +27,12 @@ from comgrasp_pin.errors import (
     PerceptionError,
 )
 from comgrasp_pin.geometry import GraspPose
-from comgrasp_pin.perception._points import check_images, largest_component, pixel_slopes
+from comgrasp_pin.perception._points import (
+    border_pixels,
+    check_images,
+    largest_component,
+    pixel_slopes,
+)
 from comgrasp_pin.perception.rod_shape import check_ends_seen, check_one_object, check_one_rod
 from comgrasp_pin.perception.table_view import TableView, differs_in_colour, in_area, view_table
 
@@ -35,6 +40,7 @@ PICK_AREA = (0.30, 0.80, -0.35, 0.35)  # x_min, x_max, y_min, y_max of the table
 MIN_HEIGHT = 0.003  # a pixel counts as object if it stands this far above the table (m)
 MAX_HEIGHT = 0.15  # ... and no higher than this (the robot above the table is not the rod)
 MIN_PIXELS = 40
+_KERNEL3 = np.ones((3, 3), np.uint8)
 # In a cleaned image (``table_view``): a pixel stands on the table this many camera noise
 # stds above it, gaps of up to 4 px close, and the rod is measured without its 1 px fringe.
 HEIGHT_SIGMAS = 2.5
@@ -42,7 +48,14 @@ CLOSE_KERNEL = np.ones((5, 5), np.uint8)
 ERODE_PX = 1  # (2 holds flying pixels better, 35 % dropouts worse)
 KEEP_EXTENT = 0.8  # ... unless the eroded rod is shorter than this share (a thin rod's handle gone)
 END_SNR = 8.0  # a rod lower than this many noise stds (after the median) may lose its ends
-EDGE_BAND = 0.01  # an object within 2 bands of the pick area's edge may leave it (m)
+EDGE_BAND = 0.01  # the table's height and noise are measured this far inside its edge (m)
+# A rod may reach over the table's edge: the pixels beyond the pick area that stand on the
+# table's plane (not the floor below) and join the rod are the rod. One that dips below the
+# plane beyond the edge (tilted down over it) is refused when at least DIP_PIXELS on its
+# axis within DIP_REACH beyond an end lie between DIP_DEPTH and the threshold below the plane.
+DIP_DEPTH = 0.3  # m below the table's plane: lower than this is the floor
+DIP_REACH = 0.05  # m
+DIP_PIXELS = 10
 
 
 @dataclass(frozen=True)
@@ -60,6 +73,9 @@ class RodDetection:
         mask: (H, W) bool pixels of the rod.
         rect: OpenCV rotated rectangle ((u, v), (w, h), angle_deg) of the mask.
         axis_px: (2, 2) pixel ends of the axis.
+        overhang: how far the rod reaches beyond the pick area (m), 0 when it lies within
+            it: a rod laid back at the table's edge is seen whole as long as the camera
+            sees it, and this says that it reaches over the edge.
     """
 
     grasp: GraspPose
@@ -70,6 +86,7 @@ class RodDetection:
     mask: np.ndarray
     rect: tuple
     axis_px: np.ndarray
+    overhang: float = 0.0
 
 
 def detect_rod_top_down(
@@ -83,7 +100,9 @@ def detect_rod_top_down(
 
     Raises:
         ObjectNotFoundError: nothing above the table.
-        ObjectCutByBorderError: the rod leaves the image or reaches the edge of the pick area.
+        ObjectCutByBorderError: the rod leaves the image, or hangs down over the table's
+            edge (a rod that lies over the edge on the table's plane is measured whole:
+            ``RodDetection.overhang``).
         AmbiguousObjectError: two objects, or two rods side by side, where one rod should be,
             or parts of the rod lost in a noisy image beyond the end seen.
         InvalidDepthError: unusable depth.
@@ -129,6 +148,7 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area) -> RodD
     lo, hi = np.percentile(along, [0.02, 99.98])
     if view.cleaned:
         check_ends_seen(view.points, standing, mask, centroid, direction, (lo, hi), p)
+    _check_no_dip(view, pick_area, centroid, direction, (lo, hi), p)
     centre = centroid + 0.5 * (lo + hi) * direction
     near_centre = np.abs(along - 0.5 * (lo + hi)) < 0.01
     heights = p[near_centre, 2] - view.table_z if near_centre.any() else p[:, 2] - view.table_z
@@ -149,11 +169,51 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area) -> RodD
     widths = _widths(p, centroid, direction, along - 0.5 * (lo + hi), yaw)
     contours, _ = cv2.findContours(mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     rect = cv2.minAreaRect(max(contours, key=cv2.contourArea))
-    ends_world = np.array([[*(centre + s * direction), view.table_z] for s in (lo, hi)])
+    # (lo, hi are along the axis from the centroid)
+    ends_world = np.array([[*(centroid + s * direction), view.table_z] for s in (lo, hi)])
     T_cam_world = np.linalg.inv(T_world_cam)
     ends_cam = ends_world @ T_cam_world[:3, :3].T + T_cam_world[:3, 3]
     return RodDetection(grasp, length, widths, view.table_z, handle_height, mask, rect,
-                        camera.project(ends_cam))  # fmt: skip
+                        camera.project(ends_cam), _overhang(ends_world, pick_area))  # fmt: skip
+
+
+def _check_no_dip(view: TableView, pick_area, centroid, direction, ends, p) -> None:
+    """ObjectCutByBorderError when the rod dips below the table's plane over its edge.
+
+    That is: beyond the table, on the rod's axis (``direction`` (2,) through ``centroid``
+    (2,), within its points' ``p`` (N, 3) spread across it and 1 cm) and within DIP_REACH
+    beyond one of its ``ends`` (along the axis, m), DIP_PIXELS or more points lie between
+    DIP_DEPTH and the height threshold below the plane (after an opening: a real camera's
+    flying pixels lie in lines a pixel wide, a rod is a surface).
+    """
+    z = view.points[..., 2]
+    min_height = max(MIN_HEIGHT, HEIGHT_SIGMAS * view.noise)
+    dips = ~in_area(view.points, pick_area, 0.0) & np.isfinite(z)
+    dips &= (z < view.table_z - min_height) & (z > view.table_z - DIP_DEPTH)
+    dips = cv2.morphologyEx(dips.astype(np.uint8), cv2.MORPH_OPEN, _KERNEL3) > 0
+    if not dips.any():
+        return
+    normal = np.array([-direction[1], direction[0]])
+    half_width = np.percentile(np.abs((p[:, :2] - centroid) @ normal), 95) + 0.01
+    rel = view.points[dips][:, :2] - centroid
+    along, across = rel @ direction, np.abs(rel @ normal)
+    lo, hi = ends
+    beyond = ((along < lo) & (along > lo - DIP_REACH)) | ((along > hi) & (along < hi + DIP_REACH))
+    count = int(np.count_nonzero(beyond & (across < half_width)))
+    if count >= DIP_PIXELS:
+        raise ObjectCutByBorderError(
+            f"the object hangs down over the edge of the pick area ({count} px on its axis "
+            f"beyond its end, {1e3 * min_height:.0f} to {1e3 * DIP_DEPTH:.0f} mm below the "
+            "table): its part below the table cannot be measured; lay it on the table"
+        )
+
+
+def _overhang(ends_world: np.ndarray, pick_area) -> float:
+    """How far (m) the rod's axis ends ((2, 3) world) reach beyond ``pick_area``."""
+    x0, x1, y0, y1 = pick_area
+    x, y = ends_world[:, 0], ends_world[:, 1]
+    beyond = np.concatenate([x0 - x, x - x1, y0 - y, y - y1])
+    return float(max(0.0, beyond.max()))
 
 
 def _core(view: TableView, mask: np.ndarray) -> tuple[np.ndarray, int]:
@@ -231,11 +291,30 @@ def _segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, n
                 f"(less than {1e3 * min_height:.1f} mm): a mark or a shadow, not an object"
             )
     check_one_object(inside & standing, mask)
-    grown = cv2.dilate(mask.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
-    near_edge = ~in_area(view.points, pick_area, 2 * EDGE_BAND)
-    if np.any(grown & standing & near_edge & np.isfinite(z)):
-        raise ObjectCutByBorderError("the object reaches the edge of the pick area")
-    return mask, inside & standing, standing & ~in_depth
+    mask, rod_standing = _over_the_edge(view, mask, inside, standing, in_depth, min_height)
+    return mask, rod_standing, standing & ~in_depth
+
+
+def _over_the_edge(view: TableView, mask, inside, standing, in_depth, min_height):
+    """(the rod's ``mask`` with its parts beyond the pick area, what stands with them).
+
+    Beyond the pick area (its EDGE_BAND and what lies over the table's edge) a pixel is the
+    rod's when it joins the rod's blob and stands on the table's plane: standing in depth,
+    or (a cleaned image's colour) differing from the table and no lower than the plane's
+    noise; the floor lies far below. ObjectCutByBorderError when it leaves the image.
+    """
+    z = view.points[..., 2]
+    on_plane = np.isfinite(z) & (z > view.table_z - min_height)
+    beyond = ~inside & on_plane & (in_depth | standing)
+    if view.cleaned:
+        beyond = cv2.morphologyEx(beyond.astype(np.uint8), cv2.MORPH_OPEN, _KERNEL3) > 0
+    region = (mask | beyond).astype(np.uint8)
+    _, labels = cv2.connectedComponents(region, connectivity=8)
+    own = np.unique(labels[mask])
+    rod = mask | (np.isin(labels, own[own > 0]) & beyond)
+    if border_pixels(rod).any():
+        raise ObjectCutByBorderError("the object reaches the border of the top-down image")
+    return rod, (inside & standing) | rod
 
 
 def _widths(p, centroid, direction, s_rel, yaw) -> np.ndarray:
