@@ -60,13 +60,13 @@ def centre_line(
         point = intercept * normal
         direction = (direction + slope * normal) / np.hypot(1.0, slope)
         in_kept = np.isin(bins, np.array(labels)[keep])
-        angle_std = _slope_std(c[keep], slope, intercept) / (1.0 + slope * slope)
+        angle_std = slope_std(c[keep], slope, intercept) / (1.0 + slope * slope)
     if direction[0] < 0:
         direction = -direction
     return direction, point - (point @ direction) * direction, in_kept, float(angle_std)
 
 
-def _slope_std(c: np.ndarray, slope: float, intercept: float) -> float:
+def slope_std(c: np.ndarray, slope: float, intercept: float) -> float:
     """Standard error of a fitted line's slope through the points ``c`` (k, 2)."""
     k = len(c)
     spread = float(np.sum((c[:, 0] - c[:, 0].mean()) ** 2))

@@ -29,8 +29,14 @@ from comgrasp_pin.perception._points import (
     noise_level,
     slice_medians,
 )
+from comgrasp_pin.perception.flat_face import face_points, looks_flat, strip_line
 from comgrasp_pin.perception.held_region import held_candidates, robot_volume
-from comgrasp_pin.perception.rod_axis import centre_line, refine_axis
+from comgrasp_pin.perception.rod_axis import (
+    MAX_REFINE_SHIFT,
+    MAX_REFINE_TURN_DEG,
+    centre_line,
+    refine_axis,
+)
 from comgrasp_pin.perception.rod_ends import centre_along, end_profile
 
 MIN_PIXELS = 60
@@ -180,25 +186,14 @@ def observe_held_rod(
     points = p[mask]
     # Tilt lives in the ee x-z plane; the jaws fix the axis at y = 0.
     x_axis, offset_xz, handle, tilt_std = centre_line(points[:, [0, 2]])
-    if handle.sum() >= MIN_PIXELS:
-        refined = refine_axis(points[handle], x_axis, offset_xz, handle_radius, noise)
-        unrefined = refined[0] is x_axis  # refine_axis hands the slice line back as it was
-        if cleaned and unrefined and not tilt_only:
-            raise UntrustedImageError(
-                "no cylinder fits the held handle's points in this image with holes or noise, "
-                "and the slice centres alone bias the tilt by up to 1-3 deg (measured): a "
-                "round handle, seen with fewer holes or less noise, is needed"
-            )
-        x_axis, offset_xz = refined
+    _check_held(points, x_axis, offset_xz)  # before judging the image: is anything held?
+    x_axis, offset_xz, tilt_std = _axis_in_jaws(
+        points, handle, (x_axis, offset_xz, tilt_std), handle_radius, noise,
+        cleaned and not tilt_only, T_ee_cam[:3, 3],
+    )  # fmt: skip
+    along, lo, hi = _check_held(points, x_axis, offset_xz)
     x_axis = np.array([x_axis[0], 0.0, x_axis[1]])
-    along = points @ x_axis
-    lo, hi = np.percentile(along, [0.1, 99.9])
     offset = np.array([offset_xz[0], 0.0, offset_xz[1]])
-    if np.linalg.norm(offset) > MAX_AXIS_FROM_TCP or hi - lo < MIN_EXTENT:
-        raise ObjectNotFoundError(
-            "nothing is held between the jaws: what the side camera sees "
-            f"({100 * (hi - lo):.0f} cm long) does not pass through them"
-        )
     rho = np.linalg.norm(points - offset - np.outer(along, x_axis), axis=1)
     radius = handle_radius if handle_radius else float(np.median(rho[handle]))
     (lo, lo_sharp), (hi, hi_sharp) = (
@@ -236,6 +231,64 @@ def observe_held_rod(
                     camera.project(ends_cam), camera.project(tcp_cam[None])[0],
                     float(radius), off_axis, axis_std, tilt_std, y0, slope, y0_std, slope_std,
                     depth_slices=slices, camera_ee=T_ee_cam[:3, 3].copy())  # fmt: skip
+
+
+def _check_held(points: np.ndarray, x_axis: np.ndarray, offset_xz: np.ndarray) -> tuple:
+    """(the points' positions along the line, their 0.1 and 99.9 percentiles) (m).
+
+    The line: ``x_axis`` (2,), ``offset_xz`` (2,) in the x-z plane. ObjectNotFoundError when
+    it does not pass through the jaws or what it runs along is too short to be a held rod.
+    """
+    along = points[:, [0, 2]] @ x_axis
+    lo, hi = np.percentile(along, [0.1, 99.9])
+    if np.linalg.norm(offset_xz) > MAX_AXIS_FROM_TCP or hi - lo < MIN_EXTENT:
+        raise ObjectNotFoundError(
+            "nothing is held between the jaws: what the side camera sees "
+            f"({100 * (hi - lo):.0f} cm long) does not pass through them"
+        )
+    return along, lo, hi
+
+
+def _axis_in_jaws(
+    points: np.ndarray,
+    handle: np.ndarray,
+    slice_line: tuple[np.ndarray, np.ndarray, float],
+    radius: float | None,
+    noise: float,
+    strict: bool,
+    camera_ee: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, float]:
+    """The rod's axis in the x-z plane, from the slice line ``slice_line``.
+
+    Returns (and ``slice_line`` is) (direction (2,), point nearest the TCP (2,), the
+    angle's standard error (rad)).
+
+    A flat bar seen edge-on (``flat_face.looks_flat``: narrower than the jaws' gap) is
+    measured from its face: the mid-line of the face's points put on its plane
+    (``flat_face``; near the slice line, else as a round handle). A round handle: the
+    cylinder fitted to its surface (``rod_axis.refine_axis``); ``strict`` (a noisy image,
+    not a slip watch) refuses one that no cylinder fits (UntrustedImageError).
+    """
+    x_axis, offset_xz, tilt_std = slice_line
+    if handle.sum() < MIN_PIXELS:
+        return slice_line
+    normal = np.array([-x_axis[1], x_axis[0]])
+    if looks_flat((points[handle][:, [0, 2]] - offset_xz) @ normal, radius):
+        face = face_points(points[handle], camera_ee, noise)
+        strip = None if face is None else strip_line(face[0], x_axis)
+        if strip is not None and (
+            strip[0] @ x_axis > np.cos(np.radians(MAX_REFINE_TURN_DEG))
+            and np.linalg.norm(strip[1] - offset_xz) < MAX_REFINE_SHIFT
+        ):
+            return strip
+    refined = refine_axis(points[handle], x_axis, offset_xz, radius, noise)
+    if strict and refined[0] is x_axis:  # refine_axis hands the slice line back as it was
+        raise UntrustedImageError(
+            "no cylinder fits the held handle's points in this image with holes or noise, "
+            "and the slice centres alone bias the tilt by up to 1-3 deg (measured): a "
+            "round handle, seen with fewer holes or less noise, is needed"
+        )
+    return refined[0], refined[1], tilt_std
 
 
 def _depth_line(along: np.ndarray, y: np.ndarray) -> tuple:

@@ -92,8 +92,11 @@ class SimCell:
         return eyes.look_from_above(self._rig, self._sim.data)
 
     def look_from_side(self, q, rod_length, centre_hint) -> SideView:
+        sensors = self._sensors
         return eyes.look_from_side(self._rig, self._sim.data, self.robot, q, rod_length,
-                                   centre_hint, finger_q=self.finger_q())  # fmt: skip
+                                   centre_hint, finger_q=self.finger_q(),
+                                   frames=sensors.side_frames,
+                                   frames_tolerance=sensors.side_frames_tolerance)  # fmt: skip
 
     def slip_watch(self, dt, grip_force, rod_length, centre_hint) -> eyes.SlipWatcher:
         return eyes.SlipWatcher(self._sim, self._rig, self.robot, dt, grip_force, rod_length,

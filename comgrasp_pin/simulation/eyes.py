@@ -14,9 +14,11 @@ import numpy as np
 from comgrasp_pin.errors import ObjectNotFoundError, PerceptionError
 from comgrasp_pin.geometry import invert_transform
 from comgrasp_pin.perception import (
+    AGREE_TOLERANCE,
     RodDetection,
     SideView,
     SlipMonitor,
+    average_depth_frames,
     detect_rod_top_down,
     observe_held_rod,
 )
@@ -56,6 +58,8 @@ def look_from_side(
     finger_q: float | None = None,
     stride: int = 1,
     tilt_only: bool = False,
+    frames: int = 1,
+    frames_tolerance: float = AGREE_TOLERANCE,
 ) -> SideView:
     """The held rod's pose in the ee frame, from the side camera at joint reading ``q``
     (``rod_length`` and ``centre_hint`` from the top view help when the rod leaves the
@@ -63,7 +67,10 @@ def look_from_side(
     rendered. ``finger_q``: the fingers' joint
     reading (m), which gives the held handle's radius. ``stride`` > 1 measures on every
     stride-th pixel of each row and column (stride^2 times fewer points: the slip monitor's
-    frames, which need the tilt only; ``tilt_only``: see ``observe_held_rod``)."""
+    frames, which need the tilt only; ``tilt_only``: see ``observe_held_rod``). ``frames``
+    > 1: that many frames of the still arm (each with its own noise; the calibration error
+    is the episode's) averaged in time (``average_depth_frames`` with ``frames_tolerance``),
+    for a camera with errors only (a clean render is the same every time)."""
     radius = None if finger_q is None else handle_radius(finger_q)
     if radius is not None and radius <= 0:
         raise ObjectNotFoundError("the jaws are closed on nothing: no rod is held")
@@ -71,6 +78,9 @@ def look_from_side(
     T_ee_cam = T_ee_cam @ rig.calibration_error(SIDE_CAMERA)
     camera = rig.intrinsics(SIDE_CAMERA).subsampled(stride)
     depth = rig.depth(data, SIDE_CAMERA, stride)
+    if frames > 1 and SIDE_CAMERA in rig.noise:
+        more = [rig.depth(data, SIDE_CAMERA, stride) for _ in range(frames - 1)]
+        depth = average_depth_frames([depth, *more], frames_tolerance)
     return observe_held_rod(None, depth, camera, T_ee_cam, T_world_ee,
                             TABLE_Z, rod_length, arm_capsules(robot, q), centre_hint,
                             radius, tilt_only)  # fmt: skip
