@@ -181,6 +181,9 @@ class RegraspConfig:
         pivot_grip: force of each finger while the rod pivots on its low end (N).
         lay_time: the pivot that lays the rod flat (s).
         rest_after_put_down: the rod comes to rest this long before it is looked at (s).
+        put_back_margin: a rod laid back when the side view cannot measure it
+            (``procedures.put_back``) is aimed to lie with its ends at least this far inside
+            the pick area (m): the top view measures the table's plane 1 cm inside its edge.
     """
 
     slip_tilt_deg: float = 2.0
@@ -200,6 +203,7 @@ class RegraspConfig:
     pivot_grip: float = 4.0
     lay_time: float = 2.0
     rest_after_put_down: float = 0.5
+    put_back_margin: float = 0.03
 
 
 @dataclass(frozen=True)

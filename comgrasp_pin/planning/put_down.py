@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from comgrasp_pin.config import RegraspConfig
+from comgrasp_pin.errors import UnobservableError
 from comgrasp_pin.motion.ik import grasp_height, top_down_frame
 
 
@@ -82,3 +83,49 @@ def axis_hint_after_put_down(plan: PutDownPlan, rod_centre_xy: tuple[float, floa
     (top view): its low end stayed at the pivot as it lay down."""
     to_pivot = np.r_[plan.p_pivot[:2] - np.asarray(rod_centre_xy, dtype=float), 0.0]
     return to_pivot if plan.low_is_plus else -to_pivot
+
+
+def put_back_jaws_xy(
+    spot_xy: tuple[float, float],
+    x_world_ee: np.ndarray,
+    tilt: float,
+    rod_length: float,
+    centre_hint: float,
+    pick_area: tuple[float, float, float, float],
+    margin: float,
+) -> np.ndarray:
+    """(2,) world x, y (m) at which the jaws let go of a hanging rod so that it comes to lie
+    centred on ``spot_xy``, its ends at least ``margin`` (m) inside ``pick_area`` (x_min,
+    x_max, y_min, y_max; m) where the area is long enough.
+
+    The rod hangs along the jaws' x axis (``x_world_ee`` (3,), world) at ``tilt`` (rad,
+    signed: a positive tilt raises the ee +x end), its centre ``centre_hint`` (m) along
+    ee-x from the jaws. Let go with its low end just above the table, it topples about that
+    end, away from it, and comes to lie from there back towards the jaws: its centre ends
+    (c - s l/2) cos(tilt) + s l/2 along ee-x from the jaws (s the sign of the tilt; level,
+    c). Lowering the jaws above the spot instead lays a steep rod's centre about half its
+    length beyond it (centimetres to decimetres over the table's edge).
+    """
+    u = np.asarray(x_world_ee, dtype=float)[:2]
+    norm = float(np.hypot(*u))
+    if norm < 1e-6:
+        raise UnobservableError("the jaws' x axis is vertical: the rod's lean is undefined")
+    u = u / norm
+    s = float(np.sign(tilt))
+    half = 0.5 * rod_length
+    centre_from_jaws = (centre_hint - s * half) * np.cos(tilt) + s * half
+    centre = _inside(np.asarray(spot_xy, dtype=float), u, half, pick_area, margin)
+    return centre - centre_from_jaws * u
+
+
+def _inside(centre: np.ndarray, u: np.ndarray, half: float, area, margin: float) -> np.ndarray:
+    """``centre`` (2,) moved, per axis, so that the segment centre +- ``half`` ``u`` lies
+    ``margin`` inside ``area``; centred in the area along an axis where it cannot."""
+    out = centre.copy()
+    for k, (lo, hi) in enumerate(((area[0], area[1]), (area[2], area[3]))):
+        reach = half * abs(u[k]) + margin
+        if hi - lo <= 2 * reach:
+            out[k] = 0.5 * (lo + hi)
+        else:
+            out[k] = float(np.clip(out[k], lo + reach, hi - reach))
+    return out

@@ -5,7 +5,10 @@ camera's noise where a steeply hanging handle is fitted), the trial grasp is giv
 one whose rod turned in the jaws: the rod is laid back on the table's put-down spot (not
 where it was grasped: a steeply hanging rod laid down there may end at the table's edge,
 where the top view cannot measure it) and grasped again
-(``pick_and_place.trial_with_retry``), towards the end that went down.
+(``pick_and_place.trial_with_retry``), towards the end that went down. The jaws let go
+where the rod, toppling about its low end, comes to lie on the spot
+(``planning.put_down.put_back_jaws_xy``), not above the spot: a steep rod let go there
+lies half its length beyond it.
 """
 
 from __future__ import annotations
@@ -14,8 +17,9 @@ import numpy as np
 
 from comgrasp_pin.config import EpisodeConfig
 from comgrasp_pin.motion.ik import grasp_frame
+from comgrasp_pin.planning.put_down import put_back_jaws_xy
 from comgrasp_pin.procedures.cell import Cell, SlipWatch
-from comgrasp_pin.workcell import PUT_DOWN_XY
+from comgrasp_pin.workcell import PICK_AREA, PUT_DOWN_XY
 
 
 def release_height_above_grasp(length: float, centre_hint: float, tilt: float,
@@ -30,14 +34,16 @@ def release_height_above_grasp(length: float, centre_hint: float, tilt: float,
 
 def put_back(cell: Cell, grasp, length: float, centre_hint: float, watch: SlipWatch,
              config: EpisodeConfig) -> None:  # fmt: skip
-    """Carry the held rod, as it hangs, above the put-down spot; lower it until its lower
-    end, at the largest tilt the watch saw, is just above the table (``grasp``, the
-    GraspPose it was grasped at, gives the height of the jaws on the table); let go and
-    retreat."""
+    """Carry the held rod, as it hangs, to where it comes to lie on the put-down spot
+    (``put_back_jaws_xy``, at the largest tilt the watch saw); lower it until its lower end
+    is just above the table (``grasp``, the GraspPose it was grasped at, gives the height
+    of the jaws on the table); let go and retreat."""
     trial = config.trial
-    tilt = abs(watch.monitor.largest_tilt()) if watch.monitor.times else 0.0
+    signed = watch.monitor.largest_tilt() if watch.monitor.times else 0.0
+    tilt = abs(signed)
     T = cell.robot.ee_pose(cell.q_des)
-    T[:2, 3] = PUT_DOWN_XY
+    T[:2, 3] = put_back_jaws_xy(PUT_DOWN_XY, T[:3, 0], signed, length, centre_hint, PICK_AREA,
+                                config.regrasp.put_back_margin)  # fmt: skip
     cell.move_linear(T.copy(), trial.put_back_time)
     T[2, 3] = grasp_frame(grasp)[2, 3] + release_height_above_grasp(
         length, centre_hint, tilt, trial.put_back_margin)  # fmt: skip

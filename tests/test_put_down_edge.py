@@ -1,0 +1,103 @@
+"""Where the jaws let go of a hanging rod so that it lies on the put-down spot, inside the
+pick area (planning.put_down.put_back_jaws_xy): pure geometry, checked against the hanging
+rod built point by point in 3-D here."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from comgrasp_pin.config import RegraspConfig
+from comgrasp_pin.errors import ComGraspError, UnobservableError
+from comgrasp_pin.planning.put_down import put_back_jaws_xy
+from comgrasp_pin.workcell import PICK_AREA, PUT_DOWN_XY
+
+
+def _landing(jaws_xy, yaw, tilt, length, centre_hint):
+    """(centre (2,), ends (2, 2)) where a rod held at ``jaws_xy`` with the jaws' x axis at
+    ``yaw`` lies once it toppled about its low end: the rod's points built in the ee frame
+    (x along the jaws, z up here), turned by ``tilt`` about ee-y (a positive tilt raises the
+    +x end), the lower end found by its height, the rod laid from it towards the other end's
+    side."""
+    c, s = np.cos(tilt), np.sin(tilt)
+    ends_ee = [np.array([centre_hint + e * 0.5 * length, 0.0]) for e in (-1.0, 1.0)]
+    # a point a along the rod (from the jaws) sits at (a cos, a sin) in the ee x-z plane
+    pts = [np.array([a[0] * c, a[0] * s]) for a in ends_ee]
+    low, high = sorted(pts, key=lambda p: p[1])
+    u = np.array([np.cos(yaw), np.sin(yaw)])
+    low_xy = np.asarray(jaws_xy) + low[0] * u
+    towards = np.sign(high[0] - low[0]) * u  # the rod falls over towards its upper end
+    centre = low_xy + 0.5 * length * towards
+    return centre, np.array([low_xy, low_xy + length * towards])
+
+
+@pytest.mark.parametrize("tilt_deg", [-75.0, -30.0, 5.0, 40.0, 80.0])
+@pytest.mark.parametrize("centre_hint", [-0.12, 0.0, 0.07])
+@pytest.mark.parametrize("yaw_deg", [0.0, 90.0, -140.0])
+def test_the_rod_lands_on_the_spot(tilt_deg, centre_hint, yaw_deg):
+    yaw, tilt, length = np.radians(yaw_deg), np.radians(tilt_deg), 0.32
+    x_ee = np.array([np.cos(yaw), np.sin(yaw), 0.0])
+    jaws = put_back_jaws_xy(PUT_DOWN_XY, x_ee, tilt, length, centre_hint, PICK_AREA, 0.03)
+    centre, _ = _landing(jaws, yaw, tilt, length, centre_hint)
+    np.testing.assert_allclose(centre, PUT_DOWN_XY, atol=1e-12)
+
+
+def test_a_steep_rod_is_let_go_half_its_length_from_the_spot():
+    """Hanging straight down from its end, a 0.4 m rod lies 0.2 m from where it stood."""
+    jaws = put_back_jaws_xy((0.55, 0.0), np.array([0.0, 1.0, 0.0]), np.radians(90.0), 0.4,
+                            -0.2, PICK_AREA, 0.03)  # fmt: skip
+    np.testing.assert_allclose(jaws, (0.55, -0.2), atol=1e-12)
+
+
+def test_a_level_rod_is_let_go_over_its_centre():
+    jaws = put_back_jaws_xy((0.55, 0.0), np.array([1.0, 0.0, 0.0]), 0.0, 0.4, 0.05,
+                            PICK_AREA, 0.03)  # fmt: skip
+    np.testing.assert_allclose(jaws, (0.50, 0.0), atol=1e-12)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    st.floats(0.30, 0.80),
+    st.floats(-0.35, 0.35),
+    st.floats(-np.pi, np.pi),
+    st.floats(-1.5, 1.5),
+    st.floats(0.1, 0.42),
+    st.floats(-0.45, 0.45),
+    st.floats(0.0, 0.035),
+)
+def test_the_landing_lies_inside_the_pick_area(x, y, yaw, tilt, length, hint_share, margin):
+    """From any spot on the table, the landing rod's ends lie ``margin`` inside the area
+    (where the area is longer than the rod along each axis: the table is 0.5 x 0.7 m,
+    every rod here shorter than 0.5 - 2 margin; one that is not is centred, below)."""
+    centre_hint = hint_share * length
+    x_ee = np.array([np.cos(yaw), np.sin(yaw), 0.0])
+    jaws = put_back_jaws_xy((x, y), x_ee, tilt, length, centre_hint, PICK_AREA, margin)
+    _, ends = _landing(jaws, yaw, tilt, length, centre_hint)
+    x0, x1, y0, y1 = PICK_AREA
+    tol = 1e-9
+    assert np.all(ends[:, 0] >= x0 + margin - tol) and np.all(ends[:, 0] <= x1 - margin + tol)
+    assert np.all(ends[:, 1] >= y0 + margin - tol) and np.all(ends[:, 1] <= y1 - margin + tol)
+
+
+def test_a_spot_inside_stays_where_it_is_and_one_at_the_edge_moves_in():
+    x_ee = np.array([0.0, 1.0, 0.0])
+    centre, _ = _landing(put_back_jaws_xy((0.55, 0.2), x_ee, 0.5, 0.3, 0.0, PICK_AREA, 0.03),
+                         np.pi / 2, 0.5, 0.3, 0.0)  # fmt: skip
+    np.testing.assert_allclose(centre, (0.55, 0.17), atol=1e-12)  # 0.35 - 0.03 - 0.15
+
+
+def test_a_rod_longer_than_the_area_allows_is_centred_in_it():
+    x_ee = np.array([1.0, 0.0, 0.0])
+    centre, _ = _landing(put_back_jaws_xy((0.7, 0.1), x_ee, 0.0, 0.46, 0.0, PICK_AREA, 0.03),
+                         0.0, 0.0, 0.46, 0.0)  # fmt: skip
+    np.testing.assert_allclose(centre, (0.55, 0.1), atol=1e-12)  # 0.46 + 0.06 > 0.5 along x
+
+
+def test_a_vertical_jaw_axis_is_refused():
+    with pytest.raises(UnobservableError):
+        put_back_jaws_xy(PUT_DOWN_XY, np.array([0.0, 0.0, 1.0]), 0.3, 0.3, 0.0, PICK_AREA, 0.03)
+    assert issubclass(UnobservableError, ComGraspError)
+
+
+def test_the_margin_is_in_the_config():
+    assert 0.0 < RegraspConfig().put_back_margin < 0.1
