@@ -36,8 +36,9 @@ def average_depth_frames(
     Per pixel: the median m of its valid values, then the mean of the valid values within
     ``tolerance`` of m (the mean, not the median: a depth given in steps, e.g. 1 mm, is
     dithered by the noise, and the mean of several frames resolves it below a step). A pixel
-    lost in every frame (or valid in fewer than ``min_valid``) is 0 if some frame had 0 there,
-    inf if every frame saw nothing (inf). One frame: that frame (a copy).
+    where every frame saw nothing (inf) is inf; one valid in fewer than ``min_valid`` frames
+    (or none), or whose values agree with their median in none, is lost: 0. One frame: that
+    frame (a copy).
 
     Raises:
         InvalidDepthError: no frame, frames of different shapes, not (H, W), not float
@@ -60,7 +61,7 @@ def average_depth_frames(
     with np.errstate(invalid="ignore", divide="ignore"):
         out = total / kept
     lost = (count < min_valid) | (kept == 0)
-    out[lost] = np.where(np.any(stack[:, lost] == 0, axis=0), 0.0, np.inf)
+    out[lost] = np.where(np.all(stack[:, lost] == np.inf, axis=0), np.inf, 0.0)
     return out
 
 
