@@ -184,6 +184,10 @@ class RegraspConfig:
         put_back_margin: a rod laid back when the side view cannot measure it
             (``procedures.put_back``) is aimed to lie with its ends at least this far inside
             the pick area (m): the top view measures the table's plane 1 cm inside its edge.
+        min_seen_share: a rod seen whole before that now runs out of the top camera's view
+            at one end (laid back or dropped at the view's edge) is completed with its
+            known length and grasped when at least this share of it is in view (its
+            centre and a grasp either side of it seen); less is refused.
     """
 
     slip_tilt_deg: float = 2.0
@@ -204,6 +208,7 @@ class RegraspConfig:
     lay_time: float = 2.0
     rest_after_put_down: float = 0.5
     put_back_margin: float = 0.03
+    min_seen_share: float = 0.6
 
 
 @dataclass(frozen=True)

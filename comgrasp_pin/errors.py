@@ -40,7 +40,16 @@ class ObjectNotFoundError(PerceptionError):
 
 class ObjectCutByBorderError(PerceptionError):
     """The object touches the image border: part of it is out of view, so its extent (and
-    centre) cannot be measured."""
+    centre) cannot be measured.
+
+    ``seen``: when a rod runs out of view at one end only, the top view's measure of the
+    part it sees (a ``RodDetection`` whose ``cut_end`` says which end), else None. Who
+    knows the rod's length may complete it (``perception.top_down.with_known_length``).
+    """
+
+    def __init__(self, message: str, seen=None):
+        super().__init__(message)
+        self.seen = seen
 
 
 class AmbiguousObjectError(PerceptionError):

@@ -101,3 +101,46 @@ def test_a_vertical_jaw_axis_is_refused():
 
 def test_the_margin_is_in_the_config():
     assert 0.0 < RegraspConfig().put_back_margin < 0.1
+
+
+def _seen(length, cut_end, yaw, x=0.6, y=0.3):
+    """A RodDetection of ``length`` m seen, 1 cm slices 2 cm wide."""
+    from comgrasp_pin.geometry import GraspPose
+    from comgrasp_pin.perception import RodDetection
+
+    pos = np.arange(-length / 2 + 0.005, length / 2, 0.01)
+    return RodDetection(GraspPose(x, y, 0.01, yaw), length, np.c_[pos, np.full(len(pos), 0.02)],
+                        0.0, 0.02, np.zeros((4, 4), bool), ((0, 0), (1, 1), 0.0),
+                        np.zeros((2, 2)), 0.0, cut_end)  # fmt: skip
+
+
+@pytest.mark.parametrize("cut_end", [1, -1])
+def test_a_rod_seen_in_part_is_completed_towards_its_cut_end(cut_end):
+    """0.30 m of a 0.40 m rod seen: the whole rod's centre lies 5 cm beyond the part seen's
+    towards the end out of view; the ends seen stay where they were."""
+    from comgrasp_pin.perception.grasp_points import with_known_length
+
+    yaw = 0.3
+    seen = _seen(0.30, cut_end, yaw)
+    whole = with_known_length(seen, 0.40, 0.6)
+    d = cut_end * np.array([np.cos(yaw), np.sin(yaw)])
+    np.testing.assert_allclose([whole.grasp.x, whole.grasp.y], np.array([0.6, 0.3]) + 0.05 * d)
+    # the end seen: the part's centre 0.15 m back from it, the whole's 0.20 m
+    end_seen = np.array([0.6, 0.3]) - 0.15 * d
+    np.testing.assert_allclose(end_seen, [whole.grasp.x, whole.grasp.y] - 0.20 * d, atol=1e-12)
+    assert whole.length == 0.40 and whole.cut_end == cut_end
+    np.testing.assert_allclose(whole.widths[:, 0], seen.widths[:, 0] - cut_end * 0.05)
+
+
+def test_a_rod_seen_too_little_or_whole_is_not_completed():
+    from comgrasp_pin.errors import ObjectCutByBorderError
+    from comgrasp_pin.perception.grasp_points import nearest_graspable, with_known_length
+
+    with pytest.raises(ObjectCutByBorderError, match="too little"):
+        with_known_length(_seen(0.20, 1, 0.0), 0.40, 0.6)
+    with pytest.raises(ObjectCutByBorderError, match="whole"):
+        with_known_length(_seen(0.40, 0, 0.0), 0.40, 0.6)
+    # a grasp goes where the pads (22 mm either side) lie on slices seen: not beyond
+    whole = with_known_length(_seen(0.30, 1, 0.0), 0.40, 0.6)
+    assert nearest_graspable(whole, 0.17) <= whole.widths[:, 0].max() + 0.01 - 0.022 + 1e-12
+    assert nearest_graspable(whole, -0.05) == -0.05  # within the part seen: where asked

@@ -8,8 +8,10 @@ import numpy as np
 import pytest
 from _corruption import corruptions, table_scene, top_errors, top_inputs
 
+from comgrasp_pin.config import RegraspConfig
 from comgrasp_pin.errors import ObjectCutByBorderError
 from comgrasp_pin.perception import detect_rod_top_down
+from comgrasp_pin.perception.grasp_points import nearest_graspable, with_known_length
 from comgrasp_pin.simulation.objects import OBJECTS
 from comgrasp_pin.workcell import PICK_AREA, TABLE_Z
 
@@ -52,12 +54,14 @@ def test_a_rod_at_or_over_the_edge_is_measured_whole(name, x, y, yaw, overhang, 
     assert det.overhang == pytest.approx(overhang, abs=3e-3 if sensors == "ideal" else 6e-3)
 
 
-def test_a_rod_leaving_the_image_is_refused():
+def test_a_rod_leaving_the_image_is_refused_with_the_part_seen():
     """The top camera sees y up to 1.25 m tan(20 deg) = 0.455 m at the table: a rod that
-    reaches 0.49 m lies partly outside its view."""
+    reaches 0.49 m lies partly outside its view; the detection is refused, the part seen
+    comes with the error."""
     depth, camera, T, rgb = _scene_at("obj2", 0.55, 0.49 - OBJECTS["obj2"].length / 2, np.pi / 2)
-    with pytest.raises(ObjectCutByBorderError, match="border of the top-down image"):
+    with pytest.raises(ObjectCutByBorderError, match="runs out of the top-down image") as caught:
         detect_rod_top_down(rgb, depth, camera, T)
+    assert caught.value.seen.length < OBJECTS["obj2"].length - 0.02
 
 
 @pytest.mark.parametrize("sensors", ["ideal", "realistic"])
@@ -84,3 +88,38 @@ def test_a_rod_dipping_over_the_edge_is_refused(sensors):
         depth = corrupt(depth)
     with pytest.raises(ObjectCutByBorderError, match="hangs down over the edge"):
         detect_rod_top_down(rgb, depth, camera, T @ T_cal)
+
+
+@pytest.mark.parametrize("sensors", ["ideal", "realistic"])
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_a_rod_running_out_of_the_image_is_completed_with_its_known_length(sensors, sign):
+    """obj1 (0.40 m) along y reaching 6 cm past the image's edge at y = +-0.455 m (the top
+    camera's half view at the table, 1.25 m tan 20 deg): the part seen comes with the
+    error; completed with the length known from a whole view, its centre is the truth's."""
+    obj = OBJECTS["obj1"]
+    y = sign * (0.455 + 0.06 - obj.length / 2)
+    depth, camera, T, rgb = _scene_at("obj1", 0.6, y, np.pi / 2)
+    T_cal = np.eye(4)
+    if sensors == "realistic":
+        corrupt, T_cal = corruptions("top", 7)["realistic"]
+        depth = corrupt(depth)
+    with pytest.raises(ObjectCutByBorderError, match="runs out of the top-down image") as caught:
+        detect_rod_top_down(rgb, depth, camera, T @ T_cal)
+    seen = caught.value.seen
+    assert seen is not None and seen.cut_end != 0
+    # the cut end points out of the image: along +yaw when cut_end is +1
+    towards = seen.cut_end * np.array([np.cos(seen.grasp.yaw), np.sin(seen.grasp.yaw)])
+    assert np.sign(towards[1]) == sign
+    assert 0.25 < seen.length < obj.length - 0.04
+    whole = with_known_length(seen, obj.length, RegraspConfig().min_seen_share)
+    centre_err, yaw_err_deg = top_errors(whole, (0.6, y, np.pi / 2), T, T_cal)
+    bound = 3e-3 if sensors == "ideal" else 6e-3
+    assert centre_err < bound and yaw_err_deg < 1.0, (centre_err, yaw_err_deg)
+    assert whole.length == obj.length and whole.cut_end == seen.cut_end
+    # a grasp goes only where the pads lie on slices seen
+    far = 0.5 * obj.length * seen.cut_end - 0.03 * seen.cut_end
+    reach = nearest_graspable(whole, far)
+    seen_end = whole.widths[:, 0].max() if seen.cut_end > 0 else whole.widths[:, 0].min()
+    assert abs(reach) + 0.022 <= abs(seen_end) + 0.01 + 1e-9
+    with pytest.raises(ObjectCutByBorderError, match="too little"):
+        with_known_length(seen, 2.0 * obj.length, 0.6)

@@ -15,8 +15,9 @@ import cv2
 import numpy as np
 
 from comgrasp_pin.camera import PinholeCamera
-from comgrasp_pin.errors import ObjectNotFoundError
+from comgrasp_pin.errors import ObjectCutByBorderError, ObjectNotFoundError
 from comgrasp_pin.perception._points import (
+    border_pixels,
     denoise,
     drop_flying,
     fill_holes,
@@ -31,6 +32,16 @@ SHADOW_CHROMA = 6.0  # ... unless its chroma (a*, b*) is this close to the table
 CLEAN_NOISE = 3e-4  # table heights noisier than this (m, robust std) are filtered first
 FLYING_MIN, FLYING_SIGMAS = 0.005, 4.0  # a pixel this far (m, noise stds) from all its
 # neighbours flies
+# A rod may reach over the table's edge: the pixels beyond the pick area that stand on the
+# table's plane (not the floor below) and join the rod are the rod. One that dips below the
+# plane beyond the edge (tilted down over it) is refused when at least DIP_PIXELS on its
+# axis within DIP_REACH beyond an end lie between DIP_DEPTH and the threshold below the plane.
+DIP_DEPTH = 0.3  # m below the table's plane: lower than this is the floor
+DIP_REACH = 0.05  # m
+DIP_PIXELS = 10
+CUT_END_BAND = 0.03  # a rod meeting the image's border only this near one end (m) runs out
+# of view there: the part seen is measured (``ObjectCutByBorderError.seen``)
+_KERNEL3 = np.ones((3, 3), np.uint8)
 
 
 @dataclass(frozen=True)
@@ -117,3 +128,82 @@ def differs_in_colour(rgb: np.ndarray, area: np.ndarray) -> np.ndarray:
     distance2 = chroma2 + diff2[..., 0]
     shadow = (chroma2 < 4 * SHADOW_CHROMA**2) & (2 * lab[..., 0].astype(np.int32) < table2[0])
     return (distance2 > 4 * COLOUR_DE**2) & ~shadow
+
+
+def check_no_dip(view: TableView, pick_area, centroid, direction, ends, p, min_height) -> None:
+    """ObjectCutByBorderError when the rod dips below the table's plane over its edge.
+
+    That is: beyond the table, on the rod's axis (``direction`` (2,) through ``centroid``
+    (2,), within its points' ``p`` (N, 3) spread across it and 1 cm) and within DIP_REACH
+    beyond one of its ``ends`` (along the axis, m), DIP_PIXELS or more points lie between
+    DIP_DEPTH and the height threshold below the plane (after an opening: a real camera's
+    flying pixels lie in lines a pixel wide, a rod is a surface); ``min_height`` (m): the
+    top view's height threshold.
+    """
+    z = view.points[..., 2]
+    dips = ~in_area(view.points, pick_area, 0.0) & np.isfinite(z)
+    dips &= (z < view.table_z - min_height) & (z > view.table_z - DIP_DEPTH)
+    dips = cv2.morphologyEx(dips.astype(np.uint8), cv2.MORPH_OPEN, _KERNEL3) > 0
+    if not dips.any():
+        return
+    normal = np.array([-direction[1], direction[0]])
+    half_width = np.percentile(np.abs((p[:, :2] - centroid) @ normal), 95) + 0.01
+    rel = view.points[dips][:, :2] - centroid
+    along, across = rel @ direction, np.abs(rel @ normal)
+    lo, hi = ends
+    beyond = ((along < lo) & (along > lo - DIP_REACH)) | ((along > hi) & (along < hi + DIP_REACH))
+    count = int(np.count_nonzero(beyond & (across < half_width)))
+    if count >= DIP_PIXELS:
+        raise ObjectCutByBorderError(
+            f"the object hangs down over the edge of the pick area ({count} px on its axis "
+            f"beyond its end, {1e3 * min_height:.0f} to {1e3 * DIP_DEPTH:.0f} mm below the "
+            "table): its part below the table cannot be measured; lay it on the table"
+        )
+
+
+def overhang(ends_world: np.ndarray, pick_area) -> float:
+    """How far (m) the rod's axis ends ((2, 3) world) reach beyond ``pick_area``."""
+    x0, x1, y0, y1 = pick_area
+    x, y = ends_world[:, 0], ends_world[:, 1]
+    beyond = np.concatenate([x0 - x, x - x1, y0 - y, y - y1])
+    return float(max(0.0, beyond.max()))
+
+
+def cut_end_of(view: TableView, mask, centroid, direction, ends, yaw) -> int:
+    """Which end of the rod runs out of the image: +1 (-1) for its end towards +yaw (-yaw).
+
+    That is: the rod's ``mask`` meets the image's border only within CUT_END_BAND of that
+    end along its axis (``direction`` (2,) through ``centroid`` (2,), ``ends`` along it,
+    m); ObjectCutByBorderError otherwise (both ends, or its side, run out of view: too
+    little is known of it).
+    """
+    along = (view.points[border_pixels(mask)][:, :2] - centroid) @ direction
+    lo, hi = ends
+    if np.all(along > hi - CUT_END_BAND):
+        side = 1
+    elif np.all(along < lo + CUT_END_BAND):
+        side = -1
+    else:
+        raise ObjectCutByBorderError("the object reaches the border of the top-down image")
+    return side if direction @ np.array([np.cos(yaw), np.sin(yaw)]) > 0 else -side
+
+
+def over_the_edge(view: TableView, mask, inside, standing, in_depth, min_height):
+    """(the rod's ``mask`` with its parts beyond the pick area, what stands with them).
+
+    Beyond the pick area (its EDGE_BAND and what lies over the table's edge) a pixel is the
+    rod's when it joins the rod's blob and stands on the table's plane: standing in depth,
+    or (a cleaned image's colour) differing from the table and no lower than the plane's
+    noise; the floor lies far below. The rod may reach the image's border there
+    (``_cut_end``).
+    """
+    z = view.points[..., 2]
+    on_plane = np.isfinite(z) & (z > view.table_z - min_height)
+    beyond = ~inside & on_plane & (in_depth | standing)
+    if view.cleaned:
+        beyond = cv2.morphologyEx(beyond.astype(np.uint8), cv2.MORPH_OPEN, _KERNEL3) > 0
+    region = (mask | beyond).astype(np.uint8)
+    _, labels = cv2.connectedComponents(region, connectivity=8)
+    own = np.unique(labels[mask])
+    rod = mask | (np.isin(labels, own[own > 0]) & beyond)
+    return rod, (inside & standing) | rod

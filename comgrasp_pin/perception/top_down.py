@@ -33,14 +33,26 @@ from comgrasp_pin.perception._points import (
     largest_component,
     pixel_slopes,
 )
+from comgrasp_pin.perception.grasp_points import (  # noqa: F401 (their home before)
+    nearest_graspable,
+    nearest_on_handle,
+)
 from comgrasp_pin.perception.rod_shape import check_ends_seen, check_one_object, check_one_rod
-from comgrasp_pin.perception.table_view import TableView, differs_in_colour, in_area, view_table
+from comgrasp_pin.perception.table_view import (
+    TableView,
+    check_no_dip,
+    cut_end_of,
+    differs_in_colour,
+    in_area,
+    over_the_edge,
+    overhang,
+    view_table,
+)
 
 PICK_AREA = (0.30, 0.80, -0.35, 0.35)  # x_min, x_max, y_min, y_max of the table (m, world)
 MIN_HEIGHT = 0.003  # a pixel counts as object if it stands this far above the table (m)
 MAX_HEIGHT = 0.15  # ... and no higher than this (the robot above the table is not the rod)
 MIN_PIXELS = 40
-_KERNEL3 = np.ones((3, 3), np.uint8)
 # In a cleaned image (``table_view``): a pixel stands on the table this many camera noise
 # stds above it, gaps of up to 4 px close, and the rod is measured without its 1 px fringe.
 HEIGHT_SIGMAS = 2.5
@@ -49,13 +61,6 @@ ERODE_PX = 1  # (2 holds flying pixels better, 35 % dropouts worse)
 KEEP_EXTENT = 0.8  # ... unless the eroded rod is shorter than this share (a thin rod's handle gone)
 END_SNR = 8.0  # a rod lower than this many noise stds (after the median) may lose its ends
 EDGE_BAND = 0.01  # the table's height and noise are measured this far inside its edge (m)
-# A rod may reach over the table's edge: the pixels beyond the pick area that stand on the
-# table's plane (not the floor below) and join the rod are the rod. One that dips below the
-# plane beyond the edge (tilted down over it) is refused when at least DIP_PIXELS on its
-# axis within DIP_REACH beyond an end lie between DIP_DEPTH and the threshold below the plane.
-DIP_DEPTH = 0.3  # m below the table's plane: lower than this is the floor
-DIP_REACH = 0.05  # m
-DIP_PIXELS = 10
 
 
 @dataclass(frozen=True)
@@ -76,6 +81,9 @@ class RodDetection:
         overhang: how far the rod reaches beyond the pick area (m), 0 when it lies within
             it: a rod laid back at the table's edge is seen whole as long as the camera
             sees it, and this says that it reaches over the edge.
+        cut_end: 0 for a rod seen whole; +1 (-1) when its end towards +yaw (-yaw) runs
+            out of the image: then ``grasp`` and ``length`` are the part seen's, and the
+            detection comes only with an ObjectCutByBorderError (its ``seen``).
     """
 
     grasp: GraspPose
@@ -87,6 +95,7 @@ class RodDetection:
     rect: tuple
     axis_px: np.ndarray
     overhang: float = 0.0
+    cut_end: int = 0
 
 
 def detect_rod_top_down(
@@ -102,7 +111,8 @@ def detect_rod_top_down(
         ObjectNotFoundError: nothing above the table.
         ObjectCutByBorderError: the rod leaves the image, or hangs down over the table's
             edge (a rod that lies over the edge on the table's plane is measured whole:
-            ``RodDetection.overhang``).
+            ``RodDetection.overhang``). When it runs out of the image at one end only,
+            the error's ``seen`` is the part seen (``RodDetection.cut_end``).
         AmbiguousObjectError: two objects, or two rods side by side, where one rod should be,
             or parts of the rod lost in a noisy image beyond the end seen.
         InvalidDepthError: unusable depth.
@@ -132,7 +142,7 @@ def detect_rod_top_down(
 
 def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area) -> RodDetection:
     """``detect_rod_top_down`` in ``view``, with the colour's help when ``rgb`` is given."""
-    mask, standing, unmeasured = _segment(view, pick_area, rgb)
+    mask, standing, unmeasured, cut = _segment(view, pick_area, rgb)
     if unmeasured.any():
         view = _on_the_rods_axis(view, mask, unmeasured, camera, T_world_cam)
     measured = ~unmeasured[mask]
@@ -148,7 +158,8 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area) -> RodD
     lo, hi = np.percentile(along, [0.02, 99.98])
     if view.cleaned:
         check_ends_seen(view.points, standing, mask, centroid, direction, (lo, hi), p)
-    _check_no_dip(view, pick_area, centroid, direction, (lo, hi), p)
+    check_no_dip(view, pick_area, centroid, direction, (lo, hi), p,
+                 max(MIN_HEIGHT, HEIGHT_SIGMAS * view.noise))  # fmt: skip
     centre = centroid + 0.5 * (lo + hi) * direction
     near_centre = np.abs(along - 0.5 * (lo + hi)) < 0.01
     heights = p[near_centre, 2] - view.table_z if near_centre.any() else p[:, 2] - view.table_z
@@ -173,47 +184,17 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area) -> RodD
     ends_world = np.array([[*(centroid + s * direction), view.table_z] for s in (lo, hi)])
     T_cam_world = np.linalg.inv(T_world_cam)
     ends_cam = ends_world @ T_cam_world[:3, :3].T + T_cam_world[:3, 3]
-    return RodDetection(grasp, length, widths, view.table_z, handle_height, mask, rect,
-                        camera.project(ends_cam), _overhang(ends_world, pick_area))  # fmt: skip
-
-
-def _check_no_dip(view: TableView, pick_area, centroid, direction, ends, p) -> None:
-    """ObjectCutByBorderError when the rod dips below the table's plane over its edge.
-
-    That is: beyond the table, on the rod's axis (``direction`` (2,) through ``centroid``
-    (2,), within its points' ``p`` (N, 3) spread across it and 1 cm) and within DIP_REACH
-    beyond one of its ``ends`` (along the axis, m), DIP_PIXELS or more points lie between
-    DIP_DEPTH and the height threshold below the plane (after an opening: a real camera's
-    flying pixels lie in lines a pixel wide, a rod is a surface).
-    """
-    z = view.points[..., 2]
-    min_height = max(MIN_HEIGHT, HEIGHT_SIGMAS * view.noise)
-    dips = ~in_area(view.points, pick_area, 0.0) & np.isfinite(z)
-    dips &= (z < view.table_z - min_height) & (z > view.table_z - DIP_DEPTH)
-    dips = cv2.morphologyEx(dips.astype(np.uint8), cv2.MORPH_OPEN, _KERNEL3) > 0
-    if not dips.any():
-        return
-    normal = np.array([-direction[1], direction[0]])
-    half_width = np.percentile(np.abs((p[:, :2] - centroid) @ normal), 95) + 0.01
-    rel = view.points[dips][:, :2] - centroid
-    along, across = rel @ direction, np.abs(rel @ normal)
-    lo, hi = ends
-    beyond = ((along < lo) & (along > lo - DIP_REACH)) | ((along > hi) & (along < hi + DIP_REACH))
-    count = int(np.count_nonzero(beyond & (across < half_width)))
-    if count >= DIP_PIXELS:
+    cut_end = cut_end_of(view, mask, centroid, direction, (lo, hi), yaw) if cut else 0
+    det = RodDetection(grasp, length, widths, view.table_z, handle_height, mask, rect,
+                       camera.project(ends_cam), overhang(ends_world, pick_area),
+                       cut_end)  # fmt: skip
+    if cut_end:
         raise ObjectCutByBorderError(
-            f"the object hangs down over the edge of the pick area ({count} px on its axis "
-            f"beyond its end, {1e3 * min_height:.0f} to {1e3 * DIP_DEPTH:.0f} mm below the "
-            "table): its part below the table cannot be measured; lay it on the table"
+            f"the object runs out of the top-down image at its {'+' if cut_end > 0 else '-'}"
+            f"yaw end: {1e3 * length:.0f} mm of it are seen (the exception's ``seen``)",
+            seen=det,
         )
-
-
-def _overhang(ends_world: np.ndarray, pick_area) -> float:
-    """How far (m) the rod's axis ends ((2, 3) world) reach beyond ``pick_area``."""
-    x0, x1, y0, y1 = pick_area
-    x, y = ends_world[:, 0], ends_world[:, 1]
-    beyond = np.concatenate([x0 - x, x - x1, y0 - y, y - y1])
-    return float(max(0.0, beyond.max()))
+    return det
 
 
 def _core(view: TableView, mask: np.ndarray) -> tuple[np.ndarray, int]:
@@ -259,10 +240,12 @@ def _on_the_rods_axis(view: TableView, mask, unmeasured, camera, T_world_cam) ->
     return replace(view, points=points)
 
 
-def _segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(the rod's mask, the pixels standing on the table, those whose depth does not).
+def _segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
+    """(the rod's mask, standing pixels, their unmeasured ones, whether it meets the border).
 
-    All three (H, W) bool; the last are the standing pixels that the colour found or the
+    That is: the rod's mask, the pixels standing on the table, those whose depth does not
+    measure them, and whether the rod reaches the image's border. The first three (H, W)
+    bool; the third are the standing pixels that the colour found or the
     closing filled in: their depth does not measure their height.
 
     The threshold follows the camera's own noise (the median's heights beside a tall head
@@ -291,30 +274,8 @@ def _segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, n
                 f"(less than {1e3 * min_height:.1f} mm): a mark or a shadow, not an object"
             )
     check_one_object(inside & standing, mask)
-    mask, rod_standing = _over_the_edge(view, mask, inside, standing, in_depth, min_height)
-    return mask, rod_standing, standing & ~in_depth
-
-
-def _over_the_edge(view: TableView, mask, inside, standing, in_depth, min_height):
-    """(the rod's ``mask`` with its parts beyond the pick area, what stands with them).
-
-    Beyond the pick area (its EDGE_BAND and what lies over the table's edge) a pixel is the
-    rod's when it joins the rod's blob and stands on the table's plane: standing in depth,
-    or (a cleaned image's colour) differing from the table and no lower than the plane's
-    noise; the floor lies far below. ObjectCutByBorderError when it leaves the image.
-    """
-    z = view.points[..., 2]
-    on_plane = np.isfinite(z) & (z > view.table_z - min_height)
-    beyond = ~inside & on_plane & (in_depth | standing)
-    if view.cleaned:
-        beyond = cv2.morphologyEx(beyond.astype(np.uint8), cv2.MORPH_OPEN, _KERNEL3) > 0
-    region = (mask | beyond).astype(np.uint8)
-    _, labels = cv2.connectedComponents(region, connectivity=8)
-    own = np.unique(labels[mask])
-    rod = mask | (np.isin(labels, own[own > 0]) & beyond)
-    if border_pixels(rod).any():
-        raise ObjectCutByBorderError("the object reaches the border of the top-down image")
-    return rod, (inside & standing) | rod
+    mask, rod_standing = over_the_edge(view, mask, inside, standing, in_depth, min_height)
+    return mask, rod_standing, standing & ~in_depth, bool(border_pixels(mask).any())
 
 
 def _widths(p, centroid, direction, s_rel, yaw) -> np.ndarray:
@@ -328,33 +289,3 @@ def _widths(p, centroid, direction, s_rel, yaw) -> np.ndarray:
     if direction @ np.array([np.cos(yaw), np.sin(yaw)]) < 0:  # rows towards +yaw
         widths = widths[::-1] * np.array([-1.0, 1.0])
     return widths
-
-
-def nearest_graspable(
-    det: RodDetection, s: float, max_width: float = 0.075, half_pad: float = 0.022
-) -> float:
-    """The position along the rod nearest ``s`` where the jaws fit.
-
-    Positions are in m from the rod's centre, towards +yaw. The jaws fit where the rod is
-    narrower than ``max_width`` over ``half_pad`` either side.
-    """
-    pos, width = det.widths[:, 0], det.widths[:, 1]
-    ok = []
-    for c in (s, *pos):  # ``s`` itself first: the slices are 1 cm apart
-        near = np.abs(pos - c) <= half_pad
-        if np.all(width[near] <= max_width) and abs(c) <= 0.5 * det.length - half_pad:
-            ok.append(c)
-    if not ok:
-        raise ObjectNotFoundError("no part of the object is narrow enough to grasp")
-    return float(min(ok, key=lambda c: abs(c - s)))
-
-
-def nearest_on_handle(det: RodDetection, s: float, half_pad: float = 0.022) -> float:
-    """The position along the rod nearest ``s`` where both pads lie on the handle.
-
-    Positions are in m from the rod's centre, towards +yaw. Within ``half_pad`` either side
-    the rod is no wider than its width at the centre (the handle) plus a quarter and 4 mm.
-    A grasp on a head's shoulder stops the jaws on the head and barely holds the handle.
-    """
-    handle = det.widths[np.argmin(np.abs(det.widths[:, 0])), 1]
-    return nearest_graspable(det, s, max_width=1.25 * handle + 0.004, half_pad=half_pad)

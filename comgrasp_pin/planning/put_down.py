@@ -86,12 +86,12 @@ def axis_hint_after_put_down(plan: PutDownPlan, rod_centre_xy: tuple[float, floa
 
 
 def put_back_jaws_xy(
-    spot_xy: tuple[float, float],
+    spot_xy: tuple[float, ...],
     x_world_ee: np.ndarray,
     tilt: float,
     rod_length: float,
     centre_hint: float,
-    pick_area: tuple[float, float, float, float],
+    pick_area: tuple[float, ...],
     margin: float,
 ) -> np.ndarray:
     """(2,) world x, y (m) at which the jaws let go of a hanging rod so that it comes to lie

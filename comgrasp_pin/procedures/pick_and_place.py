@@ -12,9 +12,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from comgrasp_pin.config import EpisodeConfig
-from comgrasp_pin.errors import RodDroppedError, RodSlippedError
+from comgrasp_pin.errors import ObjectCutByBorderError, RodDroppedError, RodSlippedError
 from comgrasp_pin.motion.ik import solve_ik
-from comgrasp_pin.perception.top_down import nearest_graspable, nearest_on_handle
+from comgrasp_pin.perception import RodDetection
+from comgrasp_pin.perception.grasp_points import (
+    nearest_graspable,
+    nearest_on_handle,
+    with_known_length,
+)
 from comgrasp_pin.planning import retry
 from comgrasp_pin.planning.put_down import PutDownPlan, axis_hint_after_put_down, plan_put_down
 from comgrasp_pin.planning.regrasp import com_grasp, decide
@@ -63,7 +68,7 @@ def regrasp(cell: Cell, config: EpisodeConfig) -> Grasped:
     cell.announce(f"{phases.PUT_DOWN}: {decision.reason}")
     plan = put_down(cell, trial, config)
     cell.announce(f"{phases.REGRASP}: {100 * decision.x_com_obj:+.1f} cm from the centre")
-    rod = cell.look_from_above()
+    rod = look_again(cell, trial.rod_length, config)
     axis_hint = axis_hint_after_put_down(plan, (rod.grasp.x, rod.grasp.y))
     # The CoM lies x_com along the rod from its centre (the side view measures both within
     # millimetres), and the top view sees the centre where the rod now lies; measured from
@@ -104,14 +109,30 @@ def deliver(cell: Cell, config: EpisodeConfig) -> None:
     cell.hold(config.motion.park_rest)
 
 
+def look_again(cell: Cell, length: float, config: EpisodeConfig) -> RodDetection:
+    """The top view of the rod seen whole before, ``length`` (m) long: when it was laid
+    back at the edge of the camera's view and runs out of it at one end, the part seen
+    completed with the length it is known to have (``with_known_length``, at least
+    ``regrasp.min_seen_share`` of it in view; the detection's ``cut_end`` says so)."""
+    try:
+        return cell.look_from_above()
+    except ObjectCutByBorderError as exc:
+        if exc.seen is None:
+            raise
+        return with_known_length(exc.seen, length, config.regrasp.min_seen_share)
+
+
 def trial_with_retry(cell: Cell, config: EpisodeConfig) -> TrialMeasurement:
     """Careful trial grasps (``planning.retry``): if the rod turns as it is lifted (or falls),
-    put it down, look again and grasp it again where it now lies, towards the end that went
-    down; the last of ``regrasp.attempts`` is not careful."""
+    put it down, look again (``look_again``: its length is the first view's) and grasp it
+    again where it now lies, towards the end that went down; the last of
+    ``regrasp.attempts`` is not careful."""
     attempts = config.regrasp.attempts
     state = retry.RetryState()
+    length = None
     for attempt in range(attempts):
-        rod = cell.look_from_above()
+        rod = cell.look_from_above() if length is None else look_again(cell, length, config)
+        length = rod.length if length is None else length  # the first, whole view's
         offset = nearest_on_handle(rod, retry.grasp_offset(state, rod.grasp.yaw))
         try:
             trial = trial_grasp(cell, config, offset, careful=attempt < attempts - 1,
