@@ -67,8 +67,10 @@ class TrialConfig:
             after lowering for this long (s) (``procedures.put_back``).
         torque_std_from: the averaged readings' std for the estimator: "spec" (the
             sensor's white noise over the samples) or "measured" (their spread, and the
-            sensor's drift over the time between the empty and the held window;
-            ``procedures.torques.pair_std``).
+            sensor's drift over the time between the empty and the held windows, as a full
+            covariance of the poses' differences, which share drift where their intervals
+            overlap; ``procedures.torques.pair_noise``; the estimator then solves the
+            generalised least squares).
     """
 
     lift_height: float = 0.45
@@ -127,7 +129,8 @@ def hardware_trial(trial: TrialConfig) -> TrialConfig:
     grasps: of 18 accuracy grasps 3 fell and 6 turned by 20-60 deg more than without);
     windows averaged on until each joint's measured standard error is below 3 mN m, 4 s at
     most (a 0.1 N m current reading at 500 Hz needs 2.2 s; a 0.05 N m torque sensor's 1 s
-    is enough); the estimator's noise from the windows' spread and the sensor's drift.
+    is enough); the estimator's noise from the windows' spread and the sensor's drift
+    (its correlation across poses and windows included: ``procedures.torques.pair_noise``).
     """
     return replace(trial, approach_deg=1.0, approach_time=1.0, window_sem=0.003,
                    window_max=4.0, torque_std_from="measured")  # fmt: skip

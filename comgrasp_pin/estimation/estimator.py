@@ -51,7 +51,7 @@ from comgrasp_pin.estimation.estimate import (
     new_estimate,
     refuse_empty_gripper,
 )
-from comgrasp_pin.estimation.inputs import check_arrays, check_options
+from comgrasp_pin.estimation.inputs import check_arrays, check_dtau_cov, check_options
 from comgrasp_pin.estimation.prior import AxisPrior
 from comgrasp_pin.estimation.rod_axis import MIN_AXIS_GRAVITY_ANGLE
 from comgrasp_pin.robot import RobotModel
@@ -72,6 +72,7 @@ def estimate_com(
     huber_delta: float = 3.0,
     com_prior: AxisPrior | None = None,
     payload_motion_ee: np.ndarray | None = None,
+    dtau_cov: np.ndarray | None = None,
 ) -> ComEstimate:
     """Estimate the held payload's mass and CoM (ee frame) from static joint torques.
 
@@ -95,6 +96,11 @@ def estimate_com(
             from where it sat at the first pose to where it sat at each pose (a held object
             that shifted or turned in the jaws; the first is the identity), or None (it
             stayed put). The CoM is estimated where it was at the first pose.
+        dtau_cov: (k n, k n) covariance of the stacked torque differences tau_after -
+            tau_before (N m^2, pose-major: pose 0's n joints first), in place of
+            ``torque_std``: readings whose errors are correlated across poses (a torque
+            sensor's drift shared by windows that overlap in time) are then weighted by
+            generalised least squares, and ``cov`` accounts for the correlation.
 
     Raises:
         InvalidInputError, UnobservableError, EmptyGripperError, SolverError (all
@@ -103,7 +109,12 @@ def estimate_com(
     check_options(method, rcond, loss, huber_delta, com_prior, torque_std)
     q_arr, dtau, sigma = check_arrays(robot, q, tau_before, tau_after, torque_std)
     n = q_arr.shape[-1]
+    chol = None if dtau_cov is None else check_dtau_cov(dtau_cov, q_arr.size, torque_std)
     try:
+        if chol is not None:
+            Q, dtau_k = q_arr.reshape(-1, n), dtau.reshape(-1, n)
+            return _estimate(robot, Q, dtau_k, None, method, rcond, loss, huber_delta,
+                             com_prior, payload_motion_ee, chol)  # fmt: skip
         if method == "lstsq" and payload_motion_ee is None:
             # the normal equations where well conditioned (None: the SVD path decides)
             floor = max(closed_form.MIN_EIGEN_RATIO, 4.0 * rcond * rcond)
@@ -134,17 +145,24 @@ def estimate_com(
         ) from None
 
 
-def _estimate(robot, Q, dtau, sigma, method, rcond, loss, huber_delta, com_prior, motion):
+def _estimate(robot, Q, dtau, sigma, method, rcond, loss, huber_delta, com_prior, motion,
+              chol=None):  # fmt: skip
     """The general path: any pose set (SVD observability, ``np.linalg.lstsq``) and IPOPT.
 
     Well-conditioned pose sets without payload motion are reduced through the Gram matrix
     (``observability.by_gram``), and their uniformly weighted least squares solved by it.
+    ``chol``: the Cholesky factor L of the differences' covariance (``dtau_cov``): the
+    problem is then whitened (L^-1 Y, L^-1 b; generalised least squares) and solved with
+    unit weights.
     """
     k, n = Q.shape
     b = dtau.ravel()
-    red = None if motion is not None else observability.by_gram(robot, Q, b, rcond)
+    red = None if motion is not None or chol is not None else observability.by_gram(
+        robot, Q, b, rcond)  # fmt: skip
     if red is None:
         red = observability.by_svd(robot, Q, rcond, observability.motion_maps(motion, k))
+    if chol is not None:
+        return _whitened(red, b, chol, method, loss, huber_delta, com_prior, k, n)
     Yr = red.Yr
     uniform = not isinstance(sigma, np.ndarray)
     if red.gram_inv is not None and uniform:  # uniform weights: the plain least squares
@@ -190,11 +208,33 @@ def _estimate(robot, Q, dtau, sigma, method, rcond, loss, huber_delta, com_prior
     return _with_prior(red, b, rows_w, w_ls, loss, huber_delta, com_prior, k, n, noise_std)
 
 
-def _with_prior(red, b, rows_w, w_ls, loss, delta, prior: AxisPrior, k, n, noise_std):
+def _whitened(red, b, chol, method, loss, delta, prior, k, n):
+    """The generalised least squares (or IPOPT on it) of the whitened problem L^-1 (Y, b)."""
+    Yr_w = np.linalg.solve(chol, red.Yr)
+    b_w = np.linalg.solve(chol, b)
+    w_ls = np.linalg.lstsq(Yr_w, b_w, rcond=None)[0]
+    ones = np.ones(len(b))
+    if method == "lstsq":
+        theta = red.B @ w_ls
+        cov = delta_method(theta, red.B @ np.linalg.inv(Yr_w.T @ Yr_w) @ red.B.T)
+        return _finish(red, theta, cov, red.u, b, k, n, "lstsq", "closed_form", 0, None)
+    if prior is None:
+        res = ipopt.solve(Yr_w, b_w, ones, w_ls, loss, delta)
+        theta = red.B @ res.x
+        cov = delta_method(theta, red.B @ _inverse(res.hessian) @ red.B.T)
+        return _finish(red, theta, cov, red.u, b, k, n, "ipopt", res.return_status,
+                       res.iterations, None)  # fmt: skip
+    Y_w = np.linalg.solve(chol, red.Y)
+    return _with_prior(red, b, ones, w_ls, loss, delta, prior, k, n, None, (Y_w, b_w))
+
+
+def _with_prior(red, b, rows_w, w_ls, loss, delta, prior: AxisPrior, k, n, noise_std,
+                fit=None):  # fmt: skip
     """The MAP estimate over (m, c_ee) with the axis prior.
 
     Warm-started from the closed form, moved along the unobservable direction to the point
-    nearest the prior's axis.
+    nearest the prior's axis. ``fit``: the (Y, b) to fit where not ``red.Y``, ``b`` (the
+    whitened ones); the residuals are reported of ``red.Y`` and ``b``.
     """
     theta0 = red.B @ w_ls
     m0 = float(theta0[0])  # m0 = 0: refused after the solve
@@ -215,7 +255,8 @@ def _with_prior(red, b, rows_w, w_ls, loss, delta, prior: AxisPrior, k, n, noise
         ud = float(u @ d)
         t = (float(u @ v) - ud * float(v @ d)) / (1.0 - ud * ud)
         c0 = c0 - t * u
-    res = ipopt.solve(red.Y, b, rows_w, np.concatenate(([m0], c0)), loss, delta, prior)
+    Y_fit, b_fit = (red.Y, b) if fit is None else fit
+    res = ipopt.solve(Y_fit, b_fit, rows_w, np.concatenate(([m0], c0)), loss, delta, prior)
     theta = res.x * res.x[0]
     theta[0] = res.x[0]
     return _finish(red, theta, _inverse(res.hessian), None, b, k, n, "ipopt",

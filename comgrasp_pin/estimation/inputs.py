@@ -146,6 +146,43 @@ def _check_values(name: str, a: np.ndarray, limit: float) -> None:
         )
 
 
+def check_dtau_cov(dtau_cov: object, rows: int, torque_std: object) -> np.ndarray | None:
+    """The lower Cholesky factor L of ``dtau_cov`` (rows, rows) (L L^T = dtau_cov), or None.
+
+    InvalidInputError where it is not a finite, symmetric, positive-definite matrix of the
+    stacked torque differences' shape, or where ``torque_std`` is given too.
+    """
+    if dtau_cov is None:
+        return None
+    if torque_std is not None:
+        raise InvalidInputError(
+            "give torque_std (independent readings) or dtau_cov (the differences' full "
+            "covariance), not both"
+        )
+    cov = validate.real_array(dtau_cov, "dtau_cov")
+    if cov.shape != (rows, rows):
+        raise InvalidInputError(
+            f"dtau_cov must have shape ({rows}, {rows}) (k n rows of the stacked torque "
+            f"differences, pose-major), got {cov.shape}"
+        )
+    scale = float(np.max(np.abs(cov))) if cov.size else 0.0
+    if not (np.all(np.isfinite(cov)) and np.allclose(cov, cov.T, rtol=1e-9, atol=1e-12 * scale)):
+        raise InvalidInputError("dtau_cov must be finite and symmetric")
+    try:
+        L = np.linalg.cholesky(0.5 * (cov + cov.T))
+    except np.linalg.LinAlgError:
+        raise InvalidInputError(
+            "dtau_cov is not positive definite: every torque difference has some noise of "
+            "its own (a covariance of readings is positive definite)"
+        ) from None
+    diag = np.diag(L)
+    if not np.all(diag >= TORQUE_STD_RANGE[0]):
+        raise InvalidInputError(
+            f"dtau_cov is near singular (a conditional std below {TORQUE_STD_RANGE[0]:g} N m)"
+        )
+    return L
+
+
 def _torque_std(torque_std: float | np.ndarray | None, n: int) -> float | np.ndarray | None:
     """The std of each reading: a float for a scalar, an (n,) array per joint, or None."""
     if torque_std is None:

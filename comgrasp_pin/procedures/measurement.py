@@ -150,15 +150,17 @@ def locate_com(robot: RobotModel, held: HeldReadings, config: EpisodeConfig) -> 
     trial, after = config.trial, held.after
     side, T_obj = held.side, held.side.T_ee_obj
     use = [i for i, view in enumerate(held.views) if view is not None]
-    pair_std = torques.pair_std([held.before[i] for i in use], [after[i] for i in use], config)
+    noise = torques.pair_noise([held.before[i] for i in use], [after[i] for i in use], config)
     q = np.array([after[i].q for i in use])
     tau_a = np.array([after[i].tau for i in use])
     tau_b = np.array([held.tau_before[i] for i in use])
     views = [held.views[i] for i in use]
 
     def estimate(k: int, method: str, prior: AxisPrior | None) -> ComEstimate:
+        first = noise.first(k, robot.nq)
         return estimate_com(robot, q[:k], tau_b[:k], tau_a[:k], method=method,
-                            torque_std=pair_std, com_prior=prior)  # fmt: skip
+                            torque_std=first.std, com_prior=prior,
+                            dtau_cov=first.cov)  # fmt: skip
 
     est_line = estimate(1, "lstsq", None)
     x_line = com_along_axis(est_line, T_obj)
@@ -176,11 +178,12 @@ def locate_com(robot: RobotModel, held: HeldReadings, config: EpisodeConfig) -> 
             [np.eye(4)]
             + [rod_motion(side, v, depth=d) for v, d in zip(views[1:], depth, strict=True)]
         )
-        est = estimate_com(robot, q, tau_b, tau_a, method=trial.estimator, torque_std=pair_std,
-                           com_prior=prior, payload_motion_ee=motion)  # fmt: skip
+        est = estimate_com(robot, q, tau_b, tau_a, method=trial.estimator,
+                           torque_std=noise.std, com_prior=prior, payload_motion_ee=motion,
+                           dtau_cov=noise.cov)  # fmt: skip
         x_com, path = com_along_axis(est, T_obj), f"{len(use)} poses"
         parts = uncertainty.motion_stds(robot, q, tau_b, tau_a, est, T_obj, views, depth,
-                                        bounds, trial.estimator, pair_std, prior)  # fmt: skip
+                                        bounds, trial.estimator, noise, prior)  # fmt: skip
     parts["estimator"] = uncertainty.estimator_std(est, T_obj)
     cal = config.sensors.side_depth
     if side.camera_ee is not None and cal.enabled:

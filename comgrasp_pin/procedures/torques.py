@@ -8,14 +8,18 @@
 - ``measure``: average the torques over a window long enough for the noise measured in it
   (``TrialConfig.window_sem``); the samples' spread, not the sensor's data sheet, says how
   long that is.
-- ``pair_std``: the std of each averaged reading as the estimator needs it (a difference of
-  two has twice its variance): the windows' measured spread and the sensor's drift over the
-  time between the empty and the held window.
+- ``pair_noise``: the noise of the torque differences as the estimator needs it: the
+  sensor's white noise (the ideal preset's), or the windows' measured spread and the
+  sensor's drift as a full covariance: a random walk shared by every window, so that two
+  poses' differences whose empty-to-held intervals overlap in time share that much drift
+  (generalised least squares then takes most of it out where the poses differ).
 
 Policy as pure functions where it can be; ``Cell`` does the moving. SI units.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -62,6 +66,95 @@ def measure(cell: Cell, settle: float, trial: TrialConfig) -> TorqueMeasurement:
     first = cell.measure_torques(settle, trial.window)
     more = extra_window(first, trial.window_sem, trial.window_max)
     return first if more <= 0 else combine(first, cell.measure_torques(0.0, more))
+
+
+@dataclass(frozen=True)
+class PairNoise:
+    """The noise of the stacked torque differences tau_after - tau_before, for
+    ``estimate_com``: one of ``std`` (each reading's std, N m, the differences independent)
+    or ``cov`` ((k n, k n) covariance of the differences, pose-major, N m^2).
+    """
+
+    std: float | None
+    cov: np.ndarray | None
+
+    def first(self, k: int, n: int) -> PairNoise:
+        """The noise of the first ``k`` poses' differences (``n`` joints)."""
+        return self if self.cov is None else PairNoise(None, self.cov[: k * n, : k * n])
+
+    def subset(self, poses: list[int], n: int) -> PairNoise:
+        """The noise of the differences of ``poses`` only."""
+        if self.cov is None:
+            return self
+        rows = np.concatenate([np.arange(i * n, (i + 1) * n) for i in poses])
+        return PairNoise(None, self.cov[np.ix_(rows, rows)])
+
+
+_GRID = 48
+"""Points per window in ``mean_min`` (its relative error is about 1 / (6 _GRID))."""
+
+
+def mean_min(a: tuple[float, float], b: tuple[float, float]) -> float:
+    """E[min(s, t)] (s) for s, t uniform over the windows ``a``, ``b`` = (start, duration):
+    the covariance of two window averages of a unit random walk (Cov(W_s, W_t) = min)."""
+    grid = (np.arange(_GRID) + 0.5) / _GRID
+    s, t = a[0] + a[1] * grid, b[0] + b[1] * grid
+    return float(np.minimum(s[:, None], t[None, :]).mean())
+
+
+def drift_cov(before: list, after: list, drift_std: float) -> np.ndarray:
+    """(k n, k n) covariance of the k differences' (after - before) white noise and drift.
+
+    Each reading is a window average of the sensor's random walk W (``drift_std`` N m /
+    sqrt(s), independent per joint) plus white noise (the window's ``std_error``). A
+    difference is W averaged over the held window minus over the empty window; where
+    ``before`` is None (tau_before from the model, carried by the measured poses' mean
+    offset), minus the mean over the measured poses' empty windows. Two differences then
+    share drift as much as their windows interleave in time:
+    Cov = sum of w w' drift_std^2 E[min(s, t)] over their windows (``mean_min``), plus the
+    white noise of the windows they share.
+    """
+    measured = [b for b in before if b is not None]
+    windows = [*after, *measured]
+    k, n = len(after), len(after[0].tau)
+    weights = np.zeros((k, len(windows)))
+    column = k  # the next measured empty window's
+    for i, b in enumerate(before):
+        weights[i, i] = 1.0
+        if b is not None:
+            weights[i, column] = -1.0
+            column += 1
+        else:
+            weights[i, k:] = -1.0 / len(measured)
+    spans = [(float(m.time), float(m.duration)) for m in windows]
+    M = np.array([[mean_min(u, v) for v in spans] for u in spans])
+    white = np.array([np.asarray(m.std_error, dtype=float) ** 2 for m in windows])  # (w, n)
+    cov = np.zeros((k, n, k, n))
+    for j in range(n):
+        block = weights @ (drift_std**2 * M + np.diag(white[:, j])) @ weights.T
+        cov[:, j, :, j] = block
+    cov = cov.reshape(k * n, k * n)
+    return 0.5 * (cov + cov.T)
+
+
+def pair_noise(before: list, after: list, config: EpisodeConfig) -> PairNoise:
+    """The noise of the torque differences for the estimator.
+
+    ``before``, ``after``: the TorqueMeasurements at each pose (``before`` None where the
+    model gave tau_before). ``trial.torque_std_from``: "spec", the sensor's white noise over
+    the samples averaged (the ideal preset's; ``pair_std``); "measured", the windows'
+    spread and the sensor's drift (``drift_std``, from its data sheet) with its
+    correlation across poses and windows (``drift_cov``), where every time is known and
+    some empty window was measured; else per joint as ``pair_std``.
+    """
+    trial, torque = config.trial, config.sensors.torque
+    timed = all(np.isfinite(m.time) for m in [*before, *after] if m is not None)
+    if trial.torque_std_from == "measured" and timed and any(b is not None for b in before):
+        return PairNoise(None, drift_cov(before, after, torque.drift_std))
+    std = pair_std(before, after, config)
+    if isinstance(std, float):
+        return PairNoise(std, None)
+    return PairNoise(None, np.diag(np.tile(2.0 * std**2, len(after))))
 
 
 def pair_std(before: list, after: list, config: EpisodeConfig) -> float | np.ndarray:

@@ -109,7 +109,7 @@ def motion_stds(
     depth: list,
     bounds: tuple[float, float],
     method: str,
-    torque_std: float,
+    noise,
     prior: AxisPrior | None,
 ) -> dict:
     """The several-pose position's error sources from the rod's motion between the views (m).
@@ -120,13 +120,14 @@ def motion_stds(
     it. Each source is summed in quadrature over the later views. Where a view's depth line
     was not used (``depth`` False), the shift and the out-of-plane turn are taken as uniform
     within the compliance's bounds (``bounds``: m, rad), standard error bound / sqrt 3.
+    ``noise``: the torque differences' (``procedures.torques.PairNoise``).
     """
     first = views[0]
     x0 = com_along_axis(est, T_ee_obj)
 
     def position(motions: list) -> float:
         other = estimate_com(robot, q, tau_before, tau_after, method=method,
-                             torque_std=torque_std, com_prior=prior,
+                             torque_std=noise.std, com_prior=prior, dtau_cov=noise.cov,
                              payload_motion_ee=np.stack([np.eye(4), *motions]))  # fmt: skip
         return com_along_axis(other, T_ee_obj)
 
@@ -153,11 +154,11 @@ def motion_stds(
             motions[i] = rod_motion(first, other_view, slide, depth=True)
             parts[name] += (position(motions) - x0) ** 2
     parts["creep"] = _creep_std(robot, q, tau_before, tau_after, views, depth, method,
-                                torque_std, prior, x0)  # fmt: skip
+                                noise, prior, x0)  # fmt: skip
     return {name: float(np.sqrt(v)) for name, v in parts.items()}
 
 
-def _creep_std(robot, q, tau_before, tau_after, views, depth, method, torque_std, prior, x0):
+def _creep_std(robot, q, tau_before, tau_after, views, depth, method, noise, prior, x0):
     """Variance (m^2) from the rod creeping in the jaws while the torques were averaged: the
     mean position is taken halfway between the window's start and end views; where in
     between it really was is uniform over half the creep either way (std: half / sqrt 3),
@@ -175,7 +176,7 @@ def _creep_std(robot, q, tau_before, tau_after, views, depth, method, torque_std
             rod_motion(turned[0], v, depth=d) for v, d in zip(turned[1:], depth, strict=True)
         ]
         other = estimate_com(robot, q, tau_before, tau_after, method=method,
-                             torque_std=torque_std, com_prior=prior,
+                             torque_std=noise.std, com_prior=prior, dtau_cov=noise.cov,
                              payload_motion_ee=np.stack([np.eye(4), *motions]))  # fmt: skip
         total += (com_along_axis(other, turned[0].T_ee_obj) - x0) ** 2
     return total
