@@ -84,13 +84,15 @@ def plan_trial(cell: Cell, detection: RodDetection, offset: float, config: Episo
 
 def measure_empty(cell: Cell, plan: _Plan, config: EpisodeConfig) -> list:
     """At each measurement pose the empty arm's TorqueMeasurement, or None where
-    ``tau_before`` is the model's."""
+    ``tau_before`` is the model's; from the last pose to the first with
+    ``trial.empty_first_last``."""
     trial, out = config.trial, []
-    for q in plan.poses:
+    order = -1 if trial.empty_first_last else 1
+    for q in plan.poses[::order]:
         torques.arrive(cell, q, trial, settle=trial.empty_settle)
         measured = trial.tau_before == "measured"
         out.append(torques.measure(cell, trial.settle, trial) if measured else None)
-    return out
+    return out[::order]
 
 
 def _heavy_side(watch: SlipWatch, plan: _Plan, config: EpisodeConfig):
