@@ -188,6 +188,9 @@ class RegraspConfig:
             at one end (laid back or dropped at the view's edge) is completed with its
             known length and grasped when at least this share of it is in view (its
             centre and a grasp either side of it seen); less is refused.
+        length_tolerance: a rod seen again whole but shorter than its first view by more
+            than this (m) is refused: part of it is out of sight (the realistic top view's
+            length is within 8 mm).
     """
 
     slip_tilt_deg: float = 2.0
@@ -209,6 +212,7 @@ class RegraspConfig:
     rest_after_put_down: float = 0.5
     put_back_margin: float = 0.03
     min_seen_share: float = 0.6
+    length_tolerance: float = 0.03
 
 
 @dataclass(frozen=True)

@@ -144,3 +144,14 @@ def test_a_rod_seen_too_little_or_whole_is_not_completed():
     whole = with_known_length(_seen(0.30, 1, 0.0), 0.40, 0.6)
     assert nearest_graspable(whole, 0.17) <= whole.widths[:, 0].max() + 0.01 - 0.022 + 1e-12
     assert nearest_graspable(whole, -0.05) == -0.05  # within the part seen: where asked
+
+
+def test_a_rod_seen_again_shorter_than_first_seen_is_refused():
+    from comgrasp_pin.errors import ObjectCutByBorderError
+    from comgrasp_pin.perception.grasp_points import check_seen_whole
+
+    tol = RegraspConfig().length_tolerance
+    rod = _seen(0.40, 0, 0.0)
+    assert check_seen_whole(rod, 0.40 + 0.9 * tol, tol) is rod
+    with pytest.raises(ObjectCutByBorderError, match="out of sight"):
+        check_seen_whole(_seen(0.148, 0, 0.0), 0.40, tol)  # obj1 seed 1004, hanging off

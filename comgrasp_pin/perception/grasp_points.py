@@ -76,3 +76,18 @@ def with_known_length(seen: RodDetection, length: float, min_share: float) -> Ro
     grasp = GraspPose(g.x + shift * np.cos(g.yaw), g.y + shift * np.sin(g.yaw), g.z, g.yaw)
     widths = seen.widths - np.array([shift, 0.0])
     return replace(seen, grasp=grasp, length=float(length), widths=widths)
+
+
+def check_seen_whole(rod: RodDetection, length: float, tolerance: float) -> RodDetection:
+    """``rod``, seen again, if it is as long as an earlier whole view saw it.
+
+    That is: within ``tolerance`` (m) of ``length`` (m) or longer; ObjectCutByBorderError
+    when shorter: part of it is out of sight (hanging down over the table's edge, below the
+    plane the top view measures), and its centre is not where it seems.
+    """
+    if rod.length < length - tolerance:
+        raise ObjectCutByBorderError(
+            f"the rod seen again is {1e3 * rod.length:.0f} mm long, {1e3 * length:.0f} mm "
+            "when first seen: part of it is out of sight (hanging over the table's edge?)"
+        )
+    return rod

@@ -37,7 +37,7 @@ FLYING_MIN, FLYING_SIGMAS = 0.005, 4.0  # a pixel this far (m, noise stds) from 
 # plane beyond the edge (tilted down over it) is refused when at least DIP_PIXELS on its
 # axis within DIP_REACH beyond an end lie between DIP_DEPTH and the threshold below the plane.
 DIP_DEPTH = 0.3  # m below the table's plane: lower than this is the floor
-DIP_REACH = 0.05  # m
+DIP_REACH = 0.2  # m (a rod dipping at a few degrees is near the plane for centimetres first)
 DIP_PIXELS = 10
 CUT_END_BAND = 0.03  # a rod meeting the image's border only this near one end (m) runs out
 # of view there: the part seen is measured (``ObjectCutByBorderError.seen``)

@@ -16,6 +16,7 @@ from comgrasp_pin.errors import ObjectCutByBorderError, RodDroppedError, RodSlip
 from comgrasp_pin.motion.ik import solve_ik
 from comgrasp_pin.perception import RodDetection
 from comgrasp_pin.perception.grasp_points import (
+    check_seen_whole,
     nearest_graspable,
     nearest_on_handle,
     with_known_length,
@@ -113,13 +114,17 @@ def look_again(cell: Cell, length: float, config: EpisodeConfig) -> RodDetection
     """The top view of the rod seen whole before, ``length`` (m) long: when it was laid
     back at the edge of the camera's view and runs out of it at one end, the part seen
     completed with the length it is known to have (``with_known_length``, at least
-    ``regrasp.min_seen_share`` of it in view; the detection's ``cut_end`` says so)."""
+    ``regrasp.min_seen_share`` of it in view; the detection's ``cut_end`` says so); seen
+    whole but shorter than that by ``regrasp.length_tolerance``, refused
+    (``check_seen_whole``: part of it hangs out of sight)."""
+    r = config.regrasp
     try:
-        return cell.look_from_above()
+        rod = cell.look_from_above()
     except ObjectCutByBorderError as exc:
         if exc.seen is None:
             raise
-        return with_known_length(exc.seen, length, config.regrasp.min_seen_share)
+        return with_known_length(exc.seen, length, r.min_seen_share)
+    return check_seen_whole(rod, length, r.length_tolerance)
 
 
 def trial_with_retry(cell: Cell, config: EpisodeConfig) -> TrialMeasurement:
