@@ -1,4 +1,7 @@
-"""The table seen from above as points: its height, the camera's noise, a cleaned image.
+"""The table seen from above as points: its height, its noise, a cleaned image, its edge.
+
+A rod at the table's edge may lie over it on its plane, dip below it, or run out of the
+image (``over_the_edge``, ``check_no_dip``, ``cut_end_of``).
 
 When the image is lost in places or noisy (a real camera), its holes are filled and its
 median taken.
@@ -195,7 +198,7 @@ def over_the_edge(view: TableView, mask, inside, standing, in_depth, min_height)
     rod's when it joins the rod's blob and stands on the table's plane: standing in depth,
     or (a cleaned image's colour) differing from the table and no lower than the plane's
     noise; the floor lies far below. The rod may reach the image's border there
-    (``_cut_end``).
+    (``cut_end_of``).
     """
     z = view.points[..., 2]
     on_plane = np.isfinite(z) & (z > view.table_z - min_height)
