@@ -7,17 +7,17 @@ import numpy as np
 import pytest
 
 from comgrasp_pin.config import EpisodeConfig
-from comgrasp_pin.experiments import design, tilt_calibration
+from comgrasp_pin.experiments import design, tilt_calibration, tilt_curves
 from comgrasp_pin.experiments.design import (
     invert_curve,
     lever_for_tilt,
     load_calibration,
-    monotone,
     target_tilt,
     target_tilts,
     tilt_curve,
     wrap_tilt,
 )
+from comgrasp_pin.experiments.tilt_curves import monotone, step_levers
 from comgrasp_pin.experiments.trials import (
     ACCURACY_COM_RANGE,
     ACCURACY_GRASP_OFFSET,
@@ -103,8 +103,9 @@ def test_every_object_is_calibrated_with_a_monotone_curve_per_side_within_the_le
             # the monotone curve is the median of the raw tilts pooled over neighbouring
             # levers (pooled by hand here), made monotone
             raw = data["objects"][name][design.side_key(side)]["abs_tilt_deg"]
+            width = tilt_curves.POOL_WIDTH
             pooled = [np.median([v for lv, row in zip(levers, raw) for v in row
-                                 if abs(lv - x) <= design.POOL_WIDTH]) for x in levers]  # fmt: skip
+                                 if abs(lv - x) <= width]) for x in levers]  # fmt: skip
             np.testing.assert_allclose(tilts, monotone(pooled), atol=2e-3)
             assert tilts[0] < 2.0 and tilts[-1] > 40.0  # holds level first, turns far later
 
@@ -192,3 +193,77 @@ def test_the_side_whose_curve_reaches_the_target_is_chosen(tmp_path):
     assert design.side_and_lever("obj4", 37.5, 0.2, str(path)) == (1.0, pytest.approx(0.75))
     assert design.side_and_lever("obj4", 37.5, 0.8, str(path)) == (-1.0, pytest.approx(0.75))
     load_calibration.cache_clear()
+
+
+def test_step_levers_bisect_steps_only_down_to_the_minimum_step():
+    # by hand: 18 -> 68 deg between 0.74 and 0.76 is a step (> GAP_DEG 20), 0 -> 10 not
+    levers, tilts = [0.6, 0.7, 0.74, 0.76, 0.8], [0.0, 10.0, 18.0, 68.0, 70.0]
+    assert step_levers(levers, tilts) == [0.75]
+    assert step_levers(levers, tilts, gap_deg=5.0) == [0.65, 0.72, 0.75]
+    # neighbours closer than MIN_STEP are not split again
+    assert step_levers([0.75, 0.75 + 0.9 * tilt_curves.MIN_STEP], [18.0, 68.0]) == []
+    assert step_levers([0.75, 0.75 + 1.1 * tilt_curves.MIN_STEP], [18.0, 68.0]) != []
+
+
+def _fake_tilt(threshold: float):
+    """A rod that settles at 20 deg x (lever - 0.6) / 0.15 up to ``threshold`` and swings to
+    70 deg beyond: a step the calibration must find."""
+
+    def trial(task):
+        r = float(task["lever"])
+        tilt = 70.0 if r > threshold else max(0.0, 20.0 * (r - 0.6) / 0.15)
+        return {**task, "tilt_deg": -tilt if task["side"] < 0 else tilt, "dropped": False}
+
+    return trial
+
+
+def test_calibrate_refines_each_step_and_merges_into_the_file(tmp_path, monkeypatch):
+    out = tmp_path / "cal.json"
+    old = {"made": {"run": "old"}, "objects": {"obj5": {"kept": True}},
+           "presets": {"realistic": {"objects": {"obj6": {"kept": True}}}}}  # fmt: skip
+    out.write_text(json.dumps(old))
+    monkeypatch.setattr(tilt_calibration, "tilt_trial", _fake_tilt(0.7537))
+    data = tilt_calibration.calibrate(["obj4"], out, seeds=[0], workers=1, dense=4, refine=4)
+    assert json.loads(out.read_text()) == data
+    assert data["objects"]["obj5"] == {"kept": True}  # other objects, presets and runs kept
+    assert data["presets"]["realistic"]["objects"] == {"obj6": {"kept": True}}
+    assert [r.get("run") for r in data["runs"]] == ["old", None]
+    for key in ("+x", "-x"):
+        curve = data["objects"]["obj4"][key]
+        r, t = np.array(curve["lever_ratio"]), np.array(curve["median_abs_tilt_deg"])
+        # the step is bracketed by 4 bisections of the dense grid's 0.75-0.77 (its rise
+        # runs 0.65-0.85 in 4 levers, 0.04 apart: 0.73, 0.77, then 0.75, 0.76, 0.755, ...)
+        below, above = r[t < 30].max(), r[t > 60].min()
+        assert below <= 0.7537 < above and above - below <= 0.04 / 2**4 + 1e-9
+        assert t[r == below][0] == pytest.approx(20.0 * (below - 0.6) / 0.15, abs=1e-3)
+        # the design's curve is pooled over LEVER_SCATTER: the step is smeared that far
+        tilts = np.array(curve["tilt_deg"])
+        assert np.all(tilts[r < 0.7537 - tilt_curves.POOL_WIDTH] < 30)
+    # a preset's curves go under presets/<name>; the ideal ones stay
+    ideal = data["objects"]["obj4"]
+    data = tilt_calibration.calibrate(["obj4"], out, levers=[0.5, 0.9], seeds=[0], workers=1,
+                                      dense=2, sensors="realistic", refine=0)  # fmt: skip
+    assert data["objects"]["obj4"] == ideal
+    assert set(data["presets"]["realistic"]["objects"]) == {"obj4", "obj6"}
+    assert data["presets"]["realistic"]["made"]["sensors"] == "realistic"
+    assert len(data["runs"]) == 3
+
+
+def test_a_presets_curves_are_used_for_that_preset_only(tmp_path):
+    steady = {"lever_ratio": [0.5, 0.6, 0.7, 0.9], "tilt_deg": [0.0, 10.0, 30.0, 60.0]}
+    early = {"lever_ratio": [0.4, 0.5, 0.6, 0.9], "tilt_deg": [0.0, 10.0, 30.0, 60.0]}
+    path = tmp_path / "calibration.json"
+    path.write_text(json.dumps({"objects": {"obj4": {"+x": steady, "-x": steady}},
+                                "presets": {"realistic": {"objects": {
+                                    "obj4": {"+x": early, "-x": early}}}}}))  # fmt: skip
+    load_calibration.cache_clear()
+    try:
+        assert lever_for_tilt("obj4", 20.0, 1.0, str(path)) == pytest.approx(0.65)
+        assert lever_for_tilt("obj4", 20.0, 1.0, str(path), "realistic") == pytest.approx(0.55)
+        # a preset not calibrated uses the top level's (the ideal preset's) curves
+        assert lever_for_tilt("obj4", 20.0, 1.0, str(path), "ideal+drift") == pytest.approx(0.65)
+        assert design.side_and_lever("obj4", 20.0, 0.2, str(path), "realistic")[1] == (
+            pytest.approx(0.55)
+        )
+    finally:
+        load_calibration.cache_clear()

@@ -47,21 +47,17 @@ MAX_DEG = 90.0  # the rest of the targets lie in LOW_DEG-MAX_DEG
 LOW_BINS = int(round(LOW_DEG / BIN_DEG))  # 6
 STRATA = LOW_BINS + 1  # the six low bins and 30-90 deg, in turn
 BIN_CORE = 0.7  # targets fill the middle 70 % of their bin (achieved tilts scatter 2-4 deg)
-# The calibration: coarse lever ratios (e / holding lever) find where each curve rises (the
-# rods start to turn at 0.45-0.8 and settle at 50-77 deg beyond 0.9), then DENSE_LEVERS
-# evenly spaced levers cover that rise, from the last coarse lever below RISE_DEG[0] to
-# the first above RISE_DEG[1]; every lever has one grasp per seed and side, each in its own
-# scene, and the curve is the median over the grasps within POOL_WIDTH of each lever.
+# The calibration's grid (``tilt_curves``): coarse lever ratios (e / holding lever), then
+# DENSE_LEVERS across each curve's rise, then each step bisected; CALIBRATION_SEEDS grasps
+# per lever and side, each in its own scene.
 CALIBRATION_LEVERS = (0.35, 0.45, 0.55, 0.65, 0.75, 0.85, 1.0)
 CALIBRATION_SEEDS = (0, 1)
 DENSE_LEVERS = 10
-RISE_DEG = (1.0, 32.0)
 SIDES = {"+x": 1.0, "-x": -1.0}  # the CoM on the heavy end's half of the rod, or the other
 GAP_DEG = 20.0  # a rise this steep between calibrated neighbours is a step (no tilts inside)
 # The lever error of a grasp (its share of the holding lever): perception and the scene
 # put the achieved tilt where the curve is 0.01-0.02 further on or back (measured).
 LEVER_SCATTER = 0.015
-POOL_WIDTH = LEVER_SCATTER + 1e-6  # grasps this close in lever pool into one median
 SIDE_TIE_DEG = 2.0  # sides scoring within this (deg) of each other are drawn at random
 CALIBRATION_SEED_BASE = 7_000_000  # far from the experiments' trial seeds
 _GOLDEN = 0.5 * (np.sqrt(5.0) - 1.0)
@@ -140,18 +136,6 @@ def target_tilts(n_trials: int, run_seed: int = 0) -> np.ndarray:
 # --- the calibrated curves ---------------------------------------------------------------
 
 
-def monotone(y: Sequence[float]) -> np.ndarray:
-    """The non-decreasing sequence nearest ``y`` in least squares (pool adjacent
-    violators): the calibration's medians made monotone."""
-    blocks: list[list[float]] = []  # [mean, count]
-    for v in map(float, y):
-        blocks.append([v, 1.0])
-        while len(blocks) > 1 and blocks[-2][0] > blocks[-1][0]:
-            (m1, n1), (m2, n2) = blocks.pop(-2), blocks.pop()
-            blocks.append([(m1 * n1 + m2 * n2) / (n1 + n2), n1 + n2])
-    return np.concatenate([np.full(int(n), m) for m, n in blocks])
-
-
 def invert_curve(
     levers: Sequence[float], tilts: Sequence[float], tilt: float, gap_deg: float = GAP_DEG
 ) -> float:
@@ -198,22 +182,34 @@ def side_key(side: float) -> str:
     return "+x" if side > 0 else "-x"
 
 
+def calibrated_objects(data: dict, sensors: str = "ideal") -> dict:
+    """The curves of a calibration measured with the sensor preset ``sensors`` and its
+    procedure (``trials.episode_config``): ``data["presets"][sensors]["objects"]``, else
+    ``data["objects"]`` (the ideal preset, the paper's procedure). The procedure matters:
+    the realistic one's approach moves and perceived grasp point turn rods 2-10 deg
+    further at the same lever (median over obj4-obj6's 0-30 deg targets, measured)."""
+    return data.get("presets", {}).get(sensors, data)["objects"]
+
+
 def tilt_curve(
-    obj: str, side: float = 1.0, path: str | None = None
+    obj: str, side: float = 1.0, path: str | None = None, sensors: str = "ideal"
 ) -> tuple[np.ndarray, np.ndarray]:
     """(levers, tilts_deg): the calibrated monotone curve of ``obj`` with its CoM on
-    ``side`` (+1 or -1) of the centre."""
-    objects = load_calibration(path)["objects"]
+    ``side`` (+1 or -1) of the centre, under the sensor preset ``sensors``
+    (``calibrated_objects``)."""
+    objects = calibrated_objects(load_calibration(path), sensors)
     if obj not in objects:
         raise InvalidInputError(f"{obj!r} is not calibrated; calibrated are {sorted(objects)}")
     curve = objects[obj][side_key(side)]
     return np.array(curve["lever_ratio"]), np.array(curve["tilt_deg"])
 
 
-def lever_for_tilt(obj: str, tilt_deg: float, side: float = 1.0, path: str | None = None) -> float:
+def lever_for_tilt(
+    obj: str, tilt_deg: float, side: float = 1.0, path: str | None = None, sensors: str = "ideal"
+) -> float:
     """The lever ratio (e / holding lever) at which ``obj``, its CoM on ``side`` of the
     centre, settles at ``tilt_deg``."""
-    return invert_curve(*tilt_curve(obj, side, path), tilt_deg)
+    return invert_curve(*tilt_curve(obj, side, path, sensors), tilt_deg)
 
 
 def curve_at(levers: Sequence[float], tilts: Sequence[float], lever: float) -> float:
@@ -221,7 +217,9 @@ def curve_at(levers: Sequence[float], tilts: Sequence[float], lever: float) -> f
     return float(np.interp(lever, levers, tilts))
 
 
-def side_and_lever(obj: str, tilt_deg: float, u: float, path: str | None = None) -> tuple:
+def side_and_lever(
+    obj: str, tilt_deg: float, u: float, path: str | None = None, sensors: str = "ideal"
+) -> tuple:
     """(side, lever ratio) for a grasp of ``obj`` aimed at ``tilt_deg``: the side of the
     centre to put the true CoM on, and that side's lever for the target.
 
@@ -229,11 +227,12 @@ def side_and_lever(obj: str, tilt_deg: float, u: float, path: str | None = None)
     side whose curve lands nearest the target and least steeply there is taken: its score
     is the miss |curve(r) - target| plus half the curve's rise over r +- LEVER_SCATTER (how
     far a grasp's usual lever error moves the tilt). Sides that score within SIDE_TIE_DEG
-    of each other are chosen between by ``u`` (uniform in [0, 1)), half and half.
+    of each other are chosen between by ``u`` (uniform in [0, 1)), half and half. The curves
+    are those of the sensor preset ``sensors`` (``calibrated_objects``).
     """
     scores, levers = {}, {}
     for key, side in SIDES.items():
-        r, t = tilt_curve(obj, side, path)
+        r, t = tilt_curve(obj, side, path, sensors)
         lever = invert_curve(r, t, tilt_deg)
         rise = curve_at(r, t, lever + LEVER_SCATTER) - curve_at(r, t, lever - LEVER_SCATTER)
         scores[key] = abs(curve_at(r, t, lever) - tilt_deg) + 0.5 * rise
@@ -243,45 +242,6 @@ def side_and_lever(obj: str, tilt_deg: float, u: float, path: str | None = None)
     else:
         key = min(scores, key=scores.get)
     return SIDES[key], levers[key]
-
-
-# --- measuring the curves ----------------------------------------------------------------
-
-
-def dense_levers(levers: Sequence[float], tilts: Sequence[float], n: int) -> list[float]:
-    """``n`` lever ratios evenly inside the rise of the (sorted, monotone) coarse curve:
-    from its last lever below RISE_DEG[0] to its first above RISE_DEG[1]."""
-    r, t = np.asarray(levers, dtype=float), np.asarray(tilts, dtype=float)
-    below, above = np.flatnonzero(t < RISE_DEG[0]), np.flatnonzero(t > RISE_DEG[1])
-    lo = r[below[-1]] if below.size else r[0]
-    hi = r[above[0]] if above.size else r[-1]
-    return [round(float(v), 5) for v in np.linspace(lo, hi, n + 2)[1:-1]]
-
-
-def pooled_median(levers: Sequence[float], tilts: Sequence[Sequence[float]]) -> np.ndarray:
-    """Per lever (sorted), the median |tilt| of every grasp at a lever within POOL_WIDTH of
-    it: the tilt a grasp aimed there lands at, its usual lever error included."""
-    r = np.asarray(levers, dtype=float)
-    return np.array([np.median(np.concatenate([np.ravel(tilts[j]) for j in
-                     np.flatnonzero(np.abs(r - x) <= POOL_WIDTH)])) for x in r])  # fmt: skip
-
-
-def curve_entry(levers: Sequence[float], tilt: Sequence, dropped: Sequence) -> dict:
-    """One calibration curve: per lever ratio (sorted) the |tilt| of each grasp, their
-    median, the median pooled over neighbouring levers (``pooled_median``) and that made
-    monotone (``tilt_deg``, the curve the design inverts)."""
-    order = np.argsort(levers)
-    r = [float(levers[i]) for i in order]
-    tilt = [list(map(float, tilt[i])) for i in order]
-    pooled = pooled_median(r, tilt)
-    return {
-        "lever_ratio": r,
-        "tilt_deg": [round(float(v), 3) for v in monotone(pooled)],
-        "pooled_median_deg": [round(float(v), 3) for v in pooled],
-        "median_abs_tilt_deg": [round(float(np.median(v)), 3) for v in tilt],
-        "abs_tilt_deg": [[round(v, 3) for v in row] for row in tilt],
-        "dropped": [[bool(v) for v in dropped[i]] for i in order],
-    }
 
 
 if __name__ == "__main__":  # python -m comgrasp_pin.experiments.design: the calibration

@@ -26,18 +26,26 @@ from comgrasp_pin.experiments.design import (
     CALIBRATION_SEED_BASE,
     CALIBRATION_SEEDS,
     DENSE_LEVERS,
-    LEVER_SCATTER,
+    GAP_DEG,
     MAX_DEG,
-    RISE_DEG,
     SIDES,
-    curve_entry,
-    dense_levers,
+    calibrated_objects,
     grasp_for_lever,
     load_calibration,
-    monotone,
     wrap_tilt,
 )
 from comgrasp_pin.experiments.runner import spawn_pool
+from comgrasp_pin.experiments.tilt_curves import (
+    MIN_STEP,
+    REFINE,
+    RISE_DEG,
+    curve_entry,
+    dense_levers,
+    dumps,
+    merged,
+    monotone,
+    step_levers,
+)
 from comgrasp_pin.planning.holding import holding_lever
 
 
@@ -61,7 +69,7 @@ def tilt_trial(task: dict) -> dict:
     from comgrasp_pin.simulation.scene import Scene, World
 
     obj, lever, seed = task["object"], float(task["lever"]), int(task["seed"])
-    config = trials.episode_config()
+    config = trials.episode_config(None, "ipopt", task.get("sensors", "ideal"))
     rng = np.random.default_rng(seed + 17)
     pos_real, offset = grasp_for_lever(obj, lever, rng, config, trials.ACCURACY_COM_RANGE,
                                        trials.ACCURACY_GRASP_OFFSET, task["side"])  # fmt: skip
@@ -125,8 +133,9 @@ def _task_key(task: dict) -> str:
     return f"{task['object']}|{float(task['lever']):.5f}|{float(task['side']):+.0f}|{task['seed']}"
 
 
-def _tasks(obj: str, levers: Sequence[float], seeds: Sequence[int], side: float) -> list[dict]:
-    return [{"object": obj, "lever": float(r), "side": float(side),
+def _tasks(obj: str, levers: Sequence[float], seeds: Sequence[int], side: float,
+           sensors: str = "ideal") -> list[dict]:  # fmt: skip
+    return [{"object": obj, "lever": float(r), "side": float(side), "sensors": sensors,
              "seed": calibration_seed(obj, r, s, side)} for r in levers for s in seeds]  # fmt: skip
 
 
@@ -164,22 +173,27 @@ def calibrate(
     seeds: Sequence[int] = CALIBRATION_SEEDS,
     workers: int = 2,
     dense: int = DENSE_LEVERS,
+    sensors: str = "ideal",
+    refine: int = REFINE,
 ) -> dict:
     """Measure every object's two curves (its CoM either side of the centre) at the coarse
-    ``levers``, then at ``dense`` levers across each curve's rise (``dense_levers``), and
-    write the calibration JSON to ``out``. Grasps are logged beside it as they finish
-    (``<out>.partial.jsonl``), so that a run that was stopped resumes."""
+    ``levers``, then at ``dense`` levers across each curve's rise (``dense_levers``), then
+    ``refine`` times inside each step (``step_levers``), with the sensor preset ``sensors``
+    and its procedure (``trials.episode_config``), and write them into the calibration
+    JSON at ``out`` (``merged``: other objects and presets there are kept). Grasps are
+    logged beside it as they finish (``<out>.partial.jsonl``), so that a stopped run
+    resumes."""
     from comgrasp_pin.experiments import trials
     from comgrasp_pin.simulation.objects import get_object
 
-    config = trials.episode_config()
+    config = trials.episode_config(None, "ipopt", sensors)
     seeds = list(seeds)
     start = time.perf_counter()
     curves_of = [(o, key) for o in objects for key in SIDES]
     results: dict[tuple, dict[float, tuple]] = {c: {} for c in curves_of}
 
     def measure(pool: _Pool, todo: list[tuple]) -> None:
-        tasks = [t for (o, key), r in todo for t in _tasks(o, [r], seeds, SIDES[key])]
+        tasks = [t for (o, key), r in todo for t in _tasks(o, [r], seeds, SIDES[key], sensors)]
         rows = pool.map(tilt_trial, tasks)
         for k, (c, r) in enumerate(todo):
             tilt, dropped = _tilts(rows[k * len(seeds) : (k + 1) * len(seeds)], [r], len(seeds))
@@ -195,6 +209,14 @@ def calibrate(
             coarse = monotone([np.median(results[c][r][0]) for r in rs])
             todo += [(c, r) for r in dense_levers(rs, coarse, dense) if r not in results[c]]
         measure(pool, todo)
+        for _ in range(int(refine)):
+            todo = []
+            for c in curves_of:
+                rs = sorted(results[c])
+                # per lever, not pooled: pooling over neighbours smears a step out
+                curve = monotone([np.median(results[c][r][0]) for r in rs])
+                todo += [(c, r) for r in step_levers(rs, curve) if r not in results[c]]
+            measure(pool, todo)
     curves: dict[str, dict] = {}
     for o, key in curves_of:
         spec = get_object(o)
@@ -204,52 +226,35 @@ def calibrate(
         entry[key] = curve_entry(rs, [results[(o, key)][r][0] for r in rs],
                                  [results[(o, key)][r][1] for r in rs])  # fmt: skip
     n_grasps = sum(len(v) for v in results.values()) * len(seeds)
-    data = {
-        "about": (
-            "Tilt calibration of the accuracy experiment (comgrasp_pin.experiments.design). "
-            "Per object and side of the centre its true CoM lies on (+x: the heavy end's "
-            "half, -x: the other) and per lever ratio (grasp-to-CoM distance over the "
-            "nominal holding lever holding_lever_m): abs_tilt_deg, the TRUE tilt (deg, from "
-            "the simulator, wrapped to [-90, 90) and made absolute) at which the rod "
-            "settled in the jaws, one trial grasp per calibration seed, each in its own "
-            "scene (90 = it dropped); median_abs_tilt_deg their median; pooled_median_deg "
-            f"the median over the grasps within {LEVER_SCATTER} of the lever; tilt_deg that "
-            "made monotone (pool adjacent violators), the curve the design inverts."
+    made = {
+        "sensors": sensors,
+        "objects": list(objects),
+        "utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
+        "command": (
+            f"python -m comgrasp_pin.experiments.tilt_calibration --objects "
+            f"{','.join(objects)} --sensors {sensors} --out {out}"
+        ),  # fmt: skip
+        "how": (
+            f"coarse levers {list(levers)}, then {dense} levers evenly across each "
+            f"curve's rise (from the last coarse lever below {RISE_DEG[0]} deg to the "
+            f"first above {RISE_DEG[1]} deg), then {refine} rounds of bisecting each step "
+            f"(a rise of more than {GAP_DEG} deg, down to {MIN_STEP:g}); {len(seeds)} "
+            f"grasps per lever and side; {n_grasps} grasps in all"
         ),
-        "made": {
-            "command": f"python -m comgrasp_pin.experiments.design --out {out}",
-            "how": (
-                f"coarse levers {list(levers)}, then {dense} levers evenly across each "
-                f"curve's rise (from the last coarse lever below {RISE_DEG[0]} deg to the "
-                f"first above {RISE_DEG[1]} deg); {len(seeds)} grasps per lever and side; "
-                f"{n_grasps} grasps in all"
-            ),
-            "scene_seeds": "design.calibration_seed(object, lever, seed, side)",
-            "config": "trials.episode_config() (the defaults; torque noise 0.05 N m)",
-            "grip_force_N": config.motion.grip_force,
-            "pad_friction": list(config.world.pad_friction),
-            "com_range": list(trials.ACCURACY_COM_RANGE),
-            "grasp_limit": trials.ACCURACY_GRASP_OFFSET,
-            "workers": workers,
-            "wall_s": round(time.perf_counter() - start, 1),
-        },
-        "objects": curves,
+        "scene_seeds": "tilt_calibration.calibration_seed(object, lever, seed, side)",
+        "config": f"trials.episode_config(None, 'ipopt', {sensors!r}): the preset's procedure",
+        "grip_force_N": config.motion.grip_force,
+        "pad_friction": list(config.world.pad_friction),
+        "com_range": list(trials.ACCURACY_COM_RANGE),
+        "grasp_limit": trials.ACCURACY_GRASP_OFFSET,
+        "workers": workers,
+        "wall_s": round(time.perf_counter() - start, 1),
     }
-    out.write_text(_dumps(data) + "\n")
+    data = merged(json.loads(out.read_text()) if out.exists() else {}, curves, made, sensors)
+    out.write_text(dumps(data) + "\n")
     log.unlink(missing_ok=True)
     load_calibration.cache_clear()
     return data
-
-
-def _dumps(data, indent: int = 0) -> str:
-    """JSON with every list of numbers (or of such lists) on one line."""
-    pad = " " * (indent + 1)
-    if isinstance(data, dict) and data:
-        items = (f"{pad}{json.dumps(k)}: {_dumps(v, indent + 1)}" for k, v in data.items())
-        return "{\n" + ",\n".join(items) + "\n" + " " * indent + "}"
-    if isinstance(data, list) and any(isinstance(v, dict) for v in data):
-        return "[\n" + ",\n".join(pad + _dumps(v, indent + 1) for v in data) + "\n]"
-    return json.dumps(data)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -263,17 +268,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--seeds", type=int, default=len(CALIBRATION_SEEDS))
     parser.add_argument("--dense", type=int, default=DENSE_LEVERS)
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--sensors", default="ideal", help="sensor preset (and its procedure)")
+    parser.add_argument("--refine", type=int, default=REFINE, help="rounds of bisecting steps")
     args = parser.parse_args(argv)
     objects = [o.strip() for o in args.objects.split(",") if o.strip()]
     levers = [float(v) for v in args.levers.split(",")]
     data = calibrate(objects, Path(args.out), levers, range(args.seeds), args.workers,
-                     args.dense)  # fmt: skip
-    for obj, entry in data["objects"].items():
+                     args.dense, args.sensors, args.refine)  # fmt: skip
+    for obj, entry in calibrated_objects(data, args.sensors).items():
         for key in SIDES:
             c = entry[key]
             pairs = " ".join(f"{r:g}:{t:.1f}" for r, t in zip(c["lever_ratio"], c["tilt_deg"]))
             print(f"{obj} {key}: {pairs}")
-    print(f"written to {args.out} in {data['made']['wall_s']} s")
+    print(f"written to {args.out} in {data['runs'][-1]['wall_s']} s")
     return 0
 
 
