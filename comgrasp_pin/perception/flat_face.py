@@ -26,6 +26,8 @@ WIDTH_PERCENTILES = (5.0, 95.0)  # the handle's width across its axis, robust to
 EDGE_PERCENTILES = (2.0, 98.0)  # a slice's edges: nearly its extremes, robust to a stray
 SLICE = 0.01  # slices along the strip (m)
 MIN_SLICE_POINTS = 10
+WHOLE_WIDTH, WHOLE_COUNT = 0.8, 0.3  # a slice narrower or sparser than this share of the
+# median slice's is partial
 
 
 def looks_flat(xz_across: np.ndarray, radius: float | None) -> bool:
@@ -104,10 +106,15 @@ def strip_line(
             if n >= MIN_SLICE_POINTS:
                 rows = order[a : a + n]
                 lo, hi = np.percentile(across[rows], EDGE_PERCENTILES)
-                mids.append((median(along[rows]), 0.5 * (lo + hi)))
-        if len(mids) < 3:
+                mids.append((median(along[rows]), 0.5 * (lo + hi), hi - lo, n))
+        whole = np.array(mids).reshape(-1, 4)
+        # A slice that sees the strip only in part (cut by an occluder, the image's border
+        # or a hole: narrower, or far fewer points) has its mid-point off the mid-line.
+        whole = whole[(whole[:, 2] >= WHOLE_WIDTH * np.median(whole[:, 2]))
+                      & (whole[:, 3] >= WHOLE_COUNT * np.median(whole[:, 3]))]  # fmt: skip
+        if len(whole) < 3:
             return None
-        c = np.array(mids)
+        c = whole[:, :2]
         keep = np.ones(len(c), dtype=bool)
         for _ in range(3):
             slope, intercept = np.polyfit(c[keep, 0], c[keep, 1], 1)
