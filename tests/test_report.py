@@ -398,28 +398,37 @@ def test_reproduce_with_a_second_seed_runs_accuracy_again_and_reports_it(tmp_pat
 
     monkeypatch.setattr(rep, "run_accuracy", fake_accuracy)
     monkeypatch.setattr(rep, "run_regrasp", lambda opts: [])
-    text = rep.reproduce(rep.RunOptions(out=tmp_path, trials=4, second_seed=7)).read_text()
-    assert [c.seed for c in calls] == [0, 7]
+    opts = rep.RunOptions(out=tmp_path, trials=4, second_seed=7, sensors="realistic")
+    text = rep.reproduce(opts).read_text()
+    # the headline, the second seed with its sensors and with ideal ones, the ideal headline
+    assert [(c.seed, c.sensors) for c in calls] == [(0, "realistic"), (7, "realistic"),
+                                                    (7, "ideal"), (0, "ideal")]  # fmt: skip
     assert calls[1].out == tmp_path / "seed7" and calls[1].second_seed is None
+    assert calls[2].out == tmp_path / "ideal" / "seed7" and calls[2].second_seed is None
     section = text.split("## A second seed: the accuracy experiment with seed 7")[1]
-    assert "| tilt bin (deg) | n | coverage ±1σ (68 %)" in section.split("## Experiment 2")[0]
+    section = section.split("## Experiment 2")[0]
+    for preset, folder in (("realistic", "seed7/"), ("ideal", "ideal/seed7/")):
+        assert f"### `{preset}` sensors (files in `{folder}`)" in section
+    assert section.count("| tilt bin (deg) | n | coverage ±1σ (68 %)") == 2
     assert "rms z" in section
 
 
 def test_the_trials_own_time_sums_every_rows_wall_time(tmp_path):
     """run.json's trial_core_minutes: every row of the run's CSVs (the headline's, ideal/,
-    seed<S>/), error rows without a wall time counting 0; other folders' CSVs not."""
+    seed<S>/, ideal/seed<S>/), error rows without a wall time counting 0; other folders'
+    CSVs not."""
     from comgrasp_pin.experiments.reproduce import RunOptions, _run_folders, _trial_minutes
 
     files = {"accuracy.csv": ["30", "90"], "ideal/regrasp.csv": ["60", ""],
-             "seed1/accuracy.csv": ["120"], "other.csv": ["6000"],
+             "seed1/accuracy.csv": ["120"], "ideal/seed1/accuracy.csv": ["6"],
+             "other.csv": ["6000"],
              "sensitivity/ideal/accuracy.csv": ["6000"]}  # fmt: skip
     for name, walls in files.items():
         path = tmp_path / name
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text("object,wall_s\n" + "".join(f"obj1,{w}\n" for w in walls))
     folders = _run_folders(RunOptions(out=tmp_path, second_seed=1))
-    assert _trial_minutes(folders) == pytest.approx((30 + 90 + 60 + 120) / 60)
+    assert _trial_minutes(folders) == pytest.approx((30 + 90 + 60 + 120 + 6) / 60)
 
 
 def test_the_run_time_names_the_parts_that_ran():

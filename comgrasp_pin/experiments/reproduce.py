@@ -120,21 +120,32 @@ def _versions() -> dict:
 
 def _second_seed_section(opts: RunOptions, out: Path) -> str:
     """The accuracy experiment again with ``opts.second_seed`` (its files in
-    ``out/seed<S>``), as a report section: its accuracy table and calibration; "" without."""
+    ``out/seed<S>``), and with ideal sensors too where the headline preset is another
+    (``out/ideal/seed<S>``), as a report section: each one's calibration and accuracy
+    table; "" without a second seed."""
     if opts.second_seed is None:
         return ""
     seed = opts.second_seed
-    sub = replace(opts, seed=seed, out=out / f"seed{seed}", second_seed=None)
-    rows = run_accuracy(sub)
-    return f"""## A second seed: the accuracy experiment with seed {seed}
-
-The same design and objects, other scenes and grasps (files in `seed{seed}/`); the
-calibration first, then the accuracy per bin.
+    runs = [(opts.sensors, replace(opts, seed=seed, out=out / f"seed{seed}", second_seed=None))]
+    if opts.sensors != "ideal":
+        noise = sensor_preset("ideal").torque.noise_std
+        runs.append(("ideal", replace(runs[0][1], sensors="ideal", noise=noise,
+                                      out=out / "ideal" / f"seed{seed}")))  # fmt: skip
+    parts = []
+    for sensors, sub in runs:
+        rows = run_accuracy(sub)
+        parts.append(f"""### `{sensors}` sensors (files in `{sub.out.relative_to(out)}/`)
 
 {report.calibration_table(rows)}
 
 {report.accuracy_table(rows)}
-"""
+""")
+    return f"""## A second seed: the accuracy experiment with seed {seed}
+
+The same design and objects, other scenes and grasps; per sensor preset the calibration
+first, then the accuracy per bin.
+
+""" + "\n".join(parts)
 
 
 def _ideal_section(opts: RunOptions, out: Path, acc: list, reg: list) -> str:
@@ -166,8 +177,10 @@ def _trial_minutes(folders: list[Path]) -> float:
 
 
 def _run_folders(opts: RunOptions) -> list[Path]:
-    """The folders a run writes its CSVs to: its own, ``ideal/``, and ``seed<S>/``."""
-    seeds = [] if opts.second_seed is None else [opts.out / f"seed{opts.second_seed}"]
+    """The folders a run writes its CSVs to: its own, ``ideal/``, ``seed<S>/`` and
+    ``ideal/seed<S>/``."""
+    seed = opts.second_seed
+    seeds = [] if seed is None else [opts.out / f"seed{seed}", opts.out / "ideal" / f"seed{seed}"]
     return [opts.out, opts.out / "ideal", *seeds]
 
 
