@@ -239,7 +239,7 @@ def _check_held(points: np.ndarray, x_axis: np.ndarray, offset_xz: np.ndarray) -
     The line: ``x_axis`` (2,), ``offset_xz`` (2,) in the x-z plane. ObjectNotFoundError when
     it does not pass through the jaws or what it runs along is too short to be a held rod.
     """
-    along = points[:, [0, 2]] @ x_axis
+    along = points @ np.array([x_axis[0], 0.0, x_axis[1]])  # as the axis in 3-D, to the bit
     lo, hi = np.percentile(along, [0.1, 99.9])
     if np.linalg.norm(offset_xz) > MAX_AXIS_FROM_TCP or hi - lo < MIN_EXTENT:
         raise ObjectNotFoundError(
