@@ -42,6 +42,8 @@ FLYING_MIN, FLYING_SIGMAS = 0.005, 4.0  # a pixel this far (m, noise stds) from 
 DIP_DEPTH = 0.3  # m below the table's plane: lower than this is the floor
 DIP_REACH = 0.2  # m (a rod dipping at a few degrees is near the plane for centimetres first)
 DIP_PIXELS = 10
+DIP_BAND = 0.06  # m beyond the table's edge: a dipping rod goes down from the edge (the drop
+# box's walls and their flying pixels stand 8 cm beyond it)
 CUT_END_BAND = 0.03  # a rod meeting the image's border only this near one end (m) runs out
 # of view there: the part seen is measured (``ObjectCutByBorderError.seen``)
 _KERNEL3 = np.ones((3, 3), np.uint8)
@@ -136,15 +138,17 @@ def differs_in_colour(rgb: np.ndarray, area: np.ndarray) -> np.ndarray:
 def check_no_dip(view: TableView, pick_area, centroid, direction, ends, p, min_height) -> None:
     """ObjectCutByBorderError when the rod dips below the table's plane over its edge.
 
-    That is: beyond the table, on the rod's axis (``direction`` (2,) through ``centroid``
-    (2,), within its points' ``p`` (N, 3) spread across it and 1 cm) and within DIP_REACH
-    beyond one of its ``ends`` (along the axis, m), DIP_PIXELS or more points lie between
-    DIP_DEPTH and the height threshold below the plane (after an opening: a real camera's
-    flying pixels lie in lines a pixel wide, a rod is a surface); ``min_height`` (m): the
+    That is: beyond the table's edge by less than DIP_BAND, on the rod's axis
+    (``direction`` (2,) through ``centroid`` (2,), within its points' ``p`` (N, 3) spread
+    across it and 1 cm) and within DIP_REACH beyond one of its ``ends`` (along the axis,
+    m), DIP_PIXELS or more points lie between DIP_DEPTH and the height threshold below the
+    plane (after an opening: a real camera's flying pixels lie in lines a pixel wide, a rod
+    is a surface); ``min_height`` (m): the
     top view's height threshold.
     """
     z = view.points[..., 2]
-    dips = ~in_area(view.points, pick_area, 0.0) & np.isfinite(z)
+    dips = ~in_area(view.points, pick_area, 0.0) & in_area(view.points, pick_area, -DIP_BAND)
+    dips &= np.isfinite(z)
     dips &= (z < view.table_z - min_height) & (z > view.table_z - DIP_DEPTH)
     dips = cv2.morphologyEx(dips.astype(np.uint8), cv2.MORPH_OPEN, _KERNEL3) > 0
     if not dips.any():
