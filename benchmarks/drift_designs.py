@@ -9,7 +9,7 @@ position along the rod (mm) and the rms of z = error / stated std, for
 
 - ``independent``: each pose's difference with the drift over its own interval, poses taken
   as independent (the estimator before the drift's covariance);
-- ``gls``: the differences' full covariance (``procedures.torques.drift_cov``), generalised
+- ``gls``: the differences' full covariance (``estimation.drift``), generalised
   least squares: what the realistic procedure does;
 - ``gls, empty last pose first``: the empty arm measured at the rolled pose first, so the
   first pose's interval is shorter;
@@ -33,9 +33,9 @@ import numpy as np
 
 import comgrasp_pin as cg
 from comgrasp_pin.estimation import AxisPrior
+from comgrasp_pin.estimation.drift import mean_min
 from comgrasp_pin.estimation.regressor import stacked_regressor
 from comgrasp_pin.motion.ik import solve_ik
-from comgrasp_pin.procedures.torques import mean_min
 
 ROBOT = cg.RobotModel.ur5()
 N = ROBOT.nq

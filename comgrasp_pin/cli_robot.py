@@ -71,7 +71,7 @@ def _cmd_estimate(args: argparse.Namespace) -> int:
     robot = _robot(args)
     log, before, after = _log_and_windows(args, robot)
     result = rio.estimate_from_log(
-        robot, log, before, after, args.torque_std, args.method, args.max_speed
+        robot, log, before, after, args.torque_std, args.method, args.max_speed, args.drift_std
     )
     exports = ((args.export_ur, rio.write_urscript), (args.export_franka, rio.write_franka),
                (args.export_ros2, rio.write_ros2))  # fmt: skip
@@ -168,6 +168,10 @@ def add_subcommands(sub: argparse._SubParsersAction) -> None:
     est.add_argument("--torque-std", type=float, default=None,
                      help="std of one AVERAGED torque reading, N m (per-sample std / sqrt(n "
                      "samples)); default: from the samples' spread")  # fmt: skip
+    est.add_argument("--drift-std", type=float, default=0.0,
+                     help="the torque sensor's drift, a random walk, N m/sqrt(s) (its data "
+                     "sheet, or measured on a still arm); the drift between and across the "
+                     "windows then enters the estimate's covariance (default 0: none)")  # fmt: skip
     est.add_argument("--method", default="lstsq", choices=("lstsq", "ipopt"),
                      help="closed-form least squares or CasADi + IPOPT")  # fmt: skip
     est.add_argument("--out", default="RESULT.json", help="the result JSON")

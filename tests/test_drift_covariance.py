@@ -16,9 +16,10 @@ from hypothesis import strategies as st
 import comgrasp_pin as cg
 from comgrasp_pin.config import EpisodeConfig, SensorConfig, TorqueSensorConfig, TrialConfig
 from comgrasp_pin.estimation import AxisPrior
+from comgrasp_pin.estimation.drift import mean_min
 from comgrasp_pin.estimation.regressor import stacked_regressor
 from comgrasp_pin.procedures.cell import TorqueMeasurement
-from comgrasp_pin.procedures.torques import drift_cov, mean_min, pair_noise
+from comgrasp_pin.procedures.torques import drift_cov, pair_noise
 from comgrasp_pin.simulation.torque_sensor import JointTorqueSensor
 from comgrasp_pin.workcell import Q_PARK
 

@@ -113,6 +113,26 @@ def _bad(args, capsys, *words):
         assert w in err, err
 
 
+def test_estimate_with_the_sensors_drift(ur5_session, tmp_path):
+    """--drift-std: recorded in RESULT.json, and the drift between the windows widens the
+    stated std against the same log without it."""
+    log, before, after, _ = ur5_session
+    csv = write_csv(log, tmp_path / "log.csv")
+    stds = {}
+    for drift in ("0", "0.01"):
+        out = tmp_path / f"RESULT_{drift}.json"
+        assert main([*_estimate_args(["--csv", str(csv)], before, after, out),
+                     "--drift-std", drift]) == 0  # fmt: skip
+        r = _check_result(out)
+        assert r["torque_drift_Nm_per_sqrt_s"] == float(drift)
+        stds[drift] = np.array(r["std"]["com_m"])
+    assert np.all(stds["0.01"] > 1.5 * stds["0"])
+    _bad_out = tmp_path / "R.json"
+    assert main([*_estimate_args(["--csv", str(csv)], before, after, _bad_out),
+                 "--drift-std", "-1"]) == 2  # fmt: skip
+    assert not _bad_out.exists()
+
+
 def test_bad_logs_exit_2_with_a_message(bag, ur5_session, tmp_path, capsys):
     log, before, after, _ = ur5_session
     out = tmp_path / "R.json"

@@ -8,7 +8,7 @@ import pytest
 from _logs import rnea_torques, session
 from _payload import panda, payload_torques
 
-from comgrasp_pin.errors import LogError
+from comgrasp_pin.errors import InvalidInputError, LogError
 from comgrasp_pin.robot_io import estimate_from_log, load_robot
 from comgrasp_pin.robot_io.planning import plan_measurement_poses
 
@@ -113,3 +113,35 @@ def test_one_pose_reports_the_unobservable_direction(robot, planned):
     est = estimate_from_log(robot, log, before[:1], after[:1]).estimate
     down_ee = robot.ee_pose(planned[0])[:3, :3].T @ np.array([0, 0, -1.0])
     np.testing.assert_allclose(est.unobservable_ee, down_ee, atol=1e-4)  # q has encoder noise
+
+
+def test_a_drifting_sensor_is_covered_with_drift_std(robot, planned):
+    """200 logs whose efforts drift (a random walk of 0.01 N m / sqrt(s) per joint, drawn on
+    the log's own clock, and the white noise): with ``drift_std`` the reported std is within
+    30 % of the estimates' spread; taken as white noise, the std understates it."""
+    log, before, after, _ = session(planned, rnea_torques(robot, MASS, COM), robot.joint_names,
+                                    RATE, 0.0)  # fmt: skip
+    rng = np.random.default_rng(8)
+    drift, dt = 0.01, np.diff(log.time, prepend=log.time[0])[:, None]
+    results: dict = {0.0: ([], []), drift: ([], [])}
+    for _ in range(200):
+        walk = np.cumsum(drift * np.sqrt(dt) * rng.standard_normal(log.effort.shape), axis=0)
+        effort = log.effort + walk + NOISE * rng.standard_normal(log.effort.shape)
+        noisy = type(log)(log.time, log.joint_names, log.position, effort)
+        for drift_std, (estimates, stds) in results.items():
+            est = estimate_from_log(robot, noisy, before, after, drift_std=drift_std).estimate
+            estimates.append(np.r_[est.mass, est.com_ee])
+            stds.append(est.std)
+    ratios = {}
+    for drift_std, (estimates, stds) in results.items():
+        ratios[drift_std] = np.mean(stds, axis=0) / np.std(estimates, axis=0, ddof=1)
+    print("sigma / MC spread without and with drift_std:", ratios)
+    assert np.all(np.abs(ratios[drift] - 1) < 0.3), ratios[drift]
+    assert np.all(ratios[0.0] < 0.7), ratios[0.0]
+
+
+def test_a_negative_drift_is_refused(robot, planned):
+    log, before, after, _ = session(planned, rnea_torques(robot, MASS, COM), robot.joint_names,
+                                    RATE, NOISE)  # fmt: skip
+    with pytest.raises(InvalidInputError, match="drift_std"):
+        estimate_from_log(robot, log, before, after, drift_std=-0.1)

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from comgrasp_pin.config import EpisodeConfig, TrialConfig
+from comgrasp_pin.estimation.drift import difference_covariance
 from comgrasp_pin.procedures.cell import Cell, TorqueMeasurement
 
 
@@ -90,33 +91,14 @@ class PairNoise:
         return PairNoise(None, self.cov[np.ix_(rows, rows)])
 
 
-_GRID = 48
-"""Points per window in ``mean_min`` (its relative error is about 1 / (6 _GRID))."""
-
-
-def mean_min(a: tuple[float, float], b: tuple[float, float]) -> float:
-    """E[min(s, t)] (s) for s, t uniform over the windows ``a``, ``b`` = (start, duration):
-    the covariance of two window averages of a unit random walk (Cov(W_s, W_t) = min)."""
-    grid = (np.arange(_GRID) + 0.5) / _GRID
-    s, t = a[0] + a[1] * grid, b[0] + b[1] * grid
-    return float(np.minimum(s[:, None], t[None, :]).mean())
-
-
 def drift_cov(before: list, after: list, drift_std: float) -> np.ndarray:
-    """(k n, k n) covariance of the k differences' (after - before) white noise and drift.
-
-    Each reading is a window average of the sensor's random walk W (``drift_std`` N m /
-    sqrt(s), independent per joint) plus white noise (the window's ``std_error``). A
-    difference is W averaged over the held window minus over the empty window; where
-    ``before`` is None (tau_before from the model, carried by the measured poses' mean
-    offset), minus the mean over the measured poses' empty windows. Two differences then
-    share drift as much as their windows interleave in time:
-    Cov = sum of w w' drift_std^2 E[min(s, t)] over their windows (``mean_min``), plus the
-    white noise of the windows they share.
-    """
+    """(k n, k n) covariance of the k differences' (after - before) white noise and drift
+    (``estimation.drift``). Each difference is its held window minus its empty window;
+    where ``before`` is None (tau_before from the model, carried by the measured poses'
+    mean offset), minus the mean of the measured poses' empty windows."""
     measured = [b for b in before if b is not None]
     windows = [*after, *measured]
-    k, n = len(after), len(after[0].tau)
+    k = len(after)
     weights = np.zeros((k, len(windows)))
     column = k  # the next measured empty window's
     for i, b in enumerate(before):
@@ -127,14 +109,8 @@ def drift_cov(before: list, after: list, drift_std: float) -> np.ndarray:
         else:
             weights[i, k:] = -1.0 / len(measured)
     spans = [(float(m.time), float(m.duration)) for m in windows]
-    M = np.array([[mean_min(u, v) for v in spans] for u in spans])
-    white = np.array([np.asarray(m.std_error, dtype=float) ** 2 for m in windows])  # (w, n)
-    cov = np.zeros((k, n, k, n))
-    for j in range(n):
-        block = weights @ (drift_std**2 * M + np.diag(white[:, j])) @ weights.T
-        cov[:, j, :, j] = block
-    cov = cov.reshape(k * n, k * n)
-    return 0.5 * (cov + cov.T)
+    white = np.array([np.asarray(m.std_error, dtype=float) for m in windows])
+    return difference_covariance(spans, white, weights, drift_std)
 
 
 def pair_noise(before: list, after: list, config: EpisodeConfig) -> PairNoise:

@@ -9,8 +9,12 @@ Noise: ``torque_std`` is the std of one AVERAGED reading (N m), i.e. the per-sam
 sqrt(number of samples in the window). Without it, it is estimated from the samples' spread
 in the windows: per joint, the RMS over poses of sqrt((s_b^2 / n_b + s_a^2 / n_a) / 2), so
 that the difference of a pose has the variance 2 torque_std^2 that estimate_com assumes.
-That is right for white noise; slow drift or a servo's sag between the two windows is not in
-it (``residual_rms`` against that std tells).
+That is right for white noise. A sensor that drifts (``drift_std`` N m / sqrt(s), a random
+walk: the sensor's data sheet, or measured on a still arm) adds the drift over the time
+between each pose's two windows, and shares it between poses whose intervals overlap: the
+differences' full covariance (``estimation.drift``) then goes to estimate_com, which solves
+the generalised least squares. A servo's sag between the windows is not in either
+(``residual_rms`` against the std tells).
 """
 
 from __future__ import annotations
@@ -21,6 +25,7 @@ import numpy as np
 
 from comgrasp_pin.errors import InvalidInputError, LogError
 from comgrasp_pin.estimation import ComEstimate, estimate_com
+from comgrasp_pin.estimation.drift import difference_covariance
 from comgrasp_pin.estimation.regressor import G0
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.logs import JointLog
@@ -43,6 +48,7 @@ class LogEstimate:
         torque_std: (n,) std of one averaged reading used (N m).
         noise_from: "given" (torque_std passed) or "samples" (the windows' spread).
         before, after: the k static readings of each window.
+        drift_std: the sensor's drift taken into the covariance (N m / sqrt(s); 0: none).
     """
 
     estimate: ComEstimate
@@ -53,6 +59,7 @@ class LogEstimate:
     noise_from: str
     before: tuple[StaticReading, ...]
     after: tuple[StaticReading, ...]
+    drift_std: float = 0.0
 
 
 def estimate_from_log(
@@ -63,6 +70,7 @@ def estimate_from_log(
     torque_std: float | None = None,
     method: str = "lstsq",
     max_speed: float = MAX_SPEED,
+    drift_std: float = 0.0,
 ) -> LogEstimate:
     """Estimate the payload from paired static windows of ``log``.
 
@@ -76,6 +84,8 @@ def estimate_from_log(
             samples' spread.
         method: "lstsq" or "ipopt" (estimate_com).
         max_speed: static threshold (rad/s).
+        drift_std: the torque sensor's drift, a random walk (N m / sqrt(s)); > 0: the
+            differences' covariance with the drift between and across the windows.
 
     Raises:
         LogError, NotStaticError: a window is outside the log, has no partner or moves;
@@ -108,8 +118,29 @@ def estimate_from_log(
         noise_from = "given"
     # the regression is written for |g| = G0: scale torques measured under another |g|
     scale = G0 / gravity_magnitude(robot)
-    est = estimate_com(robot, Q, scale * tau_b, scale * tau_a, method, torque_std=scale * sigma)
-    return LogEstimate(est, Q, tau_b, tau_a, sigma, noise_from, rb, ra)
+    cov = _drift_covariance(rb, ra, sigma, noise_from, drift_std)
+    est = estimate_com(robot, Q, scale * tau_b, scale * tau_a, method,
+                       torque_std=None if cov is not None else scale * sigma,
+                       dtau_cov=None if cov is None else scale**2 * cov)  # fmt: skip
+    return LogEstimate(est, Q, tau_b, tau_a, sigma, noise_from, rb, ra, float(drift_std))
+
+
+def _drift_covariance(rb, ra, sigma, noise_from, drift_std) -> np.ndarray | None:
+    """The differences' covariance with the sensor's drift (``estimation.drift``), or None.
+
+    None without drift. White noise: each window's own spread, or ``sigma`` where given.
+    """
+    if not (np.isfinite(drift_std) and drift_std >= 0):
+        raise InvalidInputError(f"drift_std must be finite and >= 0 (N m / sqrt(s)), got "
+                                f"{drift_std}")  # fmt: skip
+    if drift_std == 0:
+        return None
+    readings = [*ra, *rb]
+    k = len(ra)
+    weights = np.hstack([np.eye(k), -np.eye(k)])
+    white = np.array([r.tau_mean_std if noise_from == "samples" else sigma for r in readings])
+    spans = [(r.t0, r.t1 - r.t0) for r in readings]
+    return difference_covariance(spans, np.maximum(white, NOISE_FLOOR), weights, drift_std)
 
 
 def result_dict(result: LogEstimate, frame: str) -> dict:
@@ -128,6 +159,7 @@ def result_dict(result: LogEstimate, frame: str) -> dict:
         "std": None if std is None else {"mass_kg": float(std[0]), "com_m": std[1:].tolist()},
         "torque_std_Nm": result.torque_std.tolist(),
         "torque_std_from": result.noise_from,
+        "torque_drift_Nm_per_sqrt_s": result.drift_std,
         "method": est.method,
         "solver_status": est.solver_status,
         "condition_number": est.condition_number,
@@ -148,7 +180,7 @@ def summary(result: LogEstimate, frame: str) -> str:
     lines = [
         f"payload from {est.n_poses} static pose(s), {est.method} "
         f"(torque std {result.noise_from}: {np.mean(result.torque_std):.3g} N m per averaged "
-        "reading)",
+        "reading" + (f"; drift {result.drift_std:g} N m/sqrt(s)" if result.drift_std else "") + ")",
         f"  mass  {est.mass:.4f} +- {s[0]:.4f} kg",
         f"  CoM in {frame}:  x {1e3 * c[0]:8.2f} +- {1e3 * s[1]:.2f} mm",
         f"                 y {1e3 * c[1]:8.2f} +- {1e3 * s[2]:.2f} mm",
