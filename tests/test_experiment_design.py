@@ -111,9 +111,7 @@ def test_every_object_is_calibrated_with_a_monotone_curve_per_side_within_the_le
             # the monotone curve is the median of the raw tilts pooled over neighbouring
             # levers (pooled by hand here), made monotone
             raw = objects[name][design.side_key(side)]["abs_tilt_deg"]
-            width = tilt_curves.POOL_WIDTH
-            pooled = [np.median([v for lv, row in zip(levers, raw) for v in row
-                                 if abs(lv - x) <= width]) for x in levers]  # fmt: skip
+            pooled = tilt_curves.pooled_median(levers, raw)  # by hand below
             np.testing.assert_allclose(tilts, monotone(pooled), atol=2e-3)
             # holds level first, turns past the paper's range later
             assert tilts[0] < 2.0 and tilts[-1] > 35.0
@@ -202,6 +200,26 @@ def test_the_side_whose_curve_reaches_the_target_is_chosen(tmp_path):
     assert design.side_and_lever("obj4", 37.5, 0.2, str(path)) == (1.0, pytest.approx(0.75))
     assert design.side_and_lever("obj4", 37.5, 0.8, str(path)) == (-1.0, pytest.approx(0.75))
     load_calibration.cache_clear()
+
+
+def test_weighted_median_by_hand():
+    assert tilt_curves.weighted_median([3.0, 1.0, 2.0], [1.0, 1.0, 1.0]) == 2.0
+    assert tilt_curves.weighted_median([1.0, 2.0], [1.0, 1.0]) == 1.5  # half and half
+    assert tilt_curves.weighted_median([1.0, 10.0], [3.0, 1.0]) == 1.0
+
+
+def test_pooled_median_weights_levers_by_their_share_of_the_window():
+    # by hand, window 0.74 +- 0.015: 0.74 is nearest over [0.725, 0.7405] (0.0155 of 0.03),
+    # the three refined levers past the step share the rest, 0.70 none
+    levers = [0.70, 0.74, 0.741, 0.742, 0.743]
+    shares = tilt_curves.lever_shares(levers, 0.74, 0.015)
+    np.testing.assert_allclose(shares * 0.03, [0.0, 0.0155, 0.001, 0.001, 0.0125], atol=1e-12)
+    tilts = [[10.0], [18.0, 18.0], [70.0], [70.0], [70.0]]
+    pooled = tilt_curves.pooled_median(levers, tilts)
+    # 18 deg holds 0.517 of the weight: the step is not moved before 0.74 (an unweighted
+    # median of the window's grasps, 18, 18, 70, 70, 70, would say 70)
+    assert pooled[1] == 18.0
+    assert pooled[0] == 10.0 and pooled[-1] == 70.0
 
 
 def test_step_levers_bisect_steps_only_down_to_the_minimum_step():

@@ -59,12 +59,42 @@ def step_levers(levers: Sequence[float], tilts: Sequence[float], gap_deg: float 
     return [round(float(v), 5) for v in 0.5 * (r[i] + r[i + 1])]
 
 
-def pooled_median(levers: Sequence[float], tilts: Sequence[Sequence[float]]) -> np.ndarray:
-    """Per lever (sorted), the median |tilt| of every grasp at a lever within POOL_WIDTH of
-    it: the tilt a grasp aimed there lands at, its usual lever error included."""
+def lever_shares(levers: Sequence[float], x: float, width: float = POOL_WIDTH) -> np.ndarray:
+    """Per lever (sorted), the share of [x - width, x + width] nearer to it than to any
+    other lever (its cell, clipped to the window): the chance that a grasp aimed at x with a
+    uniform lever error lands nearest to it. Levers refined densely inside a step share its
+    window instead of outvoting the levers on its other side."""
     r = np.asarray(levers, dtype=float)
-    return np.array([np.median(np.concatenate([np.ravel(tilts[j]) for j in
-                     np.flatnonzero(np.abs(r - x) <= POOL_WIDTH)])) for x in r])  # fmt: skip
+    mid = 0.5 * (r[1:] + r[:-1])
+    lo = np.clip(np.concatenate([[-np.inf], mid]), x - width, x + width)
+    hi = np.clip(np.concatenate([mid, [np.inf]]), x - width, x + width)
+    return (hi - lo) / (2.0 * width)
+
+
+def weighted_median(values: Sequence[float], weights: Sequence[float]) -> float:
+    """The value at which the cumulative weight of the sorted values reaches half (the
+    mean of the two values where it is exactly half)."""
+    v, w = np.asarray(values, dtype=float), np.asarray(weights, dtype=float)
+    order = np.argsort(v)
+    v, c = v[order], np.cumsum(w[order]) / np.sum(w)
+    i = int(np.searchsorted(c, 0.5 - 1e-12))
+    return float(0.5 * (v[i] + v[i + 1]) if abs(c[i] - 0.5) < 1e-12 else v[i])
+
+
+def pooled_median(levers: Sequence[float], tilts: Sequence[Sequence[float]]) -> np.ndarray:
+    """Per lever (sorted), the median |tilt| over the grasps at levers within POOL_WIDTH of
+    it, each lever weighted by its share of that window (``lever_shares``) split among its
+    grasps: the tilt a grasp aimed there lands at, its usual lever error included."""
+    r = np.asarray(levers, dtype=float)
+    out = []
+    for x in r:
+        share = lever_shares(r, x)
+        j = np.flatnonzero(share > 0)
+        values = np.concatenate([np.ravel(tilts[k]) for k in j])
+        weights = np.concatenate([np.full(np.size(tilts[k]), share[k] / np.size(tilts[k]))
+                                  for k in j])  # fmt: skip
+        out.append(weighted_median(values, weights))
+    return np.array(out)
 
 
 def curve_entry(levers: Sequence[float], tilt: Sequence, dropped: Sequence) -> dict:
