@@ -56,7 +56,8 @@ DENSE_LEVERS = 10
 SIDES = {"+x": 1.0, "-x": -1.0}  # the CoM on the heavy end's half of the rod, or the other
 GAP_DEG = 20.0  # a rise this steep between calibrated neighbours is a step (no tilts inside)
 # The lever error of a grasp (its share of the holding lever): perception and the scene
-# put the achieved tilt where the curve is 0.01-0.02 further on or back (measured).
+# put the achieved tilt where the curve is 0.01-0.02 further on or back (measured, ideal
+# preset; the realistic preset's perceived grasp point scatters 2-3 mm, 0.05-0.1).
 LEVER_SCATTER = 0.015
 SIDE_TIE_DEG = 2.0  # sides scoring within this (deg) of each other are drawn at random
 CALIBRATION_SEED_BASE = 7_000_000  # far from the experiments' trial seeds
