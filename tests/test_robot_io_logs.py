@@ -85,6 +85,30 @@ def test_csv_round_trip(robot, synthetic, tmp_path):
     np.testing.assert_allclose(back.time, log.time, atol=1e-9)
 
 
+def _with_velocity(log):
+    """The log with velocities: the positions' central differences (any known array)."""
+    from dataclasses import replace
+
+    return replace(log, velocity=np.gradient(log.position, log.time, axis=0))
+
+
+@pytest.mark.parametrize("storage", ["sqlite3", "mcap", "csv"])
+def test_velocities_round_trip_and_are_none_when_absent(robot, synthetic, tmp_path, storage):
+    log = _with_velocity(synthetic[0])
+    if storage == "csv":
+        back = read_csv(write_csv(log, tmp_path / "log.csv"), robot.joint_names)
+        bare = read_csv(write_csv(synthetic[0], tmp_path / "bare.csv"), robot.joint_names)
+    else:
+        extra = {"panda_finger_joint1": 0.04}
+        back = read_bag(
+            write_bag(log, tmp_path / "b", storage, extra_joints=extra), robot.joint_names
+        )
+        bare = read_bag(write_bag(synthetic[0], tmp_path / "c", storage), robot.joint_names)
+    np.testing.assert_allclose(back.velocity, log.velocity, rtol=1e-9, atol=1e-12)
+    assert back.velocity.shape == back.position.shape
+    assert bare.velocity is None
+
+
 def test_csv_missing_column_is_named(robot, tmp_path):
     path = tmp_path / "log.csv"
     header = ["time"] + [f"{n}.position" for n in robot.joint_names]

@@ -1,12 +1,14 @@
 """Robot logs in: joint positions and efforts from a ROS 2 bag or a wide CSV, as a JointLog.
 
 - ROS 2 bag (sqlite3 or mcap storage, read by ``rosbags``): ``sensor_msgs/msg/JointState``
-  messages on one topic (default ``/joint_states``). Joints are matched by name; messages
+  messages (their velocities too, where every message carries them) on one topic (default
+  ``/joint_states``). Joints are matched by name; messages
   that lack one of the wanted joints (a gripper publishing its own JointState on the same
   topic) are skipped, other joints (fingers) ignored. A message's time is its header stamp,
   or the bag's receive time where the stamps are zero.
 - CSV: a header row with ``time`` (s) and, per joint J, ``J.position`` (rad or m) and
-  ``J.effort`` (N m or N); extra columns ignored.
+  ``J.effort`` (N m or N), and ``J.velocity`` (rad/s or m/s) where the log has it for
+  every joint; extra columns ignored.
 
 Times are seconds from the log's first message.
 """
@@ -35,6 +37,8 @@ class JointLog:
         position: (N, n) joint positions (rad for revolute, m for prismatic joints).
         effort: (N, n) joint efforts (N m for revolute, N for prismatic joints).
         source: the file the log was read from.
+        velocity: (N, n) joint velocities (rad/s or m/s) as the robot reported them, or
+            None where the log has none (a motion's estimate then differentiates positions).
     """
 
     time: np.ndarray
@@ -42,6 +46,7 @@ class JointLog:
     position: np.ndarray
     effort: np.ndarray
     source: str = ""
+    velocity: np.ndarray | None = None
 
     @property
     def duration(self) -> float:
@@ -104,8 +109,9 @@ def read_bag(
 def _joint_rows(
     reader, conns, names: tuple[str, ...], windows=None, margin: float = 1.0
 ) -> list[tuple[float, list, list]]:
-    """(t (s), position, effort) per message holding all ``names``, in the names' order.
+    """(t (s), position, effort, velocity or None) per message holding all ``names``.
 
+    Columns in the names' order.
     With ``windows`` ((t0, t1) in s from the first usable message, by receive time), only
     the messages within ``margin`` s of a window and the last one are deserialized.
     """
@@ -135,13 +141,13 @@ def _joint_rows(
         )
     stamps = np.array([r[0] for r in rows])
     times = stamps if np.all(stamps > 0) else np.array([r[1] for r in rows])
-    return [(t, r[2], r[3]) for t, r in zip(times, rows)]
+    return [(t, *r[2:]) for t, r in zip(times, rows)]
 
 
 def _row(reader, conn, t_bag, raw, names, cache, seen):
-    """(stamp (s), receive time (s), position, effort) of one message, or None.
+    """(stamp (s), receive time (s), position, effort, velocity or None) of one message.
 
-    None when the message lacks an arm joint; ``cache`` maps a message's name list to the
+    The row is None when the message lacks an arm joint; ``cache`` maps a message's name list to the
     arm joints' indices.
     """
     msg = reader.deserialize(raw, conn.msgtype)
@@ -160,11 +166,14 @@ def _row(reader, conn, t_bag, raw, names, cache, seen):
             "driver's effort field) to estimate a payload"
         )
     stamp = msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
-    return stamp, t_bag * 1e-9, msg.position[idx], msg.effort[idx]
+    velocity = msg.velocity[idx] if len(msg.velocity) == len(key) else None
+    return stamp, t_bag * 1e-9, msg.position[idx], msg.effort[idx], velocity
 
 
 def read_csv(path: str | Path, joint_names: list[str] | tuple[str, ...]) -> JointLog:
     """Read a wide CSV: ``time`` and ``J.position``, ``J.effort`` per joint J.
+
+    ``J.velocity`` is read too where every joint has it.
 
     Raises:
         LogError: the file is missing, a column is missing (named), or a value is not a number.
@@ -183,27 +192,44 @@ def read_csv(path: str | Path, joint_names: list[str] | tuple[str, ...]) -> Join
             f"CSV {path} lacks the columns {missing}; it needs 'time' and, per arm joint J of "
             f"the URDF ({list(names)}), 'J.position' and 'J.effort'"
         )
+    velocity = [f"{n}.velocity" for n in names]
+    if all(v in header for v in velocity):
+        wanted += velocity
     cols = [header.index(w) for w in wanted]
     try:
         data = np.loadtxt(path, delimiter=",", skiprows=1, usecols=cols, ndmin=2)
     except ValueError as exc:
         raise LogError(f"CSV {path} has a value that is not a number: {exc}") from None
     n = len(names)
-    rows = [(r[0], r[1 : 1 + n], r[1 + n :]) for r in data]
+    has_velocity = data.shape[1] > 1 + 2 * n
+    rows = [
+        (r[0], r[1 : 1 + n], r[1 + n : 1 + 2 * n], r[1 + 2 * n :] if has_velocity else None)
+        for r in data
+    ]
     return _assemble(rows, names, str(path))
 
 
 def _assemble(rows, names: tuple[str, ...], source: str) -> JointLog:
-    """The JointLog of (t, position, effort) rows, time from the first sample, sorted."""
+    """The JointLog of (t, position, effort, velocity or None) rows.
+
+    Time from the first sample, sorted; velocities only where every row has them.
+    """
     if len(rows) < 2:
         raise LogError(f"{source} has {len(rows)} usable sample(s); a log needs at least two")
     t = np.array([r[0] for r in rows], dtype=float)
     position = np.array([r[1] for r in rows], dtype=float)
     effort = np.array([r[2] for r in rows], dtype=float)
+    velocity = None
+    if all(r[3] is not None for r in rows):
+        velocity = np.array([r[3] for r in rows], dtype=float)
     order = np.argsort(t, kind="stable")
     t, position, effort = t[order], position[order], effort[order]
     if not (np.all(np.isfinite(position)) and np.all(np.isfinite(effort))):
         raise LogError(f"{source} has NaN or inf joint positions or efforts")
-    for a in (t, position, effort):
+    if velocity is not None:
+        velocity = velocity[order]
+        if not np.all(np.isfinite(velocity)):
+            raise LogError(f"{source} has NaN or inf joint velocities")
+    for a in (t, position, effort) + (() if velocity is None else (velocity,)):
         a.flags.writeable = False
-    return JointLog(t - t[0], names, position, effort, source)
+    return JointLog(t - t[0], names, position, effort, source, velocity)

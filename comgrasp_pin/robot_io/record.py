@@ -17,10 +17,14 @@ STORAGES = ("sqlite3", "mcap")
 
 
 def write_csv(log: JointLog, path: str | Path) -> Path:
-    """Write ``log`` as a CSV with ``time`` and ``J.position``, ``J.effort`` per joint J."""
+    """Write ``log`` as a CSV with ``time`` and ``J.position``, ``J.effort`` per joint J.
+
+    ``J.velocity`` too where the log has velocities.
+    """
     path = Path(path)
-    header = ["time"] + [f"{n}.{f}" for f in ("position", "effort") for n in log.joint_names]
-    data = np.column_stack([log.time, log.position, log.effort])
+    fields = ("position", "effort") + (() if log.velocity is None else ("velocity",))
+    header = ["time"] + [f"{n}.{f}" for f in fields for n in log.joint_names]
+    data = np.column_stack([log.time, *(getattr(log, f) for f in fields)])
     try:
         np.savetxt(path, data, delimiter=",", header=",".join(header), comments="", fmt="%.10g")
     except OSError as exc:
@@ -39,7 +43,7 @@ def write_bag(
     """Write ``log`` as a ROS 2 bag folder of ``sensor_msgs/msg/JointState`` messages.
 
     Args:
-        log: the readings; velocities are written empty.
+        log: the readings; velocities written where the log has them, else empty.
         path: the bag folder to create (must not exist).
         storage: "sqlite3" or "mcap".
         topic: the topic name.
@@ -67,13 +71,14 @@ def write_bag(
     try:
         with Writer(path, version=9, storage_plugin=plugin) as writer:
             conn = writer.add_connection(topic, JOINT_STATE, typestore=store)
-            for t, q, tau in zip(log.time, log.position, log.effort):
+            velocities = log.velocity if log.velocity is not None else [None] * len(log.time)
+            for t, q, tau, qd in zip(log.time, log.position, log.effort, velocities):
                 ns = t0_ns + round(float(t) * 1e9)
                 msg = JointState(
                     header=Header(stamp=Time(sec=ns // 10**9, nanosec=ns % 10**9), frame_id=""),
                     name=names,
                     position=np.concatenate([q, extra_pos]),
-                    velocity=np.empty(0),
+                    velocity=np.empty(0) if qd is None else np.concatenate([qd, extra_eff]),
                     effort=np.concatenate([tau, extra_eff]),
                 )
                 writer.write(conn, ns, store.serialize_cdr(msg, JOINT_STATE))
