@@ -80,7 +80,11 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
 
 def _cmd_views(args: argparse.Namespace) -> int:
+    from comgrasp_pin import cli_camera_files
     from comgrasp_pin.simulation.views import save_camera_views
+
+    if cli_camera_files.wants_files(args):
+        return cli_camera_files.run(args)
 
     for path in save_camera_views(Path(args.out), args.object, args.seed):
         print(f"wrote {path}")
@@ -117,6 +121,9 @@ def add_subcommands(sub, objects: tuple, seed_type, add_sensors_arg, sentence) -
     views.add_argument(
         "--out", type=cli_args.out_dir, default="results/views", help="output folder (%(default)s)"
     )
+    from comgrasp_pin.cli_camera_files import add_arguments
+
+    add_arguments(views)  # --rgb --depth --camera-info: the user's own camera
     views.set_defaults(func=_cmd_views)
 
 

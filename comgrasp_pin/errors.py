@@ -67,6 +67,11 @@ class InvalidDepthError(PerceptionError):
     """The depth image is missing, of the wrong shape, or has no valid values where needed."""
 
 
+class CameraFileError(InvalidInputError):
+    """A camera's image, camera-info or pose file cannot be read as asked: unreadable, of
+    the wrong kind or bit depth, missing a field, or sizes that disagree."""
+
+
 class IKError(ComGraspError):
     """No joint configuration reaches the target within tolerance and joint limits."""
 

@@ -16,12 +16,16 @@ import numpy as np
 
 from comgrasp_pin import validate
 from comgrasp_pin.errors import InvalidDepthError
+from comgrasp_pin.perception.camera_input import metric_depth
 
 AGREE_TOLERANCE = 0.005  # a frame's value this far from the pixel's median is a flyer (m)
 
 
 def average_depth_frames(
-    frames: Sequence[np.ndarray], tolerance: float = AGREE_TOLERANCE, min_valid: int = 1
+    frames: Sequence[np.ndarray],
+    tolerance: float = AGREE_TOLERANCE,
+    min_valid: int = 1,
+    depth_scale: float | None = None,
 ) -> np.ndarray:
     """(H, W) z-depth (m): per pixel, the mean of the frames' valid values near their median.
 
@@ -32,6 +36,8 @@ def average_depth_frames(
             left out of its mean (a flying pixel lies between an edge's near and far side
             in one frame, elsewhere in the next).
         min_valid: a pixel valid (finite, > 0) in fewer frames than this is lost.
+        depth_scale: metres per unit of the frames (the camera SDK's depth scale), for
+            frames in a camera's integer units (0: no depth); None: float metres.
 
     Per pixel: the median m of its valid values, then the mean of the valid values within
     ``tolerance`` of m (the mean, not the median: a depth given in steps, e.g. 1 mm, is
@@ -43,12 +49,13 @@ def average_depth_frames(
 
     Raises:
         InvalidDepthError: no frame, frames of different shapes, not (H, W), not float
-            metres (an integer image is in a camera's depth units) or with NaN.
+            metres (an integer image is in a camera's depth units: give depth_scale) or
+            with NaN.
         InvalidInputError: a tolerance that is not finite and > 0, a ``min_valid`` < 1.
     """
     tolerance = validate.number(tolerance, "tolerance (m)", low=0.0, low_open=True)
     min_valid = validate.integer(min_valid, "min_valid", low=1)
-    stack = _stack(frames)
+    stack = _stack(frames, depth_scale)
     valid = np.isfinite(stack) & (stack > 0)
     count = valid.sum(axis=0)
     ordered = np.sort(np.where(valid, stack, np.inf), axis=0)  # valid values first
@@ -66,8 +73,8 @@ def average_depth_frames(
     return out
 
 
-def _stack(frames: Sequence[np.ndarray]) -> np.ndarray:
-    """(N, H, W) float stack of ``frames``, checked (see ``average_depth_frames``)."""
+def _stack(frames: Sequence[np.ndarray], depth_scale: float | None) -> np.ndarray:
+    """(N, H, W) float stack of ``frames`` in metres, checked (see ``average_depth_frames``)."""
     if isinstance(frames, np.ndarray) and frames.ndim == 2:
         frames = [frames]
     try:
@@ -78,13 +85,8 @@ def _stack(frames: Sequence[np.ndarray]) -> np.ndarray:
         raise InvalidDepthError("no depth frame to average")
     arrays = []
     for k, frame in enumerate(items):
-        kind = getattr(frame, "dtype", np.dtype(float)).kind
-        a = validate.real_array(frame, f"depth frame {k}")
-        if kind in "iu":
-            raise InvalidDepthError(
-                f"depth frame {k} must be float metres, got dtype {a.dtype}: an integer image "
-                "in a camera's depth units is depth * depth_scale metres"
-            )
+        a = validate.real_array(metric_depth(frame, depth_scale, f"depth frame {k}"),
+                                f"depth frame {k}")  # fmt: skip
         if a.ndim != 2 or a.shape != np.shape(items[0]):
             raise InvalidDepthError(
                 f"depth frame {k} has shape {a.shape}; every frame must be the same (H, W), "

@@ -29,6 +29,7 @@ from comgrasp_pin.perception._points import (
     noise_level,
     slice_medians,
 )
+from comgrasp_pin.perception.camera_input import camera_frame
 from comgrasp_pin.perception.flat_face import face_points, looks_flat, strip_line
 from comgrasp_pin.perception.held_region import held_candidates, robot_volume
 from comgrasp_pin.perception.rod_axis import (
@@ -128,7 +129,7 @@ def clean_side_depth(depth: np.ndarray) -> tuple[np.ndarray, float, bool]:
 def observe_held_rod(
     rgb: np.ndarray | None,
     depth: np.ndarray,
-    camera: PinholeCamera,
+    camera: PinholeCamera | object,
     T_ee_cam: np.ndarray,
     T_world_ee: np.ndarray | None = None,
     table_z: float | None = None,
@@ -137,13 +138,17 @@ def observe_held_rod(
     centre_hint: float | None = None,
     handle_radius: float | None = None,
     tilt_only: bool = False,
+    depth_scale: float | None = None,
+    color_order: str = "rgb",
 ) -> SideView:
     """Locate the rod held in the jaws in a side-camera RGBD frame.
 
     Args:
         rgb: (H, W, 3) colour image, or None; only checked to match ``depth``.
-        depth: (H, W) z-depth (m), inf where nothing is seen.
-        camera: intrinsics.
+        depth: (H, W) z-depth (m), inf where nothing is seen; or integers in the camera's
+            units with ``depth_scale`` (m per unit).
+        camera: intrinsics: a PinholeCamera, K, or a RealSense's or ROS's fields (the
+            images undistorted where the lens model says so; ``camera_input``).
         T_ee_cam: (4, 4) optical frame of the camera in the ee frame.
         T_world_ee: (4, 4) pose of the ee in the world, or None. With ``table_z`` too,
             points within 3 mm of the table plane (world z) are left out, so that the rod
@@ -162,6 +167,8 @@ def observe_held_rod(
         tilt_only: for a slip watch, which looks for turns of degrees: a noisy image whose
             handle no cylinder fits gives the slice line's tilt (1-3 deg off at most)
             instead of an UntrustedImageError.
+        depth_scale: metres per unit of an integer ``depth`` (``camera_input``).
+        color_order: "rgb" or "bgr", the order of ``rgb``'s channels.
 
     Raises:
         ObjectNotFoundError, ObjectCutByBorderError, InvalidDepthError, UntrustedImageError
@@ -177,6 +184,7 @@ def observe_held_rod(
     centre_hint = validate.optional_number(centre_hint, "centre_hint (m)")
     handle_radius = validate.optional_number(handle_radius, "handle_radius (m)", low=0.0,
                                              low_open=True)  # fmt: skip
+    rgb, depth, camera = camera_frame(rgb, depth, camera, depth_scale, color_order)
     depth, noise, cleaned = clean_side_depth(check_images(rgb, depth, camera))
     excluded = robot_volume(exclude_capsules)
     p, candidate = held_candidates(depth, camera, T_ee_cam, T_world_ee, table_z, excluded)

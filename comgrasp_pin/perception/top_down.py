@@ -33,6 +33,7 @@ from comgrasp_pin.perception._points import (
     largest_component,
     pixel_slopes,
 )
+from comgrasp_pin.perception.camera_input import camera_frame
 from comgrasp_pin.perception.grasp_points import (  # noqa: F401 (their home before)
     nearest_graspable,
     nearest_on_handle,
@@ -101,11 +102,19 @@ class RodDetection:
 def detect_rod_top_down(
     rgb: np.ndarray | Callable[[], np.ndarray] | None,
     depth: np.ndarray,
-    camera: PinholeCamera,
+    camera: PinholeCamera | object,
     T_world_cam: np.ndarray,
     pick_area: tuple[float, float, float, float] = PICK_AREA,
+    depth_scale: float | None = None,
+    color_order: str = "rgb",
 ) -> RodDetection:
     """Find the rod in a top-down RGBD frame (depth: (H, W) z-depth in m, inf = none).
+
+    The frame may come as the camera gives it (``camera_input.camera_frame``): integer
+    depth with ``depth_scale`` (m per unit), colour in ``color_order`` ("rgb" or "bgr"),
+    ``camera`` as K or a RealSense's or ROS's intrinsics, the images undistorted where its
+    lens model says so (then ``mask``, ``rect`` and ``axis_px`` are in the undistorted
+    image).
 
     Raises:
         ObjectNotFoundError: nothing above the table.
@@ -124,6 +133,7 @@ def detect_rod_top_down(
     raised. ``rgb`` may be a function that takes the colour image: it is then called only
     when the colour is needed (a render saved on every other view).
     """
+    rgb, depth, camera = camera_frame(rgb, depth, camera, depth_scale, color_order)
     depth = check_images(None if callable(rgb) else rgb, depth, camera)
     view = view_table(depth, camera, T_world_cam, pick_area, EDGE_BAND)
     try:

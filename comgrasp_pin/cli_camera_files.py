@@ -1,0 +1,180 @@
+"""``comgrasp views --rgb --depth --camera-info``: perception on frames from the user's camera.
+
+Reads the files (``perception.rgbd_files``), undistorts them where the camera info's lens
+model says so, measures the rod from above (``--view top``) or held in the jaws (``--view
+side``) and writes the annotated PNG and a JSON of what was measured. The top view needs the
+table's frame: the camera's pose ``--T-world-cam`` (hand-eye or extrinsic calibration), or,
+without it, the table's plane fitted in the depth image (frame ``table``). Perception's
+refusals and bad files end with exit status 2 and their message.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+
+from comgrasp_pin import cli_args
+from comgrasp_pin.errors import CameraFileError, InvalidInputError
+from comgrasp_pin.geometry import check_transform, tilt_from_level_deg
+
+
+def add_arguments(views: argparse.ArgumentParser) -> None:
+    """The file mode's options of ``comgrasp views``."""
+    g = views.add_argument_group(
+        "your own camera's frames (instead of a simulated scene)",
+        "an RGBD frame as files; the depth aligned to the colour camera",
+    )
+    g.add_argument("--rgb", type=Path, metavar="FILE", help="colour PNG or JPEG")
+    g.add_argument("--depth", type=Path, metavar="FILE",
+                   help="single-channel 16-bit PNG in the camera's depth units")  # fmt: skip
+    g.add_argument("--camera-info", type=Path, metavar="FILE",
+                   help="intrinsics, JSON or YAML: RealSense fields (fx, fy, ppx, ppy, width, "
+                   "height, model, coeffs), a ROS CameraInfo (k, d, distortion_model, width, "
+                   "height) or a camera_calibration YAML")  # fmt: skip
+    g.add_argument("--depth-scale", type=cli_args.float_at_least(0.0), default=None,
+                   metavar="S", help="metres per depth unit (0.001: mm; 0.0001: a D405); "
+                   "else the camera info's depth_scale")  # fmt: skip
+    g.add_argument("--bgr", action="store_true",
+                   help="the colour file holds BGR in its RGB channels (a BGR array saved "
+                   "by an RGB writer such as PIL)")  # fmt: skip
+    g.add_argument(
+        "--view",
+        choices=("top", "side"),
+        default="top",
+        help="a rod on the table seen from above, or held in the jaws (%(default)s)",
+    )
+    g.add_argument("--T-world-cam", type=Path, metavar="FILE", dest="T_world_cam",
+                   help="top view: the camera's pose in a frame with z up (4x4, JSON or "
+                   "text); without it, the table's plane fitted in the depth is the "
+                   "frame")  # fmt: skip
+    g.add_argument("--pick-area", default=None, metavar="X0,X1,Y0,Y1",
+                   help="top view: where the rod lies (m), in --T-world-cam's frame (needed "
+                   "there), or in the table's (origin below the camera, x to the image's "
+                   "right, y to its top; default: all of the table in view)")  # fmt: skip
+    g.add_argument(
+        "--T-ee-cam",
+        type=Path,
+        metavar="FILE",
+        dest="T_ee_cam",
+        help="side view: the camera's pose in the ee frame (4x4, JSON or text)",
+    )
+
+
+def wants_files(args: argparse.Namespace) -> bool:
+    """Whether ``comgrasp views`` runs on the user's files (any of them named)."""
+    return any(getattr(args, k, None) is not None for k in ("rgb", "depth", "camera_info"))
+
+
+def read_pose(path: Path, name: str) -> np.ndarray:
+    """A (4, 4) rigid transform from JSON (a 4x4 list, or {name: 4x4}) or whitespace text."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise CameraFileError(f"cannot read {name} from {path}: {exc}") from None
+    try:
+        value = json.loads(text)
+        if isinstance(value, dict):
+            value = value.get(name)
+    except json.JSONDecodeError:
+        try:
+            value = np.loadtxt(text.splitlines(), ndmin=2)
+        except ValueError:
+            value = None
+    if value is None:
+        raise CameraFileError(f"{path} must hold {name} as a 4x4 matrix: JSON [[...], ...] or "
+                              f'{{"{name}": [[...], ...]}}, or 4 rows of 4 numbers')  # fmt: skip
+    try:
+        return check_transform(value, name)
+    except InvalidInputError as exc:
+        raise CameraFileError(f"{path}: {exc}") from None
+
+
+def _pick_area(text: str) -> tuple[float, float, float, float]:
+    try:
+        area = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        area = ()
+    if len(area) != 4 or not all(np.isfinite(area)) or area[0] >= area[1] or area[2] >= area[3]:
+        raise InvalidInputError(f"--pick-area must be X0,X1,Y0,Y1 in m with X0 < X1 and "
+                                f"Y0 < Y1, got {text!r}")  # fmt: skip
+    return area
+
+
+def _camera_json(files, color_order: str) -> dict:
+    c = files.camera
+    return {"width": c.width, "height": c.height, "K": c.K.tolist(),
+            "distortion_model": c.distortion_model, "D": c.D.tolist(),
+            "undistorted": c.distorted, "depth_scale": files.depth_scale,
+            "color_order_in_file": color_order}  # fmt: skip
+
+
+def _top(args, rgb, depth, camera) -> tuple[np.ndarray, dict]:
+    from comgrasp_pin.perception import detect_rod_top_down, draw_top_view
+    from comgrasp_pin.perception.table_plane import fit_table_plane
+
+    if args.T_world_cam is not None:
+        frame, T = "world", read_pose(args.T_world_cam, "T_world_cam")
+        if args.pick_area is None:
+            raise InvalidInputError("--T-world-cam needs --pick-area X0,X1,Y0,Y1 (m, in its "
+                                    "frame): where on the table the rod lies")  # fmt: skip
+    else:
+        frame, (T, area) = "table", fit_table_plane(depth, camera)
+    if args.pick_area is not None:
+        area = _pick_area(args.pick_area)
+    det = detect_rod_top_down(rgb, depth, camera, T, area)
+    g = det.grasp
+    measured = {
+        "view": "top", "frame": frame, f"T_{frame}_cam": T.tolist(), "pick_area_m": list(area),
+        "centre_m": [g.x, g.y, g.z], "yaw_rad": g.yaw, "yaw_deg": float(np.degrees(g.yaw)),
+        "length_m": det.length, "handle_height_m": det.handle_height,
+        "table_z_m": det.table_z, "overhang_m": det.overhang,
+    }  # fmt: skip
+    return draw_top_view(rgb, det, det.axis_px.mean(axis=0)), measured
+
+
+def _side(args, rgb, depth, camera) -> tuple[np.ndarray, dict]:
+    from comgrasp_pin.perception import draw_side_view, observe_held_rod
+
+    if args.T_ee_cam is None:
+        raise InvalidInputError("--view side needs --T-ee-cam FILE: the camera's pose in the "
+                                "ee frame (the TCP between the jaws)")  # fmt: skip
+    T_ee_cam = read_pose(args.T_ee_cam, "T_ee_cam")
+    view = observe_held_rod(rgb, depth, camera, T_ee_cam)
+    measured = {
+        "view": "side", "frame": "ee", "T_ee_cam": T_ee_cam.tolist(),
+        "T_ee_obj": view.T_ee_obj.tolist(), "tilt_rad": view.theta,
+        "tilt_from_level_deg": tilt_from_level_deg(view.theta), "length_m": view.length,
+        "grasp_offset_m": view.grasp_offset, "radius_m": view.radius,
+    }  # fmt: skip
+    return draw_side_view(rgb, view), measured
+
+
+def run(args: argparse.Namespace) -> int:
+    """``comgrasp views`` on the user's files: writes OUT/<depth>_<view>_view.png and .json."""
+    import cv2
+
+    from comgrasp_pin.perception.camera_input import camera_frame
+    from comgrasp_pin.perception.rgbd_files import read_rgbd
+
+    missing = [f"--{k.replace('_', '-')}" for k in ("rgb", "depth", "camera_info")
+               if getattr(args, k) is None]  # fmt: skip
+    if missing:
+        raise InvalidInputError(f"your own frames need --rgb, --depth and --camera-info; "
+                                f"missing {', '.join(missing)}")  # fmt: skip
+    order = "bgr" if args.bgr else "rgb"
+    files = read_rgbd(args.rgb, args.depth, args.camera_info, args.depth_scale, order)
+    rgb, depth, camera = camera_frame(files.rgb, files.depth, files.camera, files.depth_scale)
+    image, measured = (_top if args.view == "top" else _side)(args, rgb, depth, camera)
+    measured["camera"] = _camera_json(files, order)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    stem = out / f"{Path(args.depth).stem}_{args.view}_view"
+    png, js = stem.with_suffix(".png"), stem.with_suffix(".json")
+    cv2.imwrite(str(png), image)
+    js.write_text(json.dumps(measured, indent=2) + "\n")
+    print(json.dumps({k: v for k, v in measured.items() if not k.startswith("T_")}, indent=2))
+    print(f"wrote {png}\nwrote {js}")
+    return 0

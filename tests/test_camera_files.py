@@ -1,0 +1,257 @@
+"""Frames as cameras deliver them (issue 27, item 1): integer depth with depth_scale, K or a
+RealSense's or ROS's intrinsics with their lens model, RGB or BGR, and RGBD files read back
+through ``read_rgbd`` and ``comgrasp views --rgb --depth --camera-info``.
+
+Real renders of the project's top camera, saved as a camera would save them (uint16 PNG
+depth, colour PNG / JPEG, camera info JSON / YAML); the references are the float-metre
+path and the simulator's truth (3 mm, 1 deg). The lens distortion is applied with OpenCV's
+``undistortPoints`` (the inverse map), an independent computation of the one perception
+undoes (``initUndistortRectifyMap``).
+"""
+
+from __future__ import annotations
+
+import json
+
+import cv2
+import numpy as np
+import pytest
+import yaml
+from _corruption import corruptions, table_scene, top_errors, top_inputs
+
+from comgrasp_pin.cli import main
+from comgrasp_pin.errors import CameraFileError, InvalidDepthError, InvalidInputError
+from comgrasp_pin.perception import average_depth_frames, detect_rod_top_down
+from comgrasp_pin.perception.camera_model import camera_model
+from comgrasp_pin.perception.rgbd_files import read_camera_info, read_rgbd
+from comgrasp_pin.simulation.objects import OBJECTS
+
+ROD = ("obj2", 0.68, -0.2, 0.6)  # off the image's centre, where a lens distorts
+CENTRE_BOUND, YAW_BOUND_DEG = 3e-3, 1.0  # the perception contract
+PLUMB_BOB = np.array([-0.25, 0.08, 0.001, -0.001, 0.0])  # a wide lens's barrel
+
+
+@pytest.fixture(scope="module")
+def scene():
+    """(depth (m), PinholeCamera, T_world_cam, rgb, truth (x, y, yaw), float-path detection)."""
+    sim, rig, truths = table_scene([ROD])
+    depth, camera, T, rgb = top_inputs(sim, rig)
+    rig.close()
+    return depth, camera, T, rgb, truths[0], detect_rod_top_down(rgb, depth, camera, T)
+
+
+def _errors(det, truth, T):
+    return top_errors(det, truth, T, np.eye(4))
+
+
+def _calibration_yaml(camera, D=(), model="plumb_bob") -> dict:
+    """ROS camera_calibration's layout."""
+    return {"image_width": camera.width, "image_height": camera.height,
+            "camera_name": "top", "distortion_model": model,
+            "camera_matrix": {"rows": 3, "cols": 3, "data": camera.K.ravel().tolist()},
+            "distortion_coefficients": {"rows": 1, "cols": len(D), "data": list(D)}}  # fmt: skip
+
+
+def _save(tmp_path, depth_units, rgb, info: dict, suffix=".yaml", colour=".png"):
+    """Files as a camera's user saves them; the colour with OpenCV (a BGR array)."""
+    paths = tmp_path / f"rgb{colour}", tmp_path / "depth.png", tmp_path / f"info{suffix}"
+    cv2.imwrite(str(paths[0]), np.ascontiguousarray(rgb[..., ::-1]))
+    assert cv2.imwrite(str(paths[1]), depth_units)
+    text = yaml.safe_dump(info) if suffix == ".yaml" else json.dumps(info)
+    paths[2].write_text(text)
+    return paths
+
+
+def test_millimetres_from_files_measure_as_float_metres(scene, tmp_path):
+    depth, camera, T, rgb, truth, float_det = scene
+    mm = np.round(depth * 1e3).astype(np.uint16)
+    files = read_rgbd(*_save(tmp_path, mm, rgb, _calibration_yaml(camera)), depth_scale=1e-3)
+    assert files.depth.dtype == np.uint16 and (files.rgb == rgb).all()  # RGB back
+    det = detect_rod_top_down(files.rgb, files.depth, files.camera, T,
+                              depth_scale=files.depth_scale)  # fmt: skip
+    shift = np.hypot(det.grasp.x - float_det.grasp.x, det.grasp.y - float_det.grasp.y)
+    assert shift < 2e-4 and abs(det.length - float_det.length) < 5e-4
+    centre, yaw_deg = _errors(det, truth, T)
+    assert centre < CENTRE_BOUND and yaw_deg < YAW_BOUND_DEG
+    assert abs(det.length - OBJECTS["obj2"].length) < 3e-3
+
+
+def test_a_d405s_tenth_millimetres_with_realsense_intrinsics(scene, tmp_path):
+    depth, camera, T, rgb, truth, float_det = scene
+    units = np.round(depth * 1e4).astype(np.uint16)  # 0.1 mm: 6.5 m at most
+    info = {"fx": camera.fx, "fy": camera.fy, "ppx": camera.cx, "ppy": camera.cy,
+            "width": camera.width, "height": camera.height, "model": "distortion.brown_conrady",
+            "coeffs": [0, 0, 0, 0, 0], "depth_scale": 1e-4}  # fmt: skip
+    files = read_rgbd(*_save(tmp_path, units, rgb, info, suffix=".json", colour=".jpg"))
+    assert files.depth_scale == 1e-4
+    det = detect_rod_top_down(files.rgb, files.depth, files.camera, T, depth_scale=1e-4)
+    assert np.hypot(det.grasp.x - float_det.grasp.x, det.grasp.y - float_det.grasp.y) < 2e-4
+    # Read as millimetres (the scale guessed), the table is ten times farther: not measured.
+    with pytest.raises(CameraFileError, match="says 0.0001"):
+        read_rgbd(*_save(tmp_path, units, rgb, info, suffix=".json"), depth_scale=1e-3)
+
+
+def test_an_integer_image_without_depth_scale_is_refused_never_guessed(scene, tmp_path):
+    depth, camera, T, rgb, *_ = scene
+    mm = np.round(depth * 1e3).astype(np.uint16)
+    with pytest.raises(InvalidDepthError, match="pass depth_scale"):
+        detect_rod_top_down(rgb, mm, camera.K, T)
+    with pytest.raises(CameraFileError, match="no depth_scale: pass it"):
+        read_rgbd(*_save(tmp_path, mm, rgb, _calibration_yaml(camera)))
+    frames = average_depth_frames([mm, mm], depth_scale=1e-3)
+    np.testing.assert_array_equal(frames, mm * 1e-3)
+    with pytest.raises(InvalidDepthError, match="depth_scale"):
+        average_depth_frames([mm, mm])
+
+
+def _distorted(image: np.ndarray, camera, D, nearest: bool) -> np.ndarray:
+    """What a lens with plumb_bob ``D`` shows: each distorted pixel sees the ray that
+    ``cv2.undistortPoints`` gives it."""
+    v, u = np.mgrid[0 : camera.height, 0 : camera.width].astype(np.float32)
+    pixels = np.stack([u.ravel(), v.ravel()], axis=-1)[:, None]
+    src = cv2.undistortPoints(pixels, camera.K, D, P=camera.K).reshape(*u.shape, 2)
+    flags = cv2.INTER_NEAREST if nearest else cv2.INTER_LINEAR
+    return cv2.remap(image, src[..., 0], src[..., 1], flags, borderMode=cv2.BORDER_CONSTANT)
+
+
+def test_a_distorted_image_is_undistorted_by_the_camera_infos_model(scene):
+    depth, camera, T, rgb, truth, _ = scene
+    depth_d = _distorted(depth, camera, PLUMB_BOB, nearest=True)
+    rgb_d = _distorted(rgb, camera, PLUMB_BOB, nearest=False)
+    info = {
+        "width": camera.width,
+        "height": camera.height,
+        "k": camera.K.ravel().tolist(),
+        "d": PLUMB_BOB.tolist(),
+        "distortion_model": "plumb_bob",
+    }  # a CameraInfo's fields
+    with_d = _errors(detect_rod_top_down(rgb_d, depth_d, info, T), truth, T)
+    without_d = _errors(detect_rod_top_down(rgb_d, depth_d, camera, T), truth, T)
+    assert with_d[0] < CENTRE_BOUND and with_d[1] < YAW_BOUND_DEG, with_d
+    assert without_d[0] > 2 * with_d[0] and without_d[0] > CENTRE_BOUND, (with_d, without_d)
+
+
+def test_intrinsics_in_every_layout_are_the_same_camera(scene):
+    camera = scene[1]
+    fields = {"width": 640, "height": 480, "K": camera.K.ravel().tolist(), "D": [],
+              "distortion_model": ""}  # ROS 1's names  # fmt: skip
+    realsense = {"fx": camera.fx, "fy": camera.fy, "ppx": camera.cx, "ppy": camera.cy,
+                 "width": 640, "height": 480}  # fmt: skip
+    for layout in (fields, realsense, _calibration_yaml(camera), camera.K, camera):
+        model = camera_model(layout, (480, 640))
+        assert model.pinhole == camera and not model.distorted
+    with pytest.raises(InvalidInputError, match="camera intrinsics not understood"):
+        camera_model({"fx": 600.0, "width": 640})
+    with pytest.raises(InvalidInputError, match="takes 4 coefficients"):
+        camera_model({**fields, "D": [0.1, 0, 0, 0, 0], "distortion_model": "equidistant"})
+    with pytest.raises(InvalidInputError, match="not one OpenCV undistorts"):
+        camera_model({**fields, "D": [0.1, 0, 0, 0, 0], "distortion_model": "ftheta"})
+
+
+def test_colour_order_bgr_gives_the_rgb_detection_and_a_mix_up_another_mask():
+    """A 1 cm rod in a D415's noise is measured with the colour's help: given as BGR and
+    said so, the detection is the RGB one to the bit; BGR taken for RGB segments another
+    mask (the colour is used)."""
+    x, y, yaw = 0.52, 0.08, -0.4
+    sim, rig, truths = table_scene([("obj3", x, y, yaw)])
+    depth, camera, T, rgb = top_inputs(sim, rig)
+    rig.close()
+    corrupt, T_cal = corruptions("top", 7)["realistic"]
+    noisy = corrupt(depth)
+    bgr = np.ascontiguousarray(rgb[..., ::-1])
+    right = detect_rod_top_down(rgb, noisy, camera, T @ T_cal)
+    said = detect_rod_top_down(bgr, noisy, camera, T @ T_cal, color_order="bgr")
+    mixed = detect_rod_top_down(bgr, noisy, camera, T @ T_cal)
+    assert said.grasp == right.grasp and (said.mask == right.mask).all()
+    assert not (mixed.mask == right.mask).all()
+    centre, yaw_deg = top_errors(right, truths[0], T, T_cal)
+    assert centre < CENTRE_BOUND and yaw_deg < YAW_BOUND_DEG
+
+
+def _cli(tmp_path, paths, *extra) -> int:
+    rgb, depth, info = paths
+    return main(["views", "--rgb", str(rgb), "--depth", str(depth), "--camera-info", str(info),
+                 "--out", str(tmp_path / "out"), *extra])  # fmt: skip
+
+
+def test_comgrasp_views_on_files_with_the_cameras_pose(scene, tmp_path, capsys):
+    depth, camera, T, rgb, truth, float_det = scene
+    paths = _save(tmp_path, np.round(depth * 1e3).astype(np.uint16), rgb,
+                  {**_calibration_yaml(camera), "depth_scale": 0.001})  # fmt: skip
+    pose = tmp_path / "T_world_cam.json"
+    pose.write_text(json.dumps({"T_world_cam": T.tolist()}))
+    assert _cli(tmp_path, paths, "--T-world-cam", str(pose), "--pick-area",
+                "0.30,0.80,-0.35,0.35") == 0  # fmt: skip
+    measured = json.loads((tmp_path / "out" / "depth_top_view.json").read_text())
+    assert measured["frame"] == "world"
+    x, y, _ = measured["centre_m"]
+    assert np.hypot(x - float_det.grasp.x, y - float_det.grasp.y) < 2e-4
+    assert abs(measured["length_m"] - float_det.length) < 5e-4
+    drawn = cv2.imread(str(tmp_path / "out" / "depth_top_view.png"))
+    # The overlay leaves the table's far corner as it was: in the file's colours (no swap).
+    np.testing.assert_array_equal(drawn[-3:, -3:], rgb[-3:, -3:, ::-1])
+    # A file holding BGR in its RGB channels, said with --bgr, draws the same picture.
+    cv2.imwrite(str(paths[0]), rgb)
+    assert _cli(tmp_path, paths, "--T-world-cam", str(pose), "--pick-area",
+                "0.30,0.80,-0.35,0.35", "--bgr") == 0  # fmt: skip
+    np.testing.assert_array_equal(cv2.imread(str(tmp_path / "out" / "depth_top_view.png")), drawn)
+
+
+def test_comgrasp_views_on_files_finds_the_table_without_a_pose(scene, tmp_path):
+    depth, camera, T, rgb, truth, _ = scene
+    paths = _save(tmp_path, np.round(depth * 1e3).astype(np.uint16), rgb,
+                  _calibration_yaml(camera))  # fmt: skip
+    # The table frame: origin below the camera, x to the image's right, y to its top.
+    assert _cli(tmp_path, paths, "--depth-scale", "0.001",
+                "--pick-area=-0.1,0.4,-0.35,0.2") == 0  # fmt: skip
+    measured = json.loads((tmp_path / "out" / "depth_top_view.json").read_text())
+    assert measured["frame"] == "table"
+    # The table frame's centre, put in the world with the true camera pose: the truth.
+    T_world_table = T @ np.linalg.inv(np.array(measured["T_table_cam"]))
+    centre = T_world_table[:3, :3] @ measured["centre_m"] + T_world_table[:3, 3]
+    assert np.hypot(centre[0] - truth[0], centre[1] - truth[1]) < CENTRE_BOUND
+    assert abs(measured["length_m"] - OBJECTS["obj2"].length) < 3e-3
+    assert abs(centre[2] - OBJECTS["obj2"].rest_height) < 4e-3  # the handle's axis
+
+
+@pytest.mark.parametrize("bad", ["8-bit depth", "size", "missing k", "unreadable", "no scale"])
+def test_bad_files_end_with_exit_2_and_say_what_is_wrong(scene, tmp_path, capsys, bad):
+    depth, camera, T, rgb, *_ = scene
+    mm = np.round(depth * 1e3).astype(np.uint16)
+    info = {"width": 640, "height": 480, "k": camera.K.ravel().tolist(), "depth_scale": 0.001}
+    expected = {
+        "8-bit depth": "single-channel 16-bit PNG",
+        "size": "the camera info says 320",
+        "missing k": "camera intrinsics not understood",
+        "unreadable": "cannot read the colour file",
+        "no scale": "no depth_scale",
+    }[bad]
+    if bad == "size":
+        info["width"] = 320
+    if bad == "missing k":
+        del info["k"]
+    if bad == "no scale":
+        del info["depth_scale"]
+    paths = _save(tmp_path, (mm // 8).astype(np.uint8) if bad == "8-bit depth" else mm, rgb, info,
+                  suffix=".json")  # fmt: skip
+    if bad == "unreadable":
+        paths[0].write_bytes(b"not an image")
+    assert _cli(tmp_path, paths) == 2
+    err = capsys.readouterr().err
+    assert expected in err and "Traceback" not in err, err
+    assert not (tmp_path / "out").exists()  # nothing written
+
+
+def test_camera_info_files_in_ros_layouts(scene, tmp_path):
+    camera = scene[1]
+    ros2_echo = ("header:\n  frame_id: camera_color_optical_frame\nheight: 480\nwidth: 640\n"
+                 "distortion_model: rational_polynomial\nd: [0.1, -0.05, 0.0, 0.0, 0.01, 0.0, "
+                 f"0.0, 0.0]\nk: {camera.K.ravel().tolist()}\n")  # fmt: skip
+    path = tmp_path / "camera_info.yaml"
+    path.write_text(ros2_echo)
+    model, scale = read_camera_info(path)
+    assert model.distortion_model == "rational_polynomial" and model.distorted
+    assert model.pinhole == camera and scale is None
+    path.write_text("a: &x [1, 2]\nb: *x\n")
+    with pytest.raises(CameraFileError, match="anchors"):
+        read_camera_info(path)
