@@ -10,6 +10,7 @@ from pathlib import Path
 
 from comgrasp_pin import __version__, cli_args
 from comgrasp_pin.errors import ComGraspError, InvalidInputError
+from comgrasp_pin.experiments.runner import DEFAULT_TRIAL_TIMEOUT_S
 from comgrasp_pin.experiments.trials import MAX_TRIALS
 
 OBJECTS = tuple(__import__("comgrasp_pin.simulation.objects", fromlist=["OBJECTS"]).OBJECTS)
@@ -53,7 +54,7 @@ def _options(args: argparse.Namespace):
                       args.resume or args.retry_failed, args.overwrite, noise,
                       args.estimator, args.retry_failed, args.backend,
                       args.ray_address, getattr(args, "second_seed", None),
-                      args.sensors)  # fmt: skip
+                      args.sensors, args.trial_timeout)  # fmt: skip
 
 
 def _cmd_experiment(args: argparse.Namespace) -> int:
@@ -138,6 +139,11 @@ def _add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
         action="store_true",
         help="with --resume (implied): run again the trials that ended in an error",
     )
+    p.add_argument("--trial-timeout", type=cli_args.positive_seconds, metavar="S",
+                   default=DEFAULT_TRIAL_TIMEOUT_S,
+                   help="a trial running longer (s) is stopped (its worker process killed) and "
+                   "recorded as failed (TrialTimeoutError); --retry-failed runs it again "
+                   "(%(default)g; the longest measured trial took 27 s)")  # fmt: skip
     p.add_argument("--quick", action="store_true", help="a few-minute run (3 trials)")
     p.set_defaults(func=_cmd_experiment)
 

@@ -54,6 +54,18 @@ def float_at_least(low: float) -> Callable[[str], object]:
     return _argument_type(lambda text: _parse_float(text, low), "number")
 
 
+def _parse_positive(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise InvalidInputError(f"must be a number of seconds, got {text!r}") from None
+    return validate.number(value, "", low=0.0, low_open=True)
+
+
+positive_seconds = _argument_type(_parse_positive, "seconds")
+"""A finite time in seconds, > 0."""
+
+
 def _parse_names(text: str, valid: tuple[str, ...]) -> tuple[str, ...]:
     names = tuple(part.strip() for part in text.split(","))
     if not text.strip() or not all(names):

@@ -142,6 +142,11 @@ class WorkerDiedError(ComGraspError):
     """A worker process running a trial died (killed, crashed, out of memory)."""
 
 
+class TrialTimeoutError(ComGraspError):
+    """A trial ran past its time limit (``--trial-timeout``): its worker was stopped and the
+    run went on; ``--resume --retry-failed`` runs it again."""
+
+
 class BackendError(ComGraspError):
     """The requested backend cannot run trials here (``--backend ray`` without Ray installed,
     or a Ray cluster that cannot be reached)."""

@@ -92,21 +92,20 @@ _FILLS_UP = """
 import resource, signal, sys
 from pathlib import Path
 from comgrasp_pin.cli import main
-from comgrasp_pin.experiments import reproduce
+from comgrasp_pin.experiments import run_files
 
-real_trial = reproduce.accuracy_trial
+real_write = run_files.RowAppender.write_rows
 csv_path = Path(sys.argv[1]) / "accuracy.csv"
 
-def trial_then_disk_full(task):
-    row = real_trial(task)
-    if task["trial"] == 1:  # from now on the CSV cannot grow by a row: EFBIG at write
+def write_then_disk_full(self, rows):  # in the driver: trials run in worker processes
+    real_write(self, rows)
+    if self.written == 1:  # from now on the CSV cannot grow by a row: EFBIG at write
         limit = csv_path.stat().st_size + 20
         resource.setrlimit(resource.RLIMIT_FSIZE, (limit, resource.getrlimit(
             resource.RLIMIT_FSIZE)[1]))
-    return row
 
 signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # the write fails instead of killing us
-reproduce.accuracy_trial = trial_then_disk_full
+run_files.RowAppender.write_rows = write_then_disk_full
 sys.exit(main(["accuracy", "--objects", "obj1", "--trials", "3", "--workers", "1",
                "--out", sys.argv[1]]))
 """

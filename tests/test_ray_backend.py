@@ -66,6 +66,16 @@ def test_a_killed_worker_and_an_exception_are_failed_trials_and_can_be_retried(t
     assert all(r["error"] == "" for r in again)
 
 
+def test_hung_and_crashing_ray_tasks_are_failed_rows_and_the_run_goes_on(tmp_path):
+    """As locally (test_trial_timeout): a task past its limit is cancelled (its worker
+    killed), a segfault or os._exit fails its own row; --retry-failed reruns those."""
+    from test_trial_timeout import check_failed_rows_and_retry
+
+    # Ray's clock starts at submission, before a new Ray worker has started: a wider limit
+    check_failed_rows_and_retry(tmp_path / "out.csv", tmp_path, limit_s=6.0, workers=2,
+                                backend="ray")  # fmt: skip
+
+
 def _slow_value(task: dict) -> dict:
     # long enough for Ray to start its second worker on a loaded machine (0.5 s was not:
     # both tasks went to the first worker while the second was still starting)

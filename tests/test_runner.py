@@ -168,27 +168,28 @@ def _pid_or_death(task: dict) -> dict:
     return {"value": os.getpid()}
 
 
-def test_a_kept_pool_serves_several_runs_and_is_dropped_when_a_worker_dies(tmp_path):
+def test_a_kept_pool_serves_several_runs_and_replaces_a_worker_that_dies(tmp_path):
     """Inside ``kept_pool`` two experiments run on the same two worker processes (started
-    once); a worker's death fails that trial only, and the runs after it start their own
-    pool, their rows complete."""
+    once); a worker's death fails that trial only and that worker is replaced, the runs
+    after it complete on the kept set."""
     from comgrasp_pin.experiments.runner import _KEPT, kept_pool
 
     with kept_pool(2):
-        pool = _KEPT[2]
+        kept = _KEPT[2]
         first = run_trials(_pid_or_death, _tasks(6), tmp_path / "a.csv", COLUMNS, workers=2)
         second = run_trials(_pid_or_death, _tasks(6), tmp_path / "b.csv", COLUMNS, workers=2)
-        # Both ran in the kept pool's processes (how the tasks spread over the two depends
+        # Both ran in the kept set's processes (how the tasks spread over the two depends
         # on the machine's load, so which of them ran a task is not asserted).
-        pids = {r["value"] for r in first} | {r["value"] for r in second}
-        assert _KEPT[2] is pool and pids <= set(pool._processes) and len(pool._processes) <= 2
+        pids = {int(r["value"]) for r in first} | {int(r["value"]) for r in second}
+        assert pids <= set(kept.pids()) and len(kept.pids()) == 2
         assert os.getpid() not in pids
         dying = [{**t, "die": t["trial"] == 2} for t in _tasks(6)]
         third = run_trials(_pid_or_death, dying, tmp_path / "c.csv", COLUMNS, workers=2)
-        assert 2 not in _KEPT  # the broken pool is not kept
+        assert _KEPT[2] is kept  # kept, its dead worker replaced
         fourth = run_trials(_pid_or_death, _tasks(4), tmp_path / "d.csv", COLUMNS, workers=2)
+        assert {int(r["value"]) for r in fourth} <= set(kept.pids())
     assert [bool(r["error"]) for r in sorted(third, key=lambda r: r["trial"])] == [
         False, False, True, False, False, False
     ]  # fmt: skip
-    assert not any(r["error"] for r in fourth) and not {r["value"] for r in fourth} & pids
+    assert not any(r["error"] for r in fourth)
     assert not _KEPT

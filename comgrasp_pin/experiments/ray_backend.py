@@ -1,12 +1,16 @@
 """Trials as Ray tasks: the same trial functions, seeds and rows as the local processes.
 
-``run_on_ray`` runs the runner's ``_safe_call(fn, task)`` as a Ray task per trial, at most
+``run_on_ray`` runs ``workers.safe_call(fn, task)`` as a Ray task per trial, at most
 ``workers`` in flight, and hands each row to ``record`` (the runner's CSV appender) as it
 finishes, so the driver appends rows exactly as a local run does and ``--resume`` works the
 same. A trial that raises is an error row (inside the task, as locally); a task whose worker
 dies (killed, crashed, out of memory: Ray's ``WorkerCrashedError`` and its other system
 errors) is recorded as failed too, and is not retried (``max_retries=0``): a trial that
-kills its worker would kill the next one as well.
+kills its worker would kill the next one as well. A task running past ``trial_timeout_s``
+is cancelled with ``force=True`` (Ray kills its worker process) and recorded as
+``TrialTimeoutError``. Ray does not tell the driver when a task starts, so its clock starts
+when it is submitted: with at most ``workers`` tasks in flight on as many CPUs it starts at
+once, after a new Ray worker's start-up (seconds, against a limit of minutes).
 
 Ray is an optional extra (``pip install 'comgrasp_pin[ray]'``). A Ray already initialised
 in this process is used as it is; otherwise ``ray.init(address=...)`` joins an existing
@@ -16,10 +20,12 @@ cluster, or, without an address, a local Ray is started with ``num_cpus=workers`
 from __future__ import annotations
 
 import os
+import time
 from collections.abc import Callable, Sequence
 
 from comgrasp_pin.errors import BackendError, WorkerDiedError
 from comgrasp_pin.experiments.threads import thread_env
+from comgrasp_pin.experiments.workers import WORKER_DIED, error_row, timed_out
 
 BACKENDS = ("local", "ray")
 RAY_INIT_OPTIONS = {"include_dashboard": False, "log_to_driver": False}
@@ -88,8 +94,6 @@ def ensure_ray(workers: int, address: str | None = None):
 
 
 def _died_message(exc: BaseException) -> str:
-    from comgrasp_pin.experiments.runner import WORKER_DIED
-
     return f"{WORKER_DIED} (Ray: {type(exc).__name__})"
 
 
@@ -100,40 +104,53 @@ def run_on_ray(
     workers: int,
     record: Callable[[dict], None],
     address: str | None = None,
+    trial_timeout_s: float | None = None,
 ) -> None:
     """Run ``call(fn, task)`` for every task of ``todo`` as Ray tasks, at most ``workers`` at
     a time, and ``record`` the rows (in the order they finish; those that finished together
-    in one call, written with one fsync)."""
+    in one call, written with one fsync); a task past ``trial_timeout_s`` (s, None: no
+    limit) is cancelled and recorded as ``TrialTimeoutError``."""
     ray = ensure_ray(workers, address)
     remote = ray.remote(**TASK_OPTIONS)(call)
     fn_ref = ray.put(fn)
-    queue, running = list(todo), {}
+    queue, running, deadlines = list(todo), {}, {}
     queue.reverse()
+    limit_s = float("inf") if trial_timeout_s is None else trial_timeout_s
     try:
         while queue or running:
             while queue and len(running) < workers:
                 task = queue.pop()
-                running[remote.remote(fn_ref, task)] = task
-            record(*(_row(ray, ref, running.pop(ref)) for ref in _finished(ray, list(running))))
+                ref = remote.remote(fn_ref, task)
+                running[ref], deadlines[ref] = task, time.monotonic() + limit_s
+            done = _finished(ray, list(running), min(deadlines.values()) - time.monotonic())
+            rows = [_row(ray, ref, running.pop(ref)) for ref in done]
+            late = [ref for ref in running if deadlines[ref] <= time.monotonic()]
+            for ref in late:
+                ray.cancel(ref, force=True)  # kills the worker process, stuck or not
+                rows.append(error_row(running.pop(ref), timed_out(limit_s)))
+            for ref in [*done, *late]:
+                del deadlines[ref]
+            if rows:
+                record(*rows)
     finally:  # the run stopped (a row that cannot be written, ^C): stop what is in flight
         for ref in running:
             ray.cancel(ref, force=True)
 
 
-def _finished(ray, refs: list) -> list:
-    """The refs done now, at least one: O(in flight) per pass, not per row."""
-    done, rest = ray.wait(refs, num_returns=1)
-    if rest:
+def _finished(ray, refs: list, wait_s: float) -> list:
+    """The refs done within ``wait_s`` (s; at least one if that is infinite): O(in flight)
+    per pass, not per row."""
+    timeout = None if wait_s == float("inf") else max(0.0, wait_s)
+    done, rest = ray.wait(refs, num_returns=1, timeout=timeout)
+    if rest and done:
         done += ray.wait(rest, num_returns=len(rest), timeout=0)[0]
     return done
 
 
 def _row(ray, ref, task: dict) -> dict:
     """The task's row, or its error row when Ray could not run it (a dead worker)."""
-    from comgrasp_pin.experiments.runner import _error_row
-
     try:
         return ray.get(ref)
     except ray.exceptions.RayError as exc:
         crashed = isinstance(exc, ray.exceptions.WorkerCrashedError)
-        return _error_row(task, WorkerDiedError(_died_message(exc)) if crashed else exc)
+        return error_row(task, WorkerDiedError(_died_message(exc)) if crashed else exc)

@@ -14,7 +14,12 @@ from comgrasp_pin.config import sensor_preset
 from comgrasp_pin.experiments import report
 from comgrasp_pin.experiments.ray_backend import check_backend
 from comgrasp_pin.experiments.report.sensors import sensors_comparison
-from comgrasp_pin.experiments.runner import kept_pool, read_rows, run_trials
+from comgrasp_pin.experiments.runner import (
+    DEFAULT_TRIAL_TIMEOUT_S,
+    kept_pool,
+    read_rows,
+    run_trials,
+)
 from comgrasp_pin.experiments.trials import (
     ACCURACY_COLUMNS,
     REGRASP_COLUMNS,
@@ -44,7 +49,8 @@ class RunOptions:
         ``workers`` at a time); ray_address: an existing Ray cluster (None: a local Ray).
         second_seed: ``reproduce`` also runs the accuracy experiment with this seed (in
         ``out/seed<S>``) and reports its calibration and accuracy beside the first's, or
-        None. sensors: the sensor preset (``config.sensor_preset``).
+        None. sensors: the sensor preset (``config.sensor_preset``). trial_timeout_s: a
+        trial running longer (s) is stopped and recorded as ``TrialTimeoutError``.
     """
 
     out: Path
@@ -61,6 +67,7 @@ class RunOptions:
     ray_address: str | None = None
     second_seed: int | None = None
     sensors: str = "ideal"
+    trial_timeout_s: float = DEFAULT_TRIAL_TIMEOUT_S
 
 
 def run_settings(opts: RunOptions) -> dict:
@@ -75,6 +82,7 @@ def run_settings(opts: RunOptions) -> dict:
         "objects": list(opts.objects),
         "trials": opts.trials,
         "backend": opts.backend,  # recorded, not compared: a local run may resume on Ray
+        "trial_timeout_s": opts.trial_timeout_s,  # recorded, not compared (run_files.FREE)
     }
 
 
@@ -86,7 +94,8 @@ def _run(opts: RunOptions, fn, methods, name: str, columns) -> list[dict]:
         task["sensors"] = opts.sensors
     return run_trials(fn, tasks, opts.out / f"{name}.csv", columns, opts.workers, opts.resume,
                       opts.overwrite, name, opts.retry_failed, run_settings(opts),
-                      opts.backend, opts.ray_address)  # fmt: skip
+                      opts.backend, opts.ray_address,
+                      trial_timeout_s=opts.trial_timeout_s)  # fmt: skip
 
 
 def run_accuracy(opts: RunOptions) -> list[dict]:

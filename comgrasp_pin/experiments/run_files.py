@@ -3,7 +3,8 @@
 - ``DIR/NAME.settings.json`` holds every setting of the run (seed, noise, estimator, the whole
   config tree, the package version, the objects and trials). ``--resume`` refuses a run
   whose settings differ, naming each setting; only ``objects`` and ``trials`` may grow, and
-  ``backend`` (where the trials run) may change: a run started locally may resume on Ray.
+  ``backend`` (where the trials run) and ``trial_timeout_s`` may change: a run started
+  locally may resume on Ray, a timed-out trial may be retried with a longer limit.
 - Every row is one line, written whole: appended with one unbuffered write, flushed and
   fsynced (the rows a Ray driver collects in one pass: one write and one fsync for them
   all), so the CSV is readable while a run goes on. A write that fails (full disk) is
@@ -33,8 +34,9 @@ from comgrasp_pin.errors import OutputError, ResumeError
 
 GROWABLE = ("objects", "trials")
 """Settings ``--resume`` lets change: a run may be extended with more trials or objects."""
-FREE = ("backend", "ray_address")
-"""Settings recorded but not compared: where the trials run changes none of their rows."""
+FREE = ("backend", "ray_address", "trial_timeout_s")
+"""Settings recorded but not compared: where the trials run, and how long one may take,
+change none of the finished rows."""
 
 
 def settings_path(csv_path: Path) -> Path:

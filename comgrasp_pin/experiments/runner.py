@@ -5,11 +5,14 @@ interrupted run loses nothing and ``resume=True`` continues where it stopped; th
 settings are kept beside the CSV and a resumed run must match them. A trial that raises is
 recorded with its error and does not stop the run; ``retry_failed=True`` runs those again.
 ``backend="ray"`` runs the same trials as Ray tasks (``ray_backend``), the driver appending
-rows as they finish. ``workers > 1`` runs trials in separate processes (spawned, so each has
-its own MuJoCo and OpenGL context); a worker that dies (killed, crashed) breaks the pool:
-it is restarted, the trials that were in flight are run again one at a time, and the one
-that kills its worker again is recorded as failed (``WorkerDiedError``). A row that cannot
-be written (full disk) stops the run with ``OutputError``; the rows before it stay intact.
+rows as they finish. Locally, trials run in worker processes (``workers``: spawned, each
+with its own MuJoCo and OpenGL context), one per worker for a serial run with a time limit:
+a trial that kills its worker is recorded as failed (``WorkerDiedError``), one that runs
+past ``trial_timeout_s`` has its worker killed and is recorded as ``TrialTimeoutError``;
+the worker is replaced and the run goes on. Only a serial run without a time limit calls
+the trial in this process (a debugger, closures), where a crash or a hang ends the run.
+A row that cannot be written (full disk) stops the run with ``OutputError``; the rows
+before it stay intact.
 """
 
 from __future__ import annotations
@@ -17,30 +20,34 @@ from __future__ import annotations
 import csv
 import multiprocessing
 import os
-import threading
-import time
-import traceback
-from collections import Counter, deque
+import pickle
+from collections import Counter
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
-from concurrent.futures.process import BrokenProcessPool
+from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
 from pathlib import Path
 
 from tqdm import tqdm
 
-from comgrasp_pin.errors import InvalidInputError, ResumeError, WorkerDiedError
+from comgrasp_pin import validate
+from comgrasp_pin.errors import InvalidInputError, ResumeError
 from comgrasp_pin.experiments import run_files
 from comgrasp_pin.experiments.ray_backend import check_backend, ensure_ray, run_on_ray
 from comgrasp_pin.experiments.run_files import RowAppender
 from comgrasp_pin.experiments.threads import worker_threads
+from comgrasp_pin.experiments.workers import (
+    WORKER_DIED,  # noqa: F401 (callers and tests read it from the runner)
+    WorkerSet,
+    exit_with_parent,
+    safe_call,
+)
 
 KEY_COLUMNS = ("object", "trial", "method")
-PARENT_CHECK_S = 1.0  # how often a pool worker checks that its driver is still there (s)
-WORKER_DIED = (
-    "the worker process running this trial died (killed, crashed or out of memory); the run "
-    "went on without it: run it again with --resume --retry-failed"
-)
+DEFAULT_TRIAL_TIMEOUT_S = 600.0
+"""The experiment commands' time limit per trial (s). The longest trial in docs/results
+(4891 rows: accuracy, regrasp, sweeps, sensitivity; ideal and realistic sensors) took 27 s,
+the 99th percentile 12.5 s, the median 1.7 s: 600 s is 22 times the longest, room for a
+machine several times slower or more loaded, and still ends a hung trial within minutes."""
 
 
 def task_key(row: dict) -> tuple[str, ...]:
@@ -54,18 +61,6 @@ def read_rows(csv_path: Path) -> list[dict]:
         return []
     with csv_path.open(newline="") as f:
         return list(csv.DictReader(f))
-
-
-def _error_row(task: dict, exc: BaseException) -> dict:
-    last = traceback.format_exception_only(type(exc), exc)[-1].strip()
-    return {**task, "error": last}
-
-
-def _safe_call(fn: Callable[[dict], dict], task: dict) -> dict:
-    try:
-        return {**task, **fn(task), "error": ""}
-    except Exception as exc:  # a failed trial is data, not the end of the run
-        return _error_row(task, exc)
 
 
 def _kept_rows(csv_path: Path, columns: list[str], resume: bool, overwrite: bool,
@@ -108,6 +103,7 @@ def run_trials(
     backend: str = "local",
     ray_address: str | None = None,
     keys: Sequence[str] = KEY_COLUMNS,
+    trial_timeout_s: float | None = None,
 ) -> list[dict]:
     """Run ``fn(task)`` for every task not already in ``csv_path``; return all rows.
 
@@ -117,8 +113,8 @@ def run_trials(
             into the row.
         csv_path: results file; rows are appended as trials finish.
         columns: the CSV header (an ``error`` column is added).
-        workers: processes (1: in this process), or Ray tasks in flight (0: as many as the
-            Ray cluster has CPUs).
+        workers: worker processes, or Ray tasks in flight (0: as many as the Ray cluster
+            has CPUs). 1 without ``trial_timeout_s``: in this process.
         resume: keep the rows already in ``csv_path`` and run only the missing tasks.
         overwrite: start a new file even if one exists.
         retry_failed: with ``resume``, run again the tasks whose rows hold an error.
@@ -127,6 +123,8 @@ def run_trials(
         backend: "local" (this process or ``workers`` processes) or "ray" (Ray tasks, at
             most ``workers`` at a time, on ``ray_address`` or a local Ray).
         keys: the columns that identify a trial (each task once).
+        trial_timeout_s: a trial running longer (s) is stopped (its worker killed) and
+            recorded as ``TrialTimeoutError``; None: no limit.
 
     Raises:
         ResumeError: the CSV cannot be continued (see ``run_files``).
@@ -138,7 +136,11 @@ def run_trials(
     if repeated:
         raise InvalidInputError(f"tasks {repeated[:5]} are listed more than once")
     check_backend(backend, ray_address)
-    execute = _executor(backend, workers, ray_address)
+    if trial_timeout_s is not None:
+        validate.number(trial_timeout_s, "trial_timeout_s", low=0.0, low_open=True)
+    execute = _executor(backend, workers, ray_address, trial_timeout_s)
+    if execute is not _run_serial and backend == "local":
+        _check_picklable(fn)
     with run_files.run_lock(Path(csv_path)):
         rows = _kept_rows(Path(csv_path), columns, resume, overwrite, retry_failed, settings)
         return _run_missing(fn, tasks, rows, Path(csv_path), columns, execute, desc, key)
@@ -148,21 +150,43 @@ def _key_of(keys: tuple[str, ...]) -> Callable[[dict], tuple[str, ...]]:
     return lambda row: tuple(str(row.get(k, "")) for k in keys)
 
 
-def _executor(backend: str, workers: int, ray_address: str | None):
+def _check_picklable(fn) -> None:
+    try:
+        pickle.dumps(fn)
+    except (pickle.PicklingError, AttributeError, TypeError) as exc:
+        raise InvalidInputError(
+            f"the trial function {fn!r} cannot be sent to a worker process ({exc}): pass a "
+            "module's top-level function, or run it in this process (workers=1, "
+            "trial_timeout_s=None)"
+        ) from None
+
+
+def _executor(backend: str, workers: int, ray_address: str | None, timeout_s: float | None):
     """``execute(fn, todo, record)`` for the backend."""
     if backend == "ray":
         ray = ensure_ray(workers, ray_address)  # before any file is touched: none if it fails
         workers = workers or max(1, int(ray.cluster_resources().get("CPU", 1)))
-        return lambda fn, todo, record: run_on_ray(_safe_call, fn, todo, workers, record,
-                                                   ray_address)  # fmt: skip
-    if workers <= 1:
+        return lambda fn, todo, record: run_on_ray(safe_call, fn, todo, workers, record,
+                                                   ray_address, timeout_s)  # fmt: skip
+    if workers <= 1 and timeout_s is None:
         return _run_serial
-    return lambda fn, todo, record: _run_parallel(fn, todo, workers, record)
+    return lambda fn, todo, record: _run_local(fn, todo, max(1, workers), record, timeout_s)
 
 
 def _run_serial(fn, todo, record) -> None:
     for task in todo:
-        record(_safe_call(fn, task))
+        record(safe_call(fn, task))
+
+
+def _run_local(fn, todo, workers: int, record, timeout_s: float | None) -> None:
+    """All of ``todo`` on ``workers`` worker processes: the ``kept_pool``'s, if it has as
+    many, else a set of this run's own."""
+    kept = _KEPT.get(workers)
+    if kept is not None:
+        kept.run(safe_call, fn, todo, record, timeout_s)
+        return
+    with WorkerSet(workers) as own:
+        own.run(safe_call, fn, todo, record, timeout_s)
 
 
 def _run_missing(fn, tasks, rows: list[dict], csv_path: Path, columns: list[str],
@@ -188,44 +212,22 @@ def _run_missing(fn, tasks, rows: list[dict], csv_path: Path, columns: list[str]
     return rows
 
 
-def _run_parallel(fn, todo, workers: int, record) -> None:
-    """All of ``todo`` on ``workers`` processes, a pool restarted whenever a worker dies."""
-    queue = deque(todo)
-    while queue:
-        for task in _run_pool(fn, queue, workers, record):
-            _run_pool(fn, deque([task]), 1, record)  # alone: a second death is its own
-
-
-def _run_pool(fn, queue: deque, workers: int, record) -> list[dict]:
-    """Run tasks from ``queue`` (at most ``workers`` at a time) until it is empty or a
-    worker dies; return the tasks in flight when it died (none otherwise). A task that
-    kills the only worker of a one-worker pool is recorded as failed. The pool is the one
-    ``kept_pool`` keeps, if it has as many workers, else a new one."""
-    kept = _KEPT.get(workers)
-    if kept is not None:
-        died = _run_in_pool(kept, fn, queue, workers, record)
-        if died:
-            del _KEPT[workers]  # broken: what runs next starts a pool of its own
-        return died
-    with spawn_pool(workers) as pool:
-        return _run_in_pool(pool, fn, queue, workers, record)
-
-
-_KEPT: dict[int, ProcessPoolExecutor] = {}
-"""The pools ``kept_pool`` keeps, by their number of workers."""
+_KEPT: dict[int, WorkerSet] = {}
+"""The worker sets ``kept_pool`` keeps, by their number of workers."""
 
 
 @contextmanager
 def kept_pool(workers: int) -> Iterator[None]:
-    """Within the block, every local run of ``workers`` processes uses one pool: its
-    workers start (imports, OpenGL context, solvers) once for several experiments, not
-    once for each. A trial's result does not depend on the worker it runs in: each builds
-    its world from its own seed."""
-    if workers <= 1 or workers in _KEPT:
+    """Within the block, every local run on ``workers`` worker processes uses one set of
+    them: they start (imports, OpenGL context, solvers) once for several experiments, not
+    once for each; one that dies or is killed is replaced. A trial's result does not depend
+    on the worker it runs in: each builds its world from its own seed."""
+    workers = max(1, workers)
+    if workers in _KEPT:
         yield
         return
-    with spawn_pool(workers) as pool:
-        _KEPT[workers] = pool
+    with WorkerSet(workers) as kept:
+        _KEPT[workers] = kept
         try:
             yield
         finally:
@@ -234,10 +236,10 @@ def kept_pool(workers: int) -> Iterator[None]:
 
 @contextmanager
 def spawn_pool(workers: int) -> Iterator[ProcessPoolExecutor]:
-    """A pool of ``workers`` spawned processes (each with its own MuJoCo and OpenGL
-    context) that run their libraries on ``cores // workers`` threads (``worker_threads``)
-    and end when this process is gone (``exit_with_parent``); shut down, tasks not yet
-    started cancelled, when the block ends."""
+    """A pool of ``workers`` spawned processes (the tilt calibration's ``map``; each with
+    its own MuJoCo and OpenGL context) that run their libraries on ``cores // workers``
+    threads (``worker_threads``) and end when this process is gone (``exit_with_parent``);
+    shut down, tasks not yet started cancelled, when the block ends."""
     with worker_threads(workers):  # the workers start as tasks are submitted
         context = multiprocessing.get_context("spawn")
         pool = ProcessPoolExecutor(
@@ -250,38 +252,3 @@ def spawn_pool(workers: int) -> Iterator[ProcessPoolExecutor]:
             yield pool
         finally:
             pool.shutdown(wait=True, cancel_futures=True)
-
-
-def exit_with_parent(parent: int) -> None:
-    """A pool worker's initializer: the worker ends when the process that started it
-    (``parent``, its pid) is gone. A driver killed outright cannot shut its pool down, and
-    its workers would run on as orphans, each a core busy with trials nobody records."""
-
-    def watch() -> None:
-        while os.getppid() == parent:
-            time.sleep(PARENT_CHECK_S)
-        os._exit(1)
-
-    threading.Thread(target=watch, name="exit-with-parent", daemon=True).start()
-
-
-def _run_in_pool(pool: ProcessPoolExecutor, fn, queue: deque, workers: int, record) -> list[dict]:
-    running: dict[Future, dict] = {}
-    while queue or running:
-        while queue and len(running) < workers:
-            try:
-                future = pool.submit(_safe_call, fn, queue[0])
-            except BrokenProcessPool:
-                return list(running.values())
-            running[future] = queue.popleft()
-        finished, _ = wait(running, return_when=FIRST_COMPLETED)
-        died = [running[f] for f in finished if isinstance(f.exception(), BrokenProcessPool)]
-        for future in finished:
-            task, exc = running.pop(future), future.exception()
-            if not isinstance(exc, BrokenProcessPool):
-                record(_error_row(task, exc) if exc is not None else future.result())
-        if died and workers == 1:
-            record(_error_row(died[0], WorkerDiedError(WORKER_DIED)))
-        elif died:
-            return died + list(running.values())
-    return []

@@ -167,7 +167,8 @@ def run_sweep(opts: SweepOptions) -> list[dict]:
     r = opts.run
     rows = run_trials(fn, sweep_tasks(opts), r.out / "sweep.csv", [*paths, *columns], r.workers,
                       r.resume, r.overwrite, "sweep", r.retry_failed, sweep_settings(opts),
-                      r.backend, r.ray_address, keys=(*paths, *KEY_COLUMNS))  # fmt: skip
+                      r.backend, r.ray_address, keys=(*paths, *KEY_COLUMNS),
+                      trial_timeout_s=r.trial_timeout_s)  # fmt: skip
     table = summarise(rows, params, opts.experiment)
     sweep_figures(table, params, r.out)
     (r.out / "sweep_table.md").write_text(markdown_table(table, params) + "\n")
