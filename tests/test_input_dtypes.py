@@ -124,3 +124,45 @@ def test_float32_points_are_transformed_as_float64_ones():
     T[:3, 3] = [0.1, -0.2, 0.3]
     expected = points.astype(float) + T[:3, 3]
     np.testing.assert_array_equal(transform_points(T, points), expected)
+
+
+def _public_constructors():
+    """name -> function of a converter of one array argument: the public values that take
+    arrays (the estimator's prior, a robot log, a payload, a camera's intrinsics and depth)."""
+    from comgrasp_pin.perception.camera_input import metric_depth
+    from comgrasp_pin.perception.camera_model import camera_model
+    from comgrasp_pin.robot_io import JointLog, Payload
+
+    t, pos = np.linspace(0.0, 1.0, 5), np.zeros((5, 2))
+    x, K = np.array([1.0, 0.0, 0.0]), CAMERA.K
+    return {
+        "point_ee": lambda b: cg.AxisPrior(point_ee=b(np.zeros(3)), direction_ee=x, std=0.01),
+        "direction_ee": lambda b: cg.AxisPrior(point_ee=np.zeros(3), direction_ee=b(x), std=0.01),
+        "JointLog.time": lambda b: JointLog(b(t), ("a", "b"), pos, pos),
+        "JointLog.position": lambda b: JointLog(t, ("a", "b"), b(pos), pos),
+        "JointLog.effort": lambda b: JointLog(t, ("a", "b"), pos, b(pos)),
+        "JointLog.velocity": lambda b: JointLog(t, ("a", "b"), pos, pos, velocity=b(pos)),
+        "Payload.com_flange": lambda b: Payload(1.0, b(np.zeros(3)), np.eye(3), "f", None, "point"),
+        "Payload.inertia_flange": lambda b: Payload(
+            1.0, np.zeros(3), b(np.eye(3)), "f", None, "point"
+        ),  # fmt: skip
+        "K": lambda b: camera_model(b(K), (48, 64)),
+        "depth": lambda b: metric_depth(b(np.full((4, 4), 500.0)), 1e-3),
+    }
+
+
+@settings(max_examples=60, deadline=None)
+@given(which=st.sampled_from(sorted(_public_constructors())), dtype=st.sampled_from(REFUSED))
+def test_public_values_that_take_arrays_refuse_what_is_not_real(which, dtype):
+    """A complex, boolean, string or object array is refused naming the argument (it was
+    taken, a complex one with its imaginary part dropped)."""
+    with pytest.raises(InvalidInputError, match=which.split(".")[-1]):
+        _public_constructors()[which](lambda a: _as(a, dtype))
+
+
+@pytest.mark.parametrize("dtype", REFUSED)
+def test_planning_refuses_what_is_not_real(ur5, dtype):
+    with pytest.raises(InvalidInputError, match="q"):
+        cg.plan_wrist_poses(ur5, _as(Q, dtype), 3)
+    with pytest.raises(InvalidInputError, match="not a numeric array"):  # (it says q)
+        cg.plan_measurement_poses(ur5, 3, start=_as(Q, dtype), n_candidates=50)

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from comgrasp_pin import validate
 from comgrasp_pin.errors import InvalidInputError
 
 MAX_DISTANCE_M = 1e3
@@ -87,10 +88,7 @@ class AxisPrior:
 
 
 def _vector3(value, name: str) -> np.ndarray:
-    try:
-        v = np.array(value, dtype=float)
-    except (TypeError, ValueError):
-        raise InvalidInputError(f"AxisPrior {name} must be 3 numbers, got {value!r}") from None
+    v = np.array(validate.real_array(value, f"AxisPrior {name}"), dtype=float)  # a copy
     if v.shape != (3,):
         raise InvalidInputError(f"AxisPrior {name} must have shape (3,), got {v.shape}")
     if not np.all(np.isfinite(v)):

@@ -36,9 +36,10 @@ def metric_depth(
         name: the argument's name in messages.
 
     Raises:
-        InvalidDepthError: an integer image without ``depth_scale``; complex, boolean,
-            string or object values.
-        InvalidInputError: a ``depth_scale`` that is not finite and > 0.
+        InvalidDepthError: an integer image without ``depth_scale``.
+        InvalidInputError: a ``depth_scale`` that is not finite and > 0; complex, boolean,
+            string or object values (with a ``depth_scale``; without, perception refuses
+            them with an InvalidDepthError).
     """
     try:
         kind = np.asarray(depth).dtype.kind
@@ -54,11 +55,7 @@ def metric_depth(
             )
         return depth  # float metres, checked by the perception that takes it
     scale = validate.number(depth_scale, "depth_scale (m per unit)", low=0.0, low_open=True)
-    try:
-        values = validate.real_array(depth, name)
-    except InvalidInputError as exc:
-        raise InvalidDepthError(str(exc)) from None
-    return values * scale
+    return validate.real_array(depth, name) * scale
 
 
 def rgb_of(colour: Colour, color_order: str = "rgb") -> Colour:

@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from comgrasp_pin import validate
 from comgrasp_pin.errors import LogError
 
 JOINT_STATE = "sensor_msgs/msg/JointState"
@@ -47,6 +48,13 @@ class JointLog:
     effort: np.ndarray
     source: str = ""
     velocity: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        """Refuse complex, boolean, string and object arrays (validate.real_array)."""
+        for name in ("time", "position", "effort", "velocity"):
+            value = getattr(self, name)
+            if value is not None:
+                object.__setattr__(self, name, validate.real_array(value, f"JointLog.{name}"))
 
     @property
     def duration(self) -> float:

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from comgrasp_pin import validate
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.estimation import ComEstimate
 from comgrasp_pin.robot import RobotModel
@@ -49,6 +50,13 @@ class Payload:
     cov: np.ndarray | None
     inertia_model: str
     unobservable_flange: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        """Refuse complex, boolean, string and object arrays (validate.real_array)."""
+        for name in ("com_flange", "inertia_flange", "cov", "unobservable_flange"):
+            value = getattr(self, name)
+            if value is not None:
+                object.__setattr__(self, name, validate.real_array(value, f"Payload.{name}"))
 
     @property
     def std(self) -> np.ndarray | None:
