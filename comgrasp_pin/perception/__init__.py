@@ -1,20 +1,29 @@
 """Perception on RGBD images (OpenCV + NumPy only; no simulator): works on real cameras too."""
 
+from comgrasp_pin.perception.camera_input import camera_frame
+from comgrasp_pin.perception.camera_model import CameraModel, camera_model
 from comgrasp_pin.perception.depth_frames import AGREE_TOLERANCE, average_depth_frames
 from comgrasp_pin.perception.draw import draw_side_view, draw_top_view
+from comgrasp_pin.perception.rgbd_files import RgbdFiles, read_camera_info, read_rgbd
 from comgrasp_pin.perception.side_view import SideView, observe_held_rod
 from comgrasp_pin.perception.slip import SlipMonitor, SlipVerdict
 from comgrasp_pin.perception.top_down import RodDetection, detect_rod_top_down
 
 __all__ = [
     "AGREE_TOLERANCE",
+    "CameraModel",
+    "RgbdFiles",
     "RodDetection",
     "SideView",
     "SlipMonitor",
     "SlipVerdict",
     "average_depth_frames",
+    "camera_frame",
+    "camera_model",
     "detect_rod_top_down",
     "draw_side_view",
     "draw_top_view",
     "observe_held_rod",
+    "read_camera_info",
+    "read_rgbd",
 ]
