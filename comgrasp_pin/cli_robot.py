@@ -69,6 +69,10 @@ def _cmd_estimate(args: argparse.Namespace) -> int:
     from comgrasp_pin import robot_io as rio
 
     robot = _robot(args)
+    if args.dynamic:
+        from comgrasp_pin.cli_dynamic import run_dynamic
+
+        return run_dynamic(args, robot, _write_json)
     log, before, after = _log_and_windows(args, robot)
     result = rio.estimate_from_log(
         robot, log, before, after, args.torque_std, args.method, args.max_speed, args.drift_std
@@ -140,17 +144,20 @@ def _add_robot_args(p: argparse.ArgumentParser) -> None:
 
 def add_subcommands(sub: argparse._SubParsersAction) -> None:
     """Add `estimate` and `plan-poses` to the `comgrasp` subparsers ``sub``."""
+    from comgrasp_pin.cli_dynamic import add_dynamic_args
     from comgrasp_pin.robot_io.logs import DEFAULT_TOPIC
     from comgrasp_pin.robot_io.payload import INERTIA_HELP
     from comgrasp_pin.robot_io.windows import MAX_SPEED
 
     est = sub.add_parser(
         "estimate",
-        help="payload mass and CoM from a robot log (ROS 2 bag or CSV) before/after a grasp",
+        help="payload mass and CoM from a robot log (ROS 2 bag or CSV) before/after a grasp; "
+        "--dynamic: the inertia too, from a motion",
         description="Estimate the held payload's mass and centre of mass from a robot log (a "
         "ROS 2 bag or a CSV of joint positions and efforts): static windows before and after "
         "the grasp, paired per pose; RESULT.json, a summary, and payload files for UR, Franka "
-        "and ROS 2 in the flange frame.",
+        "and ROS 2 in the flange frame. With --dynamic: mass, CoM and inertia from a log of a "
+        "motion (comgrasp plan-motion) played holding the payload, with their covariance.",
         formatter_class=_DEFAULTS,
     )
     _add_robot_args(est)
@@ -183,6 +190,7 @@ def add_subcommands(sub: argparse._SubParsersAction) -> None:
     est.add_argument("--export-franka", default=None, help="JSON for libfranka setLoad")
     est.add_argument("--export-ros2", default=None,
                      help="YAML: ur_msgs/SetPayload and franka_msgs/SetLoad requests")  # fmt: skip
+    add_dynamic_args(est)
     est.set_defaults(func=_cmd_estimate)
 
     plan = sub.add_parser(

@@ -120,6 +120,11 @@ class LogError(ComGraspError):
     topic, joint or effort is missing, or a time window is outside the log."""
 
 
+class MotionLogError(LogError):
+    """A motion's log cannot identify a payload's inertia: too short, no motion, a joint at
+    its limit, too jerky for the filter, or sampled with gaps."""
+
+
 class NotStaticError(LogError):
     """A time window of a log is not static: the arm moved faster than the threshold."""
 

@@ -14,7 +14,8 @@ Field names and conventions, as their documentation states them:
 - ROS 2 ``franka_msgs/srv/SetLoad`` request: ``float64 mass``, ``float64[3] center_of_mass``,
   ``float64[9] load_inertia`` (3x3, column-major) (docs.ros.org, franka_msgs SetLoad).
 
-Every file says that the inertia is an approximation (static torques cannot see it).
+Every file says how its inertia was made: an approximation (static torques cannot see it),
+or identified from a motion, with its standard deviation.
 """
 
 from __future__ import annotations
@@ -30,11 +31,20 @@ from comgrasp_pin.robot_io.payload import Payload
 
 def _note(p: Payload) -> list[str]:
     std = p.std
-    lines = [
-        f"payload estimated by comgrasp_pin from static joint torques; frame {p.flange_frame}",
-        f"inertia: {p.inertia_model} approximation about the CoM, flange axes (static torques "
-        "do not see inertia)",
-    ]
+    if p.inertia_std_flange is None:
+        lines = [
+            f"payload estimated by comgrasp_pin from static joint torques; frame {p.flange_frame}",
+            f"inertia: {p.inertia_model} approximation about the CoM, flange axes (static "
+            "torques do not see inertia)",
+        ]
+    else:
+        s = _six(p.inertia_std_flange)
+        lines = [
+            f"payload identified by comgrasp_pin from a motion's joint torques; frame "
+            f"{p.flange_frame}",
+            "inertia: identified, about the CoM, flange axes; 1-sigma [Ixx, Iyy, Izz, Ixy, "
+            f"Ixz, Iyz] {_list(s)} kg m^2",
+        ]
     if std is not None:
         lines.append(
             f"1-sigma: mass {std[0]:.4g} kg, CoM {np.array2string(1e3 * std[1:], precision=3)} mm"

@@ -41,6 +41,8 @@ class Payload:
         inertia_model: how the inertia was made (``"point"`` or the cylinder spec).
         unobservable_flange: (3,) the direction (flange frame) the CoM was not seen along
             (its component there is 0 in the ee frame), or None.
+        inertia_std_flange: (3, 3) std of each entry of ``inertia_flange`` where the inertia
+            was identified from a motion, or None where it is an approximation.
     """
 
     mass: float
@@ -50,10 +52,12 @@ class Payload:
     cov: np.ndarray | None
     inertia_model: str
     unobservable_flange: np.ndarray | None = None
+    inertia_std_flange: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         """Refuse complex, boolean, string and object arrays (validate.real_array)."""
-        for name in ("com_flange", "inertia_flange", "cov", "unobservable_flange"):
+        for name in ("com_flange", "inertia_flange", "cov", "unobservable_flange",
+                     "inertia_std_flange"):  # fmt: skip
             value = getattr(self, name)
             if value is not None:
                 object.__setattr__(self, name, validate.real_array(value, f"Payload.{name}"))
@@ -123,3 +127,20 @@ def payload_in_flange(
         cov = G @ est.cov @ G.T
     u = None if est.unobservable_ee is None else R @ est.unobservable_ee
     return Payload(float(est.mass), com_flange, I_flange, flange, cov, model, u)
+
+
+def dynamic_payload_in_flange(robot: RobotModel, est, flange_frame: str | None = None) -> Payload:
+    """A ``DynamicEstimate`` (ee frame) in ``flange_frame``, the identified inertia too.
+
+    The inertia's std is rotated to the flange axes through its covariance (R x R).
+    """
+    flange = flange_frame or robot.ee_frame
+    T = T_flange_ee(robot, flange)
+    R = T[:3, :3]
+    I_flange = R @ est.inertia_com_ee @ R.T
+    K = np.kron(R, R)  # vec(R I R^T) = (R x R) vec(I), row-major vec
+    std = np.sqrt(np.clip(np.diag(K @ est.inertia_cov @ K.T), 0, None)).reshape(3, 3)
+    G = np.eye(4)
+    G[1:, 1:] = R
+    return Payload(float(est.mass), R @ est.com_ee + T[:3, 3], 0.5 * (I_flange + I_flange.T),
+                   flange, G @ est.cov @ G.T, "identified from a motion", None, std)  # fmt: skip

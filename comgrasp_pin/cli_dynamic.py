@@ -1,0 +1,112 @@
+"""`comgrasp estimate --dynamic`: the whole payload (mass, CoM, inertia) from a motion's log.
+
+The options are added to `comgrasp estimate` (``add_dynamic_args``); ``cli_robot`` hands the
+parsed arguments here when ``--dynamic`` is given (DESIGN.md 4c).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+
+from comgrasp_pin.errors import InvalidInputError, LogError
+
+
+def add_dynamic_args(est: argparse.ArgumentParser) -> None:
+    """The options of the dynamic estimate, on the `estimate` parser."""
+    from comgrasp_pin.robot_io.motion_signals import CUTOFF_HZ
+
+    g = est.add_argument_group(
+        "from a motion (--dynamic)",
+        "the payload's mass, CoM and inertia from a log of an excitation motion (comgrasp "
+        "plan-motion) played holding it; --before/--after are not used",
+    )
+    g.add_argument("--dynamic", action="store_true",
+                   help="identify the inertia too, from a motion (the log's efforts, positions "
+                   "and velocities where logged)")  # fmt: skip
+    g.add_argument("--empty-bag", default=None,
+                   help="the same motion with the empty arm (ROS 2 bag); subtracted sample "
+                   "by sample. Without it the URDF's model stands for the arm")  # fmt: skip
+    g.add_argument("--empty-csv", default=None, help="the empty-arm motion as a CSV")
+    g.add_argument("--window", default=None, help="T0:T1, the motion's part of the log (s)")
+    g.add_argument("--empty-window", default=None, help="T0:T1 of the empty-arm log (s)")
+    g.add_argument("--cutoff", type=float, default=CUTOFF_HZ,
+                   help="zero-phase low-pass cutoff for positions and efforts (Hz)")  # fmt: skip
+    g.add_argument("--prior", default=None,
+                   help="a static estimate's RESULT.json (same ee frame): its mass and CoM "
+                   "enter as a Gaussian prior")  # fmt: skip
+
+
+def run_dynamic(args: argparse.Namespace, robot, write_json) -> int:
+    """Read the logs, identify the payload, write RESULT.json and the payload files."""
+    from comgrasp_pin import robot_io as rio
+    from comgrasp_pin.robot_io.dynamic import estimate_payload_dynamic
+    from comgrasp_pin.robot_io.dynamic_report import dynamic_result_dict, dynamic_summary
+    from comgrasp_pin.robot_io.payload import dynamic_payload_in_flange
+
+    if args.before or args.after or args.auto:
+        raise InvalidInputError("--dynamic uses the whole motion (or --window): leave out "
+                                "--before, --after and --auto")  # fmt: skip
+    log = _one_log(args.bag, args.csv, "--bag", "--csv", robot, args.topic, required=True)
+    empty = _one_log(args.empty_bag, args.empty_csv, "--empty-bag", "--empty-csv", robot,
+                     args.topic, required=False)  # fmt: skip
+    est = estimate_payload_dynamic(
+        robot, log, empty, _window(args.window, "--window"),
+        _window(args.empty_window, "--empty-window"), args.cutoff, _prior(args.prior),
+    )  # fmt: skip
+    exports = ((args.export_ur, rio.write_urscript), (args.export_franka, rio.write_franka),
+               (args.export_ros2, rio.write_ros2))  # fmt: skip
+    payload = None
+    if any(path for path, _ in exports):  # the flange checked before anything is written
+        payload = dynamic_payload_in_flange(robot, est, args.flange_frame)
+    write_json(args.out, dynamic_result_dict(est, robot.ee_frame))
+    print(dynamic_summary(est, robot.ee_frame))
+    if payload is not None:
+        for path, write in exports:
+            if path:
+                print(f"wrote {write(payload, path)}")
+    print(f"wrote {args.out}")
+    return 0
+
+
+def _one_log(bag, csv, bag_opt, csv_opt, robot, topic, required: bool):
+    from comgrasp_pin import robot_io as rio
+
+    if bag is not None and csv is not None:
+        raise InvalidInputError(f"give one of {bag_opt} and {csv_opt}, not both")
+    if bag is None and csv is None:
+        if required:
+            raise InvalidInputError(f"give the motion's log: {bag_opt} PATH or {csv_opt} PATH")
+        return None
+    if bag is not None:
+        return rio.read_bag(bag, robot.joint_names, topic)
+    return rio.read_csv(csv, robot.joint_names)
+
+
+def _window(text: str | None, option: str):
+    if text is None:
+        return None
+    from comgrasp_pin.robot_io import parse_windows
+
+    windows = parse_windows(text, option)
+    if len(windows) != 1:
+        raise InvalidInputError(f"{option} takes one window T0:T1, got {len(windows)}")
+    return windows[0]
+
+
+def _prior(path: str | None):
+    """The static estimate in a RESULT.json as a prior ((m, c), cov), or None."""
+    if path is None:
+        return None
+    try:
+        data = json.loads(Path(path).read_text())
+        mass, com = float(data["mass_kg"]), np.array(data["com_m"], float)
+        cov = np.array(data["cov"], float)
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise LogError(f"--prior {path}: not a static estimate's RESULT.json ({exc})") from None
+    if cov.shape != (4, 4) or com.shape != (3,) or data.get("unobservable") is not None:
+        raise LogError(f"--prior {path}: needs a full 3-D CoM with its 4x4 cov (mass, CoM)")
+    return np.concatenate([[mass], com]), cov

@@ -1,0 +1,75 @@
+"""A motion's payload estimate as RESULT.json (DESIGN.md 4c) and as a few lines for a person."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from comgrasp_pin.estimation.payload_regressor import PARAMETER_NAMES
+from comgrasp_pin.robot_io.dynamic import DynamicEstimate
+
+
+def dynamic_result_dict(est: DynamicEstimate, frame: str) -> dict:
+    """RESULT.json: the fields of the static estimate's (4b) plus the inertia (4c), SI units."""
+    std = np.sqrt(np.clip(np.diag(est.cov), 0, None))
+    return {
+        "mass_kg": est.mass,
+        "com_m": est.com_ee.tolist(),
+        "frame": frame,
+        "cov": est.cov.tolist(),
+        "unobservable": None,
+        "n_poses": None,
+        "residual_rms_Nm": est.residual_rms.tolist(),
+        "std": {"mass_kg": float(std[0]), "com_m": std[1:].tolist()},
+        "inertia_kgm2": est.inertia_com_ee.tolist(),
+        "inertia_std_kgm2": est.inertia_std.tolist(),
+        "inertia_about": "the CoM, axes of frame",
+        "params": dict(zip(PARAMETER_NAMES, est.params.tolist(), strict=True)),
+        "params_cov": est.params_cov.tolist(),
+        "params_about": "m (kg), m c (kg m), inertia at the frame's origin (kg m^2)",
+        "unconstrained_params": est.unconstrained_params.tolist(),
+        "condition_number": est.condition_number,
+        "method": "dynamic",
+        "arm_model": est.arm_model,
+        "offsets_Nm": est.offsets.tolist(),
+        "friction": None if est.friction is None else {
+            "viscous_Nms_per_rad": est.friction[:, 0].tolist(),
+            "coulomb_Nm": est.friction[:, 1].tolist(),
+        },
+        "torque_std_Nm": est.torque_std.tolist(),
+        "n_samples": est.n_samples,
+        "duration_s": est.duration_s,
+        "cutoff_hz": est.cutoff_hz,
+        "velocity_from": est.velocity_from,
+        "solver_status": est.solver_status,
+    }  # fmt: skip
+
+
+def dynamic_summary(est: DynamicEstimate, frame: str) -> str:
+    """Mass, CoM, principal moments with their std; where the arm's own torques came from."""
+    std = np.sqrt(np.clip(np.diag(est.cov), 0, None))
+    c = 1e3 * est.com_ee
+    moments, axes = np.linalg.eigh(est.inertia_com_ee)
+    # std of each principal moment: the inertia's covariance projected on u u^T
+    moment_std = [float(np.sqrt(max(np.kron(u, u) @ est.inertia_cov @ np.kron(u, u), 0)))
+                  for u in axes.T]  # fmt: skip
+    arm = (
+        "the empty-arm run subtracted"
+        if est.arm_model == "empty run"
+        else "the URDF's model stands for the arm (no empty-arm run), friction identified"
+    )
+    lines = [
+        f"payload from a {est.duration_s:.1f} s motion ({est.n_samples} samples after a "
+        f"{est.cutoff_hz:g} Hz zero-phase filter; velocities from {est.velocity_from}); {arm}",
+        f"  mass  {est.mass:.4f} +- {std[0]:.4f} kg",
+        f"  CoM in {frame}:  x {c[0]:8.2f} +- {1e3 * std[1]:.2f} mm",
+        f"                 y {c[1]:8.2f} +- {1e3 * std[2]:.2f} mm",
+        f"                 z {c[2]:8.2f} +- {1e3 * std[3]:.2f} mm",
+        "  principal moments of inertia about the CoM (kg m^2), axes in " + frame + ":",
+    ]
+    for value, s, u in zip(moments, moment_std, axes.T):
+        lines.append(f"    {value:.3e} +- {s:.1e}  along {np.array2string(u, precision=3)}")
+    lines += [
+        f"  condition number of the motion {est.condition_number:.1f} (scaled regressor)",
+        f"  residual RMS per joint {np.array2string(est.residual_rms, precision=3)} N m",
+    ]
+    return "\n".join(lines)

@@ -1,0 +1,184 @@
+"""The payload's inertia from a motion (robot_io.dynamic, estimation.inertial_fit).
+
+Independent reference: the efforts are Pinocchio's RNEA of the arm with the payload appended
+as a body (not the payload regressor under test), plus friction, an offset and white noise;
+the log-Cholesky map is checked against the pseudo-inertia's definition.
+"""
+
+import json
+from dataclasses import replace
+
+import numpy as np
+import pinocchio as pin
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from comgrasp_pin.cli import main
+from comgrasp_pin.errors import MotionLogError
+from comgrasp_pin.estimation.inertial_fit import fit_inertial, pi_of_theta, theta_of_pi
+from comgrasp_pin.robot import RobotModel
+from comgrasp_pin.robot_io import JointLog, write_csv
+from comgrasp_pin.robot_io.dynamic import estimate_payload_dynamic
+
+PAYLOAD = pin.Inertia(0.8, np.array([0.02, -0.01, 0.08]), np.diag([4e-3, 5e-3, 1e-3]))
+RATE = 250.0
+
+
+@pytest.fixture(scope="module")
+def robot():
+    return RobotModel.ur5()
+
+
+def fourier_motion(robot, duration=16.0, seed=0, amplitude=0.5):
+    """A smooth motion at rest at both ends: each joint a sum of four harmonics, windowed."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, duration, 1 / RATE)
+    w = 2 * np.pi / (duration / 2)
+    q = np.tile([0.0, -1.6, 1.6, -1.57, -1.57, 0.0], (len(t), 1))
+    window = np.sin(np.pi * t / duration) ** 2
+    for j in range(robot.nq):
+        for h in range(1, 5):
+            a, b = rng.normal(0, amplitude / h / 2, 2)
+            q[:, j] += window * (a * np.sin(h * w * t) + b * (np.cos(h * w * t) - 1))
+    qd = np.gradient(q, t, axis=0)
+    return t, q, qd, np.gradient(qd, t, axis=0)
+
+
+def rnea_log(robot, inertia, motion, noise=0.05, seed=0, offset=0.2):
+    """The arm's efforts along ``motion`` with ``inertia`` appended at the ee frame."""
+    t, q, qd, qdd = motion
+    rng = np.random.default_rng(seed)
+    model = pin.Model(robot.model)
+    if inertia is not None:
+        frame = model.frames[robot.ee_frame_id]
+        model.appendBodyToJoint(frame.parentJoint, inertia, frame.placement)
+    data = model.createData()
+    tau = np.array([pin.rnea(model, data, a, b, c) for a, b, c in zip(q, qd, qdd)])
+    tau += 0.3 * np.tanh(qd / 0.01) + 0.5 * qd + offset + noise * rng.standard_normal(tau.shape)
+    q_read = q + 1e-5 * rng.standard_normal(q.shape)
+    return JointLog(t, tuple(robot.joint_names), q_read, tau, "synthetic")
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.lists(st.floats(-2, 2), min_size=10, max_size=10))
+def test_every_theta_is_a_consistent_body_and_maps_back(theta):
+    theta = np.array(theta)
+    pi = pi_of_theta(theta)
+    m, h = pi[0], pi[1:4]
+    inertia = np.array([[pi[4], pi[5], pi[7]], [pi[5], pi[6], pi[8]], [pi[7], pi[8], pi[9]]])
+    sigma = 0.5 * np.trace(inertia) * np.eye(3) - inertia  # the second moment of mass
+    J = np.block([[sigma, h[:, None]], [h[None, :], np.array([[m]])]])
+    assert np.linalg.eigvalsh(J).min() > 0
+    # a consistent body: triangle inequalities of the principal moments about the CoM
+    c = h / m
+    I_c = inertia - m * (c @ c * np.eye(3) - np.outer(c, c))
+    e = np.linalg.eigvalsh(I_c)
+    assert e[0] + e[1] >= e[2] * (1 - 1e-9) - 1e-12
+    np.testing.assert_allclose(theta_of_pi(pi), theta, atol=1e-6)
+
+
+def test_the_fit_stays_consistent_where_least_squares_does_not():
+    """A point mass with noisy rows: the plain solution's pseudo-inertia is indefinite."""
+    rng = np.random.default_rng(1)
+    A = rng.standard_normal((60, 10))
+    truth = pin.Inertia(1.0, np.array([0.0, 0.0, 0.1]), np.zeros((3, 3))).toDynamicParameters()
+    b = A @ truth + 0.05 * rng.standard_normal(60)
+    fit = fit_inertial(A, np.zeros((60, 0)), b, np.full(60, 20.0))
+    from comgrasp_pin.estimation.inertial_fit import pseudo_inertia
+
+    assert np.linalg.eigvalsh(pseudo_inertia(fit.unconstrained_pi)).min() < 0
+    assert np.linalg.eigvalsh(pseudo_inertia(fit.pi)).min() > -1e-12
+    assert abs(fit.pi[0] - 1.0) < 0.05
+
+
+@pytest.mark.parametrize("empty_run", [True, False])
+def test_payload_from_a_motion_within_its_stated_uncertainty(robot, empty_run):
+    motion = fourier_motion(robot)
+    log = rnea_log(robot, PAYLOAD, motion, seed=1)
+    empty = rnea_log(robot, None, motion, seed=2, offset=0.25) if empty_run else None
+    est = estimate_payload_dynamic(robot, log, empty)
+    truth = PAYLOAD.toDynamicParameters()
+    z = (est.params - truth) / np.sqrt(np.diag(est.params_cov))
+    assert np.all(np.abs(z) < 4.5), z
+    # a random motion (condition number ~2000); the friction and offsets found with the
+    # payload take some of its information: the tolerances are the stated std's, above
+    tolerance = 1 if empty_run else 3
+    assert abs(est.mass - 0.8) < tolerance * 0.01 * 0.8
+    assert np.linalg.norm(est.com_ee - PAYLOAD.lever) < tolerance * 2e-3
+    assert est.arm_model == ("empty run" if empty_run else "URDF model + friction")
+    if not empty_run:  # friction found where the model lacks it: 0.5 N m s/rad viscous and
+        # 0.3 N m Coulomb, whose shape (tanh(qd / 0.01)) differs from the model's (0.02)
+        np.testing.assert_allclose(est.friction[:, 0], 0.5, atol=0.25)
+        np.testing.assert_allclose(est.friction[:, 1], 0.3, atol=0.1)
+
+
+def test_logged_velocities_are_used(robot):
+    motion = fourier_motion(robot, seed=3)
+    log = rnea_log(robot, PAYLOAD, motion, seed=4)
+    noisy = motion[2] + 0.01 * np.random.default_rng(0).standard_normal(motion[2].shape)
+    est = estimate_payload_dynamic(robot, replace(log, velocity=noisy))
+    assert est.velocity_from == "log"
+    assert abs(est.mass - 0.8) < 0.01 * 0.8
+
+
+def _still(robot):
+    t = np.arange(0, 10, 1 / RATE)
+    return t, np.tile([0.0, -1.6, 1.6, -1.57, -1.57, 0.0], (len(t), 1))
+
+
+def test_bad_motion_logs_say_what_is_wrong(robot):
+    motion = fourier_motion(robot)
+    good = rnea_log(robot, PAYLOAD, motion)
+    t, q = _still(robot)
+    cases = {
+        "barely moves": JointLog(t, good.joint_names, q, np.zeros_like(q)),
+        "lasts": JointLog(
+            good.time[:500], good.joint_names, good.position[:500], good.effort[:500]
+        ),  # fmt: skip
+        "gap": JointLog(
+            np.delete(good.time, range(1000, 1200)),
+            good.joint_names,
+            np.delete(good.position, range(1000, 1200), axis=0),
+            np.delete(good.effort, range(1000, 1200), axis=0),
+        ),  # fmt: skip
+    }
+    jerky = good.position.copy()
+    jerky[::2, 4] += 0.05  # a 125 Hz square wave on a wrist joint
+    cases["jerkily"] = replace(good, position=jerky)
+    at_limit = good.position.copy()
+    at_limit[:, 0] = np.clip(at_limit[:, 0] + 2 * np.pi, None, robot.q_upper[0])
+    cases["limit"] = replace(good, position=at_limit)
+    for words, log in cases.items():
+        with pytest.raises(MotionLogError, match=words):
+            estimate_payload_dynamic(robot, log)
+
+
+def test_cli_writes_the_inertia_and_exports_carry_it(robot, tmp_path, capsys):
+    from comgrasp_pin._paths import urdf_path
+
+    motion = fourier_motion(robot, seed=5)
+    loaded = write_csv(rnea_log(robot, PAYLOAD, motion, seed=6), tmp_path / "loaded.csv")
+    empty = write_csv(rnea_log(robot, None, motion, seed=7), tmp_path / "empty.csv")
+    out, franka = tmp_path / "RESULT.json", tmp_path / "load.json"
+    args = ["estimate", "--dynamic", "--urdf", str(urdf_path("ur5_gripper.urdf")),
+            "--ee-frame", "eelink", "--csv", str(loaded), "--empty-csv", str(empty),
+            "--out", str(out), "--export-franka", str(franka)]  # fmt: skip
+    assert main(args) == 0
+    result = json.loads(out.read_text())
+    I = np.array(result["inertia_kgm2"])
+    assert I.shape == (3, 3) and np.allclose(I, I.T)
+    assert np.array(result["params_cov"]).shape == (10, 10)
+    assert result["condition_number"] > 1 and result["arm_model"] == "empty run"
+    load = json.loads(franka.read_text())
+    np.testing.assert_allclose(np.reshape(load["load_inertia"], (3, 3), order="F"), I, atol=1e-12)
+    assert "identified" in load["comment"]
+    assert "principal moments" in capsys.readouterr().out
+    # a still log: exit 2 with the reason, nothing written
+    t, q = _still(robot)
+    still = write_csv(JointLog(t, tuple(robot.joint_names), q, np.zeros_like(q)),
+                      tmp_path / "still.csv")  # fmt: skip
+    out2 = tmp_path / "R2.json"
+    assert main(args[:6] + ["--csv", str(still), "--out", str(out2)]) == 2
+    assert "barely moves" in capsys.readouterr().err
+    assert not out2.exists()
