@@ -152,7 +152,8 @@ def motion_reference(
 
 def _servo(model, robot, q_d, qd_d, qdd_d, every: int, config: MotionSimConfig):
     """Step the arm along the set points; (q, qd, tau) at every ``every``-th step, each
-    (steps // every + 1, n): the state before the step and the torque applied over it."""
+    (steps // every + 1, n): the state before the step and the torque applied over it.
+    The model's qpos and qvel are the arm's joints in ``robot``'s order (``arm_world``)."""
     data = mujoco.MjData(model)
     data.qpos[:] = q_d[0]
     omega = 2 * np.pi * config.servo_hz
