@@ -68,11 +68,19 @@ def candidate_poses(
     return rng.uniform(lo, hi, size=(n, robot.nq))
 
 
+def floor_heights(robot: RobotModel, q: np.ndarray) -> np.ndarray:
+    """(4,) heights (m, world z) of the last three joint origins and the ee origin at ``q``.
+
+    These are the points kept above the floor plane.
+    """
+    return np.r_[robot.joint_origins(q)[-3:, 2], robot.ee_pose(q)[2, 3]]
+
+
 def feasible(robot: RobotModel, checker: SelfCollision, q: np.ndarray, min_height: float) -> bool:
     """Within the limits, no self-collision, ee and wrist origins above ``min_height`` (m)."""
     if np.any(q < robot.q_lower) or np.any(q > robot.q_upper):
         return False
-    heights = np.r_[robot.joint_origins(q)[-3:, 2], robot.ee_pose(q)[2, 3]]
+    heights = floor_heights(robot, q)
     return bool(np.all(heights >= min_height)) and not checker.in_collision(q)
 
 
