@@ -132,6 +132,14 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_plan_motion(args: argparse.Namespace) -> int:
+    from comgrasp_pin.cli_motion import run_plan_motion
+
+    robot = _robot(args)
+    start = None if args.start is None else _vector(args.start, "--start", robot.nq)
+    return run_plan_motion(args, robot, start)
+
+
 def _add_robot_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--urdf", required=True, help="the robot's URDF file")
     p.add_argument("--ee-frame", required=True, help="the frame the CoM is estimated in")
@@ -145,6 +153,7 @@ def _add_robot_args(p: argparse.ArgumentParser) -> None:
 def add_subcommands(sub: argparse._SubParsersAction) -> None:
     """Add `estimate` and `plan-poses` to the `comgrasp` subparsers ``sub``."""
     from comgrasp_pin.cli_dynamic import add_dynamic_args
+    from comgrasp_pin.cli_motion import add_plan_motion
     from comgrasp_pin.robot_io.logs import DEFAULT_TOPIC
     from comgrasp_pin.robot_io.payload import INERTIA_HELP
     from comgrasp_pin.robot_io.windows import MAX_SPEED
@@ -219,3 +228,4 @@ def add_subcommands(sub: argparse._SubParsersAction) -> None:
     plan.add_argument("--out", default="poses.json", help="the poses JSON")
     plan.add_argument("--urscript", default=None, help="also write a URScript movej program")
     plan.set_defaults(func=_cmd_plan)
+    add_plan_motion(sub, _add_robot_args, _cmd_plan_motion)

@@ -193,7 +193,7 @@ def plan_excitation(
         UnobservableError: fewer than ``MIN_JOINTS`` joints, or a motion of rank < 10.
         SolverError: every IPOPT refinement failed.
     """
-    s = settings or ExcitationSettings()
+    s = _checked(settings or ExcitationSettings())
     say = progress or (lambda _text: None)
     duration_s = validate.number(duration_s, "duration_s", low=MIN_DURATION_S, high=MAX_DURATION_S)
     if robot.nq < MIN_JOINTS:
@@ -247,6 +247,21 @@ def plan_excitation(
         min_height_m=float(heights.min()), gravity=robot.model.gravity.linear.copy(),
         settings=s, solver_status=tuple(status), plan_time_s=time.perf_counter() - t0,
     )  # fmt: skip
+
+
+def _checked(s: ExcitationSettings) -> ExcitationSettings:
+    """``s`` if every number is in its range, else InvalidInputError naming the field."""
+    for name in ("velocity_scale", "acceleration_limit", "wrist_range_rad", "typical_length_m",
+                 "sample_period_s"):  # fmt: skip
+        validate.number(getattr(s, name), name, low=0, low_open=True)
+    for name in ("position_margin_rad", "arm_range_rad", "min_height_m"):
+        validate.number(getattr(s, name), name, low=0)
+    validate.number(s.velocity_scale, "velocity_scale", high=1)
+    for name, low in (("periods", 1), ("harmonics", 2), ("wrist_joints", 1),
+                      ("samples_per_period", 10), ("n_random", 1), ("n_starts", 1),
+                      ("max_iter", 0), ("check_every_iter", 1)):  # fmt: skip
+        validate.integer(getattr(s, name), name, low=low)
+    return s
 
 
 def _within_limits(series: FourierMotion, t: np.ndarray, lim: Limits) -> FourierMotion:
