@@ -15,11 +15,27 @@ import pinocchio as pin
 from comgrasp_pin import validate
 from comgrasp_pin._paths import example_robot_data_dir, urdf_path
 from comgrasp_pin.errors import InvalidInputError
+from comgrasp_pin.file_checks import read_description
 
 UR5_URDF = "ur5_gripper.urdf"  # in the top-level urdf/
 UR5_EE_FRAME = "eelink"
 
 _WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+
+def urdf_model(path: Path, package_dirs: list[str | Path] | None = None) -> pin.Model:
+    """Pinocchio's model of the URDF file ``path``, read once and checked first
+    (``file_checks.read_description``: a regular file of bounded size, XML without entities,
+    mesh files inside its folder or ``package_dirs``); Pinocchio gets the checked text.
+
+    Raises:
+        InvalidInputError: the file fails a check, or Pinocchio cannot read it as a URDF.
+    """
+    text = read_description(path, "URDF", package_dirs or [])
+    try:
+        return pin.buildModelFromXML(text)
+    except (RuntimeError, ValueError, OSError) as exc:
+        raise InvalidInputError(f"cannot read {path} as a URDF: {exc}") from None
 
 
 class RobotModel:
@@ -80,24 +96,20 @@ class RobotModel:
 
         Raises:
             InvalidInputError: no such file, a folder, a file Pinocchio cannot read as a
-                URDF, an ee frame that is not in it or that no joint moves.
+                URDF or that fails ``urdf_model``'s checks, an ee frame that is not in it
+                or that no joint moves.
         """
         if not isinstance(urdf_path, (str, Path)):
             raise InvalidInputError(f"urdf_path must be a path, got {urdf_path!r}")
         urdf_path = Path(urdf_path)
-        if not urdf_path.is_file():
-            what = "is a folder, not a file" if urdf_path.is_dir() else "not found"
-            raise InvalidInputError(f"URDF file {what}: {urdf_path}")
-        try:
-            full_model = pin.buildModelFromUrdf(str(urdf_path))
-        except (RuntimeError, ValueError, OSError) as exc:
-            raise InvalidInputError(f"cannot read {urdf_path} as a URDF: {exc}") from None
+        if urdf_path.is_dir():  # other kinds (FIFO, device, missing): read_description
+            raise InvalidInputError(f"URDF file is a folder, not a file: {urdf_path}")
         dirs = list(package_dirs or [])
         if isinstance(package_dirs, (str, Path)) or not all(
             isinstance(d, (str, Path)) for d in dirs
         ):
             raise InvalidInputError(f"package_dirs must be a list of folders, got {package_dirs!r}")
-        robot = cls(full_model, ee_frame, urdf_path)
+        robot = cls(urdf_model(urdf_path, dirs), ee_frame, urdf_path)
         robot.package_dirs = [str(p) for p in dirs]
         return robot
 

@@ -30,6 +30,7 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
+from comgrasp_pin import file_checks
 from comgrasp_pin.errors import OutputError, ResumeError
 
 GROWABLE = ("objects", "trials")
@@ -78,14 +79,14 @@ def check_settings(csv_path: Path, wanted: dict) -> dict:
         ResumeError: no settings beside the CSV, or settings that differ (each one named).
     """
     path = settings_path(csv_path)
-    try:
-        recorded = json.loads(path.read_text())
-    except FileNotFoundError:
+    if not path.exists():
         raise ResumeError(
             f"{csv_path} has no {path.name} beside it, so its settings are unknown and it "
             "cannot be continued safely; start again with --overwrite"
-        ) from None
-    except (OSError, json.JSONDecodeError) as exc:
+        )
+    try:  # a regular file, of bounded size and nesting: a FIFO or a bomb in its place
+        recorded = file_checks.read_json(path, "run settings", ResumeError)
+    except ResumeError as exc:
         raise ResumeError(f"cannot read {path}: {exc}; start again with --overwrite") from None
     if not isinstance(recorded, dict):
         raise ResumeError(f"{path} does not hold a run's settings; start again with --overwrite")
@@ -150,10 +151,10 @@ def read_results(csv_path: Path, columns: Sequence[str]) -> tuple[list[dict], bo
     Raises:
         ResumeError: another header, or a damaged row before the last line.
     """
-    try:
-        text = csv_path.read_bytes().decode("utf-8", errors="replace")
-    except FileNotFoundError:
+    if not csv_path.exists():
         return [], False
+    data = file_checks.read_bytes(csv_path, "results CSV", file_checks.MAX_CSV_BYTES, ResumeError)
+    text = data.decode("utf-8", errors="replace")
     if not text:
         return [], False
     repaired = not text.endswith("\n")

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from comgrasp_pin import validate
+from comgrasp_pin import file_checks, validate
 from comgrasp_pin.errors import LogError
 
 JOINT_STATE = "sensor_msgs/msg/JointState"
@@ -88,15 +88,14 @@ def read_bag(
     a long bag costs about 20 us each. None reads every message.
 
     Raises:
-        LogError: the bag cannot be opened, has no such topic or type, no message holds all
+        LogError: the bag cannot be opened or fails ``file_checks.bag_folder`` (a FIFO, a
+            compressed bag), has no such topic or type, no message holds all
             the joints (the missing ones are named), or the messages carry no efforts.
     """
     from rosbags.highlevel import AnyReader
 
     path = Path(path)
-    bag = path.parent if path.is_file() and path.suffix in (".db3", ".mcap") else path
-    if not bag.exists():
-        raise LogError(f"bag not found: {path}")
+    bag = file_checks.bag_folder(path, LogError)  # a FIFO, a compressed bag: refused
     names = tuple(joint_names)
     try:
         with AnyReader([bag]) as reader:
@@ -184,14 +183,17 @@ def read_csv(path: str | Path, joint_names: list[str] | tuple[str, ...]) -> Join
     ``J.velocity`` is read too where every joint has it.
 
     Raises:
-        LogError: the file is missing, a column is missing (named), or a value is not a number.
+        LogError: the file is missing, not a regular file (a FIFO, a device), larger than
+            ``file_checks.MAX_CSV_BYTES``, not UTF-8; a column is missing (named), or a
+            value is not a number.
     """
     path = Path(path)
-    if not path.is_file():
-        raise LogError(f"CSV log not found: {path}")
-    with path.open(newline="") as f:
-        header = next(csv.reader(f), [])
-    header = [h.strip() for h in header]
+    line = file_checks.first_line(path, "CSV log", file_checks.MAX_CSV_BYTES,
+                                  file_checks.MAX_CSV_HEADER_BYTES, LogError)  # fmt: skip
+    try:
+        header = [h.strip() for h in next(csv.reader([line]), [])]
+    except csv.Error as exc:  # a field past csv's size limit (128 kB)
+        raise LogError(f"CSV {path} has no readable header: {exc}") from None
     names = tuple(joint_names)
     wanted = ["time"] + [f"{n}.{field}" for field in ("position", "effort") for n in names]
     missing = [w for w in wanted if w not in header]
@@ -208,6 +210,8 @@ def read_csv(path: str | Path, joint_names: list[str] | tuple[str, ...]) -> Join
         data = np.loadtxt(path, delimiter=",", skiprows=1, usecols=cols, ndmin=2)
     except ValueError as exc:
         raise LogError(f"CSV {path} has a value that is not a number: {exc}") from None
+    except MemoryError:  # within MAX_CSV_BYTES, yet more than this machine holds
+        raise LogError(f"CSV {path} is too large to load here") from None
     n = len(names)
     has_velocity = data.shape[1] > 1 + 2 * n
     rows = [

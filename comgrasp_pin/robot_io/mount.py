@@ -17,7 +17,7 @@ import pinocchio as pin
 
 from comgrasp_pin import validate
 from comgrasp_pin.errors import InvalidInputError
-from comgrasp_pin.robot import RobotModel
+from comgrasp_pin.robot import RobotModel, urdf_model
 
 GRAVITY_FLOOR = (0.0, 0.0, -9.81)
 """Gravity in the base frame of a floor-mounted arm (m/s^2)."""
@@ -37,9 +37,7 @@ def load_robot(
             f"a magnitude above 0.1, e.g. 0,0,-9.81 on a floor or 9.81,0,0 on a wall; got {g}"
         )
     path = Path(urdf_path)
-    if not path.exists():
-        raise InvalidInputError(f"URDF file not found: {path}")
-    full = pin.buildModelFromUrdf(str(path))
+    full = urdf_model(path, package_dirs)
     R_world_base = rotation_to_down(g)
     if not np.allclose(R_world_base, np.eye(3)):
         _turn_root(full, pin.SE3(R_world_base, np.zeros(3)))
