@@ -24,6 +24,18 @@ VALLEY_SHARE = 0.3  # ... or this share of the lower top's height splits a slice
 VALLEY_SIGMAS = 4.0  # ... and this many noise stds
 SPLIT_SLICES = 0.2  # a blob with this share of its slices split is two objects
 MIN_SPLIT_SLICES = 3
+# A rod, heads and all, is symmetric about its axis: in each slice its piece's middle and
+# its top (the median of the points within TOP_BAND or TOP_SIGMAS noise stds of the slice's
+# highest) lie on the axis. A slice whose middle or top is OFF_AXIS (or OFF_AXIS_SHARE of
+# its width) away counts as split: an L, a V, a rod crossing or beside another, a box.
+OFF_AXIS, OFF_AXIS_SHARE = 0.005, 0.15  # m, or this share of the slice's width if more
+TOP_BAND, TOP_SIGMAS = 0.002, 3.0  # m, noise stds
+# Two equal rods side by side, touching: their slices' profiles, taken together (the median
+# of each PROFILE_BIN across the axis over the slices), show two tops with a valley between
+# deeper than PROFILE_VALLEY_SHARE of the lower top (and VALLEY_SIGMAS of its noise).
+PROFILE_BIN = 0.001  # m
+PROFILE_EDGE_BINS = 3  # bins at each side of the profile not looked at (its outline)
+PROFILE_VALLEY_SHARE = 0.15
 _KERNEL3, _KERNEL5 = np.ones((3, 3), np.uint8), np.ones((5, 5), np.uint8)
 
 
@@ -101,8 +113,15 @@ def check_one_rod(
     if total and split >= max(MIN_SPLIT_SLICES, SPLIT_SLICES * total):
         raise AmbiguousObjectError(
             f"what lies on the table is not one rod: {split} of its {total} slices across "
-            "its axis show two pieces or two tops (rods side by side?); the top view "
-            "measures one rod alone on the table: move the others away"
+            "its axis show two pieces, two tops, or a middle or top off the axis (rods side "
+            "by side, crossing or at an angle?); the top view measures one rod alone on the "
+            "table: move the others away"
+        )
+    if _profile_two_tops(p, centroid, direction, table_z, noise, measured):
+        raise AmbiguousObjectError(
+            "what lies on the table is not one rod: across its axis it shows two tops all "
+            "along (two rods side by side, touching?); the top view measures one rod alone "
+            "on the table: move the others away"
         )
 
 
@@ -141,8 +160,59 @@ def split_slices(
         heights = np.full(bins.max() + 1, -np.inf)
         np.maximum.at(heights, bins[measured[sel]], height[sel][measured[sel]])
         measured_top = heights[np.isfinite(heights)] if not measured[sel].all() else heights
-        split += int(_two_pieces(top) or _two_tops(measured_top, noise))
+        split += int(_two_pieces(top) or _two_tops(measured_top, noise)
+                     or _off_axis(across[sel], height[sel], measured[sel], noise))  # fmt: skip
     return split, total
+
+
+def _off_axis(across: np.ndarray, height: np.ndarray, measured: np.ndarray, noise: float) -> bool:
+    """Whether a slice's middle or top lies OFF_AXIS or more from the rod's axis.
+
+    ``across``: the slice's points across the axis (m); its top: the median of the
+    ``measured`` points within TOP_BAND or TOP_SIGMAS ``noise`` stds of its highest
+    ``height``.
+    """
+    middle = 0.5 * (across.min() + across.max())
+    off = max(OFF_AXIS, OFF_AXIS_SHARE * np.ptp(across))
+    if not measured.any():
+        return bool(abs(middle) > off)
+    h = height[measured]
+    top = across[measured][h >= h.max() - max(TOP_BAND, TOP_SIGMAS * noise)]
+    return bool(abs(middle) > off or abs(np.median(top)) > off)
+
+
+def _profile_two_tops(p, centroid, direction, table_z, noise, measured) -> bool:
+    """Whether the slices' median profile across the axis has two tops.
+
+    Two equal rods touching side by side, whose valley one slice's coarse profile misses.
+    The arguments are ``split_slices``'.
+    """
+    if measured is None:
+        measured = np.ones(len(p), bool)
+    rel = p[measured, :2] - centroid
+    along = rel @ direction
+    across = rel @ np.array([-direction[1], direction[0]])
+    height = p[measured, 2] - table_z
+    slices = np.floor(along / SLICE).astype(int)
+    bins = np.floor(across / PROFILE_BIN).astype(int)
+    slices -= slices.min()
+    bins -= bins.min()
+    grid = np.full((slices.max() + 1, bins.max() + 1), np.nan)
+    np.fmax.at(grid, (slices, bins), height)
+    seen = np.isfinite(grid).sum(axis=0)
+    rows = np.count_nonzero(np.isfinite(grid).any(axis=1))
+    if rows < MIN_SPLIT_SLICES:
+        return False
+    profile = np.nanmedian(grid[:, seen >= 0.5 * rows], axis=0)  # the bins most slices see
+    profile = profile[PROFILE_EDGE_BINS:-PROFILE_EDGE_BINS]  # (the outline: flying pixels)
+    if len(profile) < 3:
+        return False
+    left = np.maximum.accumulate(profile)
+    right = np.maximum.accumulate(profile[::-1])[::-1]
+    lower_top = np.minimum(left, right)
+    need = np.maximum(np.maximum(MIN_VALLEY, PROFILE_VALLEY_SHARE * lower_top),
+                      VALLEY_SIGMAS * noise / np.sqrt(rows))  # fmt: skip
+    return bool(np.any((lower_top - profile)[1:-1] > need[1:-1]))
 
 
 def _two_pieces(top: np.ndarray) -> bool:
