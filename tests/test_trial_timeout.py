@@ -128,3 +128,23 @@ def test_the_limit_is_an_option_recorded_in_the_settings_and_may_change_on_resum
     for bad in ("0", "-1", "inf", "soon"):
         with pytest.raises(SystemExit):
             parser.parse_args(["regrasp", "--trial-timeout", bad])
+
+
+def test_a_real_trial_past_the_limit_on_the_command_line_then_retried(tmp_path):
+    """`comgrasp accuracy --workers 1 --trial-timeout 0.5`: the real trial (seconds of
+    MuJoCo) is stopped and its row says so; the settings record the limit; --retry-failed
+    with the default limit runs it to the end."""
+    from comgrasp_pin.cli import main
+
+    base = ["accuracy", "--objects", "obj1", "--trials", "1", "--workers", "1",
+            "--out", str(tmp_path)]  # fmt: skip
+    assert main([*base, "--trial-timeout", "0.5"]) == 0
+    (row,) = read_rows(tmp_path / "accuracy.csv")
+    assert row["error"].startswith("comgrasp_pin.errors.TrialTimeoutError")
+    settings = json.loads((tmp_path / "accuracy.settings.json").read_text())
+    assert settings["trial_timeout_s"] == 0.5
+    assert main([*base, "--retry-failed"]) == 0
+    (row,) = read_rows(tmp_path / "accuracy.csv")
+    assert row["error"] == "" and 0.0 < float(row["accuracy"]) <= 1.0
+    settings = json.loads((tmp_path / "accuracy.settings.json").read_text())
+    assert settings["trial_timeout_s"] == 600.0
