@@ -87,6 +87,13 @@ def add_plan_motion(sub: argparse._SubParsersAction, add_robot_args, func) -> No
         help="SRDF whose disabled collisions are removed (default: the one beside "
         "an example-robot-data URDF, else adjacent links)",
     )
+    p.add_argument("--candidates", type=int, default=d.n_random, help="random motions searched")
+    p.add_argument(
+        "--starts", type=int, default=d.n_starts, help="best random motions refined by IPOPT"
+    )
+    p.add_argument(
+        "--iterations", type=int, default=d.max_iter, help="IPOPT iterations per refinement"
+    )
     p.add_argument("--seed", type=int, default=0, help="random seed of the search")
     p.add_argument("--out", default="motion.json", help="the motion JSON")
     p.add_argument("--csv", default=None, help="also write time, J.position/velocity/acceleration")
@@ -127,7 +134,8 @@ def run_plan_motion(args: argparse.Namespace, robot, start: np.ndarray | None) -
     settings = ExcitationSettings(
         velocity_scale=args.velocity_scale, acceleration_limit=args.acceleration,
         wrist_range_rad=args.wrist_range, arm_range_rad=args.arm_range,
-        min_height_m=args.min_height,
+        min_height_m=args.min_height, n_random=args.candidates, n_starts=args.starts,
+        max_iter=args.iterations,
     )  # fmt: skip
     t0 = time.perf_counter()
 

@@ -61,9 +61,10 @@ class ExcitationSettings:
 
     ``periods`` repetitions of the fundamental period fill the duration; ``harmonics`` per
     period. Limits: ``velocity_scale`` of the URDF's, ``acceleration_limit`` (rad/s^2 or
-    m/s^2, every joint), ``position_margin_rad`` inside the URDF's. Search:
-    ``samples_per_period`` grid points, ``n_random`` random motions, ``n_starts`` IPOPT
-    refinements of ``max_iter`` iterations each, checked for collisions every
+    m/s^2, every joint), ``position_margin_rad`` inside the URDF's. The joints before the
+    wrist keep ``arm_range_rad`` and ``arm_rate_scale`` of the velocity and acceleration
+    limits. Search: ``samples_per_period`` grid points, ``n_random`` random motions,
+    ``n_starts`` IPOPT refinements of ``max_iter`` iterations each, checked for collisions every
     ``check_every_iter`` iterations.
     """
 
@@ -75,6 +76,7 @@ class ExcitationSettings:
     wrist_joints: int = 3
     wrist_range_rad: float = 1.5
     arm_range_rad: float = 0.3
+    arm_rate_scale: float = 0.5
     min_height_m: float = 0.05
     typical_length_m: float = 0.1
     sample_period_s: float = 0.01
@@ -161,10 +163,12 @@ def excitation_limits(robot: RobotModel, start: np.ndarray, s: ExcitationSetting
     if bad:
         raise InvalidInputError(f"the URDF gives no velocity limit for the joints {bad}")
     n_wrist = min(s.wrist_joints, robot.nq)
-    box = np.r_[np.full(robot.nq - n_wrist, s.arm_range_rad), np.full(n_wrist, s.wrist_range_rad)]
+    n_arm = robot.nq - n_wrist
+    box = np.r_[np.full(n_arm, s.arm_range_rad), np.full(n_wrist, s.wrist_range_rad)]
+    rate = np.r_[np.full(n_arm, s.arm_rate_scale), np.ones(n_wrist)]
     lower = np.maximum(robot.q_lower + s.position_margin_rad, start - box)
     upper = np.minimum(robot.q_upper - s.position_margin_rad, start + box)
-    return Limits(lower, upper, s.velocity_scale * v_urdf, np.full(robot.nq, s.acceleration_limit))
+    return Limits(lower, upper, rate * s.velocity_scale * v_urdf, rate * s.acceleration_limit)
 
 
 def plan_excitation(
@@ -252,11 +256,12 @@ def plan_excitation(
 def _checked(s: ExcitationSettings) -> ExcitationSettings:
     """``s`` if every number is in its range, else InvalidInputError naming the field."""
     for name in ("velocity_scale", "acceleration_limit", "wrist_range_rad", "typical_length_m",
-                 "sample_period_s"):  # fmt: skip
+                 "sample_period_s", "arm_rate_scale"):  # fmt: skip
         validate.number(getattr(s, name), name, low=0, low_open=True)
     for name in ("position_margin_rad", "arm_range_rad", "min_height_m"):
         validate.number(getattr(s, name), name, low=0)
     validate.number(s.velocity_scale, "velocity_scale", high=1)
+    validate.number(s.arm_rate_scale, "arm_rate_scale", high=1)
     for name, low in (("periods", 1), ("harmonics", 2), ("wrist_joints", 1),
                       ("samples_per_period", 10), ("n_random", 1), ("n_starts", 1),
                       ("max_iter", 0), ("check_every_iter", 1)):  # fmt: skip
