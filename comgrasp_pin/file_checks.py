@@ -140,24 +140,24 @@ def _inside(path: Path, roots: Sequence[Path]) -> bool:
     return any(real == root or root in real.parents for root in roots)
 
 
-def _referenced(root: ET.Element, folder: Path) -> list[tuple[str, Path | None]]:
-    """(name as written, path it resolves to) of every file the description names.
+def _referenced(root: ET.Element, folder: Path) -> list[tuple[str, list[Path]]]:
+    """(name as written, the paths it may resolve to) of every file the description names.
 
-    The path is None for ``package://`` URIs; MJCF names resolve in its <compiler> folders.
+    No paths for ``package://`` URIs. An MJCF name may resolve in any of its <compiler>
+    folders (meshdir, texturedir, assetdir; each may be absolute): every one is returned,
+    so that a check of them all does not depend on which MuJoCo uses for which element.
     """
-    dirs = {}
+    bases = {folder}
     for compiler in root.iter("compiler"):
-        dirs.update({k: compiler.get(k) for k in MJCF_DIRS if compiler.get(k)})
+        bases |= {folder / str(compiler.get(k)) for k in MJCF_DIRS if compiler.get(k)}
     out = []
     for element, attribute in FILE_ATTRIBUTES:
         for node in root.iter(element):
             name = node.get(attribute)
             if name is None:
                 continue
-            base = dirs.get("texturedir" if element in ("texture", "hfield") else "meshdir")
-            base = folder / (base or dirs.get("assetdir") or "")
             path = name.removeprefix("file://")
-            out.append((name, None if name.startswith("package://") else base / path))
+            out.append((name, [] if name.startswith("package://") else [b / path for b in bases]))
     return out
 
 
@@ -174,13 +174,15 @@ def check_referenced_files(root: ET.Element, description: Path, what: str,
     packages = [Path(os.path.realpath(d)) for d in package_dirs]
     roots = [folder, *packages]
     allowed = f"inside {folder}" + "".join(f" or {p}" for p in packages)
-    for name, path in _referenced(root, folder):
-        if path is None:  # package://PKG/rest: PKG/rest under each package folder
+    for name, paths in _referenced(root, folder):
+        if name.startswith("package://"):  # package://PKG/rest: PKG/rest under each package
             rest = name.removeprefix("package://")
             bad = not rest or any(not _inside(p / rest, [p]) for p in packages or [folder])
             bad = bad or Path(rest).is_absolute() or ".." in Path(rest).parts
         else:
-            bad = "://" in name.removeprefix("file://") or not _inside(path, roots)
+            bad = "://" in name.removeprefix("file://") or not all(
+                _inside(path, roots) for path in paths
+            )
         if bad:
             raise error(f"{what} names the file {name!r}, which is not {allowed}: a "
                         "description may use only files in its own folder or the package "

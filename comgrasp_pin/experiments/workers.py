@@ -166,7 +166,7 @@ class WorkerSet:
 
     def pids(self) -> list[int]:
         """The process ids of the live workers."""
-        return [w.process.pid for w in self._workers if w.process.is_alive()]
+        return [w.process.pid or 0 for w in self._workers if w.process.is_alive()]
 
     def run(self, call: Callable, fn: Callable[[dict], dict], todo: Sequence[dict],
             record: Callable[..., None], trial_timeout_s: float | None = None) -> None:  # fmt: skip
@@ -214,7 +214,8 @@ class WorkerSet:
                          timeout=None if wait_s == float("inf") else wait_s))  # fmt: skip
         rows = []
         for worker in busy:
-            task, message = worker.task, _NOTHING
+            task: dict = worker.task or {}
+            message = _NOTHING
             if worker.conn in ready:
                 message = _receive(worker.conn)
             if message == READY:
