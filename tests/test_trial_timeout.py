@@ -148,3 +148,28 @@ def test_a_real_trial_past_the_limit_on_the_command_line_then_retried(tmp_path):
     assert row["error"] == "" and 0.0 < float(row["accuracy"]) <= 1.0
     settings = json.loads((tmp_path / "accuracy.settings.json").read_text())
     assert settings["trial_timeout_s"] == 600.0
+
+
+def test_a_stopped_run_leaves_no_late_row_for_the_next_run_on_kept_workers(tmp_path):
+    """A run that stops (its CSV cannot take a row) while a kept worker still runs a trial:
+    that worker is killed, so the next run on the kept set gets its own rows only."""
+    from _slow_task import sleep_and_record_pid
+
+    from comgrasp_pin.errors import OutputError
+    from comgrasp_pin.experiments.workers import WorkerSet, safe_call
+
+    def task(k, sleep_s):
+        return {"object": "obj1", "trial": k, "method": "m", "pid_dir": str(tmp_path),
+                "sleep_s": sleep_s}  # fmt: skip
+
+    def full_disk(*rows):
+        raise OutputError("no room")
+
+    got = []
+    with WorkerSet(2) as kept:
+        with pytest.raises(OutputError):
+            kept.run(safe_call, sleep_and_record_pid, [task(0, 0.0), task(1, 3.0)], full_disk)
+        kept.run(safe_call, sleep_and_record_pid, [task(k, 0.0) for k in (5, 6, 7)],
+                 lambda *rows: got.extend(rows))  # fmt: skip
+    assert sorted(r["trial"] for r in got) == [5, 6, 7]
+    assert all(r["error"] == "" for r in got)
