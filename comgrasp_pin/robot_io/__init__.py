@@ -6,11 +6,17 @@
     payload = payload_in_flange(robot, result.estimate, "tool0", inertia="point")
     write_urscript(payload, "payload.script")
     plan = plan_measurement_poses(robot, k=3)  # limits, no self-collision, D-optimal
+    motion = plan_excitation(robot, duration_s=20)  # the inertia too: a motion to record
 
 No MuJoCo here: this runs on a real robot's logs.
 """
 
 from comgrasp_pin.robot_io.estimate import LogEstimate, estimate_from_log, result_dict, summary
+from comgrasp_pin.robot_io.excitation import (
+    ExcitationMotion,
+    ExcitationSettings,
+    plan_excitation,
+)
 from comgrasp_pin.robot_io.exports import (
     franka_load,
     ros2_yaml,
@@ -33,6 +39,8 @@ from comgrasp_pin.robot_io.windows import (
 )
 
 __all__ = [
+    "ExcitationMotion",
+    "ExcitationSettings",
     "JointLog",
     "LogEstimate",
     "Payload",
@@ -46,6 +54,7 @@ __all__ = [
     "pair_by_configuration",
     "parse_windows",
     "payload_in_flange",
+    "plan_excitation",
     "plan_measurement_poses",
     "read_bag",
     "read_csv",

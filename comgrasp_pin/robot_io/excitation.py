@@ -76,7 +76,7 @@ class ExcitationSettings:
     wrist_joints: int = 3
     wrist_range_rad: float = 1.5
     arm_range_rad: float = 0.3
-    arm_rate_scale: float = 0.5
+    arm_rate_scale: float = 1.0
     min_height_m: float = 0.05
     typical_length_m: float = 0.1
     sample_period_s: float = 0.01
