@@ -150,7 +150,8 @@ def default_start(robot: RobotModel, checker: SelfCollision) -> np.ndarray:
                 q_full = np.array(model.referenceConfigurations[name])
             except (KeyError, IndexError, TypeError):
                 continue
-            return q_full[checker._q_index].copy()
+            model = checker.model
+            return q_full[[model.idx_qs[model.getJointId(n)] for n in robot.joint_names]]
     if tuple(robot.joint_names) == UR_JOINT_NAMES:
         return np.array(UR_HOME)
     return pin.neutral(robot.model)
