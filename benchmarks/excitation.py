@@ -26,8 +26,8 @@ from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.excitation import (
     ExcitationSettings,
     plan_excitation,
-    random_condition_numbers,
 )
+from comgrasp_pin.robot_io.excitation_baseline import random_condition_numbers
 
 ARMS = {
     "ur5": (urdf_path("ur5_gripper.urdf"), "eelink"),

@@ -24,8 +24,8 @@ from comgrasp_pin.robot_io.excitation import (
     UR_HOME,
     ExcitationSettings,
     plan_excitation,
-    random_condition_numbers,
 )
+from comgrasp_pin.robot_io.excitation_baseline import random_condition_numbers
 
 DURATION_S = 8.0
 FAST = ExcitationSettings(n_random=300, n_starts=1, max_iter=40)  # a quick search for tests

@@ -42,7 +42,7 @@ from comgrasp_pin.estimation.payload_regressor import (
 from comgrasp_pin.motion.fourier import FourierMotion
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.collision import SelfCollision
-from comgrasp_pin.robot_io.excitation_search import Grid, Limits, random_motions, search
+from comgrasp_pin.robot_io.excitation_search import Limits, search
 from comgrasp_pin.robot_io.planning import feasible, floor_heights
 
 MAX_DURATION_S = 20.0
@@ -231,7 +231,7 @@ def plan_excitation(
         return all(feasible(robot, checker, qi, s.min_height_m) for qi in q)
 
     series, status = search(robot, start, period_s, lim, scale, s, seed, is_free, say)
-    series = _within_limits(series, t, lim)
+    series = within_limits(series, t, lim)
     say(f"checking the motion at {len(t)} samples (limits, self-collision, floor)")
     if not is_free(series, t):
         raise CollisionError("the planned motion collides between the search's grid points")
@@ -270,7 +270,7 @@ def _checked(s: ExcitationSettings) -> ExcitationSettings:
     return s
 
 
-def _within_limits(series: FourierMotion, t: np.ndarray, lim: Limits) -> FourierMotion:
+def within_limits(series: FourierMotion, t: np.ndarray, lim: Limits) -> FourierMotion:
     """``series`` scaled down about its start where a peak on ``t`` exceeds a limit.
 
     The search kept the limits on a coarser grid.
@@ -294,42 +294,3 @@ def _within_limits(series: FourierMotion, t: np.ndarray, lim: Limits) -> Fourier
     if worst <= 1.0:
         return series
     return FourierMotion(series.q0, series.a / worst, series.b / worst, series.period_s)
-
-
-def random_condition_numbers(
-    robot: RobotModel,
-    duration_s: float = MAX_DURATION_S,
-    start: np.ndarray | None = None,
-    settings: ExcitationSettings | None = None,
-    count: int = 20,
-    seed: int = 1,
-    srdf: str | None = None,
-) -> np.ndarray:
-    """(count,) scaled condition numbers of random motions: the baseline a plan should beat.
-
-    Motions of the same family, length and limits as ``plan_excitation``'s (each joint
-    scaled to its tightest limit), free of collision and of the floor, on the same grid.
-
-    Raises:
-        CollisionError: fewer than ``count`` of ``50 count`` random motions are free.
-    """
-    s = settings or ExcitationSettings()
-    checker = SelfCollision(robot, srdf)
-    start = default_start(robot, checker) if start is None else robot.check_q(start)
-    lim = excitation_limits(robot, start, s)
-    period_s = duration_s / s.periods
-    scale = parameter_scale(s.typical_length_m)
-    grid = Grid(robot, start, period_s, s.harmonics, s.samples_per_period, scale)
-    t = np.linspace(0.0, duration_s, int(round(duration_s / s.sample_period_s)) + 1)
-    rng = np.random.default_rng(seed)
-    conds: list[float] = []
-    for _ in range(50 * count):
-        series = _within_limits(
-            FourierMotion.from_free(start, random_motions(grid, lim, 1, rng)[0], period_s), t, lim
-        )
-        q, qd, qdd = series.evaluate(t)
-        if all(feasible(robot, checker, qi, s.min_height_m) for qi in q):
-            conds.append(condition_number(payload_regressor(robot, q, qd, qdd), scale))
-        if len(conds) == count:
-            return np.array(conds)
-    raise CollisionError(f"only {len(conds)} random motions of {50 * count} are free")
