@@ -86,7 +86,8 @@ def test_at_rest_at_the_start_at_both_ends(motion):
     np.testing.assert_allclose(q[0], UR_HOME, atol=1e-12)
     np.testing.assert_allclose(q[-1], UR_HOME, atol=1e-9)
     for i in (0, -1):
-        np.testing.assert_allclose(qd[i], 0.0, atol=1e-5)
+        # a first difference over h = 1 ms misses by jerk h^2 / 2 (jerk <= 100 rad/s^3)
+        np.testing.assert_allclose(qd[i], 0.0, atol=5e-5)
         np.testing.assert_allclose(qdd[i], 0.0, atol=2e-2)  # differences of differences
     np.testing.assert_allclose(motion.qd[[0, -1]], 0.0, atol=1e-12)
     np.testing.assert_allclose(motion.qdd[[0, -1]], 0.0, atol=1e-12)

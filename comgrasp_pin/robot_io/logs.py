@@ -128,7 +128,7 @@ def _joint_rows(
     t_first, skipped = None, None
     for conn, t_bag, raw in reader.messages(connections=conns):
         if t_first is not None and windows is not None:
-            rel = t_bag * 1e-9 - t_first
+            rel = (t_bag - t_first) * 1e-9
             if not any(a - margin <= rel <= b + margin for a, b in windows):
                 skipped = (conn, t_bag, raw)
                 continue
@@ -146,13 +146,15 @@ def _joint_rows(
             f"no JointState message holds all the arm's joints: {missing} never appear "
             f"(joints in the log: {sorted(seen)}; the URDF's arm joints: {list(names)})"
         )
-    stamps = np.array([r[0] for r in rows])
-    times = stamps if np.all(stamps > 0) else np.array([r[1] for r in rows])
+    # integer ns from the first message: float seconds since 1970 keep only 0.2 us
+    stamps = np.array([r[0] for r in rows], dtype=np.int64)
+    ns = stamps if np.all(stamps > 0) else np.array([r[1] for r in rows], dtype=np.int64)
+    times = (ns - ns[0]) * 1e-9
     return [(t, *r[2:]) for t, r in zip(times, rows)]
 
 
 def _row(reader, conn, t_bag, raw, names, cache, seen):
-    """(stamp (s), receive time (s), position, effort, velocity or None) of one message.
+    """(stamp (ns), receive time (ns), position, effort, velocity or None) of one message.
 
     The row is None when the message lacks an arm joint; ``cache`` maps a message's name list to the
     arm joints' indices.
@@ -172,9 +174,9 @@ def _row(reader, conn, t_bag, raw, names, cache, seen):
             "joints: the log has no joint efforts (torques); record them (e.g. the "
             "driver's effort field) to estimate a payload"
         )
-    stamp = msg.header.stamp.sec + 1e-9 * msg.header.stamp.nanosec
+    stamp = int(msg.header.stamp.sec) * 10**9 + int(msg.header.stamp.nanosec)
     velocity = msg.velocity[idx] if len(msg.velocity) == len(key) else None
-    return stamp, t_bag * 1e-9, msg.position[idx], msg.effort[idx], velocity
+    return stamp, int(t_bag), msg.position[idx], msg.effort[idx], velocity
 
 
 def read_csv(path: str | Path, joint_names: list[str] | tuple[str, ...]) -> JointLog:
