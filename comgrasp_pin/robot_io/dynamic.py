@@ -16,8 +16,8 @@ torques come from one of two places:
 
 The ten parameters are fitted physically consistent (``estimation.inertial_fit``), the static
 estimate as prior where one is given. Noise: per joint, the residuals' std of a first plain
-fit, widened by (1 + r) / (1 - r) for their lag-one correlation r (the filtered samples and
-the sensor's drift are not white).
+fit weighs the rows; the covariance is widened for the residuals' correlation in time (the
+filtered samples and the sensor's drift are not white) by Newey and West's estimator.
 """
 
 from __future__ import annotations
@@ -50,8 +50,6 @@ COULOMB_SPEED = 0.02
 """Coulomb friction modelled as tanh(qd / COULOMB_SPEED) (rad/s): smooth through zero speed."""
 ALIGN_SPAN_S = 0.25
 """The empty run is aligned within this many seconds (s) of its motion start's offset."""
-MAX_CORRELATION = 0.95
-"""Lag-one correlation of the residuals capped here when widening the noise."""
 
 
 @dataclass(frozen=True)
@@ -70,14 +68,20 @@ class DynamicEstimate:
         condition_number: of the payload regressor along the motion, columns scaled by a
             1 kg payload 0.1 m out (``payload_regressor.parameter_scale``).
         residual_rms: (n,) per joint (N m).
-        torque_std: (n,) the noise per joint the fit assumed (N m, correlation included).
+        torque_std: (n,) the noise per joint that weighs the rows (N m, white).
         arm_model: "empty run" or "URDF model + friction".
-        offsets: (n,) the efforts' offsets found (N m).
+        offsets: (n,) the efforts' offsets found (N m), at the motion's middle.
+        offset_drift: (n,) their change from the motion's start to its end (N m): the
+            sensor's drift, linear over the motion.
         friction: (n, 2) viscous (N m s/rad) and Coulomb (N m) per joint, or None.
         n_samples, duration_s: samples fitted and the motion's length (s).
         cutoff_hz: the filter's cutoff; velocity_from: "log" or "positions".
         solver_status: IPOPT's.
         unconstrained_params: (10,) the plain least squares' parameters (maybe inconsistent).
+        t: (k,) the fitted samples' times (s from the log's start).
+        tau_payload: (k, n) the payload's torques as measured: efforts minus the arm's own,
+            the offsets and friction found (N m).
+        tau_payload_fit: (k, n) the fitted payload's torques, Y pi (N m).
     """
 
     mass: float
@@ -93,6 +97,7 @@ class DynamicEstimate:
     torque_std: np.ndarray
     arm_model: str
     offsets: np.ndarray
+    offset_drift: np.ndarray
     friction: np.ndarray | None
     n_samples: int
     duration_s: float
@@ -100,6 +105,9 @@ class DynamicEstimate:
     velocity_from: str
     solver_status: str
     unconstrained_params: np.ndarray
+    t: np.ndarray
+    tau_payload: np.ndarray
+    tau_payload_fit: np.ndarray
 
 
 def estimate_payload_dynamic(
@@ -133,10 +141,10 @@ def estimate_payload_dynamic(
     if empty_log is not None:
         E = _aligned_empty(robot, S, empty_log, empty_window, cutoff_hz)
         b = b - (E.tau - _arm_torques(robot, E))
-        columns = [np.ones_like(S.qd)]
+        columns = [np.ones_like(S.qd), _trend(S)]
         arm_model = "empty run"
     else:
-        columns = [np.ones_like(S.qd), S.qd, np.tanh(S.qd / COULOMB_SPEED)]
+        columns = [np.ones_like(S.qd), _trend(S), S.qd, np.tanh(S.qd / COULOMB_SPEED)]
         arm_model = "URDF model + friction"
     k, n = S.q.shape
     Y = regressor_rows(robot, S.q, S.qd, S.qdd)
@@ -144,16 +152,19 @@ def estimate_payload_dynamic(
     sigma = _noise(A_pi, A_x, b_rows, k, n)
     w = np.tile(1.0 / sigma, k)
     fit = fit_inertial(A_pi, A_x, b_rows, w, _prior(prior))
-    residual = (A_pi @ fit.pi + A_x @ fit.x - b_rows).reshape(k, n)
+    tau_fit = (A_pi @ fit.pi).reshape(k, n)
+    tau_payload = (b_rows - A_x @ fit.x).reshape(k, n)
+    residual = tau_fit - tau_payload
+    params_cov = _widened(fit, A_pi, A_x, w, residual)
     extras = fit.x.reshape(len(columns), n)
-    mass, com, inertia_c, cov4, inertia_cov = _about_com(fit.pi, fit.cov)
+    mass, com, inertia_c, cov4, inertia_cov = _about_com(fit.pi, params_cov)
     inertia_std = np.sqrt(np.clip(np.diag(inertia_cov), 0, None)).reshape(3, 3)
     return DynamicEstimate(
-        mass, com, inertia_c, fit.pi, fit.cov, cov4, inertia_std, inertia_cov,
+        mass, com, inertia_c, fit.pi, params_cov, cov4, inertia_std, inertia_cov,
         condition_number(Y, parameter_scale()), np.sqrt(np.mean(residual**2, axis=0)), sigma,
-        arm_model, extras[0], None if empty_log is not None else extras[1:].T,
+        arm_model, extras[0], extras[1], None if empty_log is not None else extras[2:].T,
         k, float(S.t[-1] - S.t[0]), S.cutoff_hz, S.velocity_from, fit.return_status,
-        fit.unconstrained_pi,
+        fit.unconstrained_pi, S.t, tau_payload, tau_fit,
     )  # fmt: skip
 
 
@@ -189,6 +200,12 @@ def _aligned_empty(robot, S: MotionSamples, empty_log, empty_window, cutoff_hz) 
     return E
 
 
+def _trend(S: MotionSamples) -> np.ndarray:
+    """(k, n) a linear drift over the motion, -1/2 at its start to +1/2 at its end."""
+    ramp = (S.t - 0.5 * (S.t[0] + S.t[-1])) / (S.t[-1] - S.t[0])
+    return np.tile(ramp[:, None], (1, S.q.shape[1]))
+
+
 def _joint_columns(columns: list[np.ndarray]) -> np.ndarray:
     """(k n, len(columns) n): column c of joint j acts on joint j's rows only."""
     k, n = columns[0].shape
@@ -200,16 +217,36 @@ def _joint_columns(columns: list[np.ndarray]) -> np.ndarray:
 
 
 def _noise(A_pi, A_x, b_rows, k: int, n: int) -> np.ndarray:
-    """(n,) per joint noise std of the rows, widened for the residuals' correlation."""
+    """(n,) per joint noise std of the rows: a first plain fit's residuals."""
     A = np.column_stack([A_pi, A_x])
     beta, *_ = np.linalg.lstsq(A, b_rows, rcond=None)
     r = (A @ beta - b_rows).reshape(k, n)
     dof = max(k * n - A.shape[1], 1) / (k * n)
-    sigma = np.sqrt(np.mean(r**2, axis=0) / dof)
-    rho = np.array([np.corrcoef(r[:-1, j], r[1:, j])[0, 1] if sigma[j] > 0 else 0.0
-                    for j in range(n)])  # fmt: skip
-    rho = np.clip(np.nan_to_num(rho), 0.0, MAX_CORRELATION)
-    return np.maximum(sigma * np.sqrt((1 + rho) / (1 - rho)), 1e-9)
+    return np.maximum(np.sqrt(np.mean(r**2, axis=0) / dof), 1e-9)
+
+
+def _widened(fit, A_pi, A_x, w, residual: np.ndarray) -> np.ndarray:
+    """The fit's covariance of pi, each std widened by Newey-West over white noise.
+
+    The residuals are correlated in time (the filter, the sensor's drift) and across joints
+    at one time. Newey and West's estimator (Bartlett weights, ``L`` lags by their rule of
+    thumb) sums the scores' products over the lags; its stds of pi against the white
+    noise's give a factor per parameter, applied to the Laplace covariance (which holds the
+    consistency constraint and the prior).
+    """
+    k, n = residual.shape
+    A = np.column_stack([A_pi, A_x]) * w[:, None]
+    bread = np.linalg.inv(A.T @ A)
+    scores = (A * (w * residual.reshape(-1))[:, None]).reshape(k, n, -1).sum(axis=1)
+    lags = int(np.ceil(4 * (k / 100) ** (2 / 9)))
+    meat = scores.T @ scores
+    for lag in range(1, lags + 1):
+        product = scores[lag:].T @ scores[:-lag]
+        meat += (1 - lag / (lags + 1)) * (product + product.T)
+    hac = (bread @ meat @ bread)[:10, :10]
+    white = bread[:10, :10] * np.mean((w * residual.reshape(-1)) ** 2)
+    factor = np.sqrt(np.maximum(np.diag(hac), 0) / np.diag(white))
+    return fit.cov * np.outer(factor, factor)
 
 
 def _prior(est):

@@ -69,7 +69,7 @@ def dynamic_summary(est: DynamicEstimate, frame: str) -> str:
     for value, s, u in zip(moments, moment_std, axes.T):
         lines.append(f"    {value:.3e} +- {s:.1e}  along {np.array2string(u, precision=3)}")
     lines += [
-        f"  condition number of the motion {est.condition_number:.1f} (scaled regressor)",
+        f"  condition number of the logged motion {est.condition_number:.1f} (scaled regressor)",
         f"  residual RMS per joint {np.array2string(est.residual_rms, precision=3)} N m",
     ]
     return "\n".join(lines)
