@@ -137,3 +137,22 @@ def test_the_notebooks_extra_and_the_license_are_stated():
     assert (README.parent / "LICENSE").read_text().startswith("BSD 3-Clause License")
     assert "BSD 3-Clause" in text.split("## License", 1)[1]
     assert "https://arxiv.org/abs/2205.01048" in text.split("## Citation", 1)[1]
+
+
+def test_the_readme_is_short_and_every_link_resolves():
+    import re
+
+    text = README.read_text()
+    assert len(text.splitlines()) <= 300
+    links = re.findall(r"\]\(([^)\s]+)\)", text)
+    assert links
+    headings = {re.sub(r"[^a-z0-9 -]", "", h.lower()).strip().replace(" ", "-")
+                for h in re.findall(r"^#+ (.+)$", text, flags=re.M)}  # fmt: skip
+    for target in links:
+        if target.startswith("#"):
+            assert target[1:] in headings, f"README links to {target}, no such heading"
+            continue
+        if target.startswith(("http://", "https://", "mailto:")):
+            continue
+        path = (README.parent / target.split("#")[0]).resolve()
+        assert path.exists(), f"README links to {target}, which is not in the repository"
