@@ -77,7 +77,7 @@ def estimate_com_batch(
             ``estimate_com``).
 
     Raises:
-        ComGraspError subclasses (ValueError) naming the offending grasps.
+        ComGraspError: its subclasses (a ValueError), naming the offending grasps.
     """
     rcond = check_rcond(rcond)
     if np.ndim(q) != 2:

@@ -103,8 +103,12 @@ def estimate_com(
             generalised least squares, and ``cov`` accounts for the correlation.
 
     Raises:
-        InvalidInputError, UnobservableError, EmptyGripperError, SolverError (all
-        ComGraspError, a ValueError).
+        InvalidInputError: an argument has the wrong shape, type or value.
+        UnobservableError: the data cannot determine the mass.
+        EmptyGripperError: the mass is not measurably above zero: nothing is held.
+        SolverError: IPOPT failed (``return_status`` carries its status).
+
+    All four are ``ComGraspError``, a ``ValueError``.
     """
     check_options(method, rcond, loss, huber_delta, com_prior, torque_std)
     q_arr, dtau, sigma = check_arrays(robot, q, tau_before, tau_after, torque_std)

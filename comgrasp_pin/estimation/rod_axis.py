@@ -39,9 +39,10 @@ def com_along_axis(
         min_angle: smallest accepted angle (rad) between rod axis and gravity (one pose).
 
     Raises:
-        InvalidInputError for a bad transform, an ``est`` that is not a ComEstimate or a
-        ``min_angle`` outside (0, pi/2]; UnobservableError when the rod axis is within
-        ``min_angle`` of gravity (the vertical CoM line then does not fix a point).
+        InvalidInputError: a bad transform, an ``est`` that is not a ComEstimate or a
+            ``min_angle`` outside (0, pi/2].
+        UnobservableError: the rod axis is within ``min_angle`` of gravity (the vertical
+            CoM line then does not fix a point).
     """
     if not (hasattr(est, "com_ee") and hasattr(est, "unobservable_ee")):
         raise InvalidInputError(f"est must be a ComEstimate, got {type(est).__name__}")

@@ -18,7 +18,8 @@ from comgrasp_pin import validate
 from comgrasp_pin.errors import InvalidDepthError
 from comgrasp_pin.perception.camera_input import metric_depth
 
-AGREE_TOLERANCE = 0.005  # a frame's value this far from the pixel's median is a flyer (m)
+AGREE_TOLERANCE = 0.005
+"""A frame's depth this far (m) from the pixel's median over the frames is a flyer."""
 
 
 def average_depth_frames(

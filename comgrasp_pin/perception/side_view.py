@@ -171,10 +171,13 @@ def observe_held_rod(
         color_order: "rgb" or "bgr", the order of ``rgb``'s channels.
 
     Raises:
-        ObjectNotFoundError, ObjectCutByBorderError, InvalidDepthError, UntrustedImageError
-        (a noisy image of a handle no cylinder fits); InvalidInputError for
-        a transform that is not a (4, 4) rigid one, or a length, radius, hint or table
-        height that is not finite (or, for length and radius, not positive).
+        ObjectNotFoundError: no rod in the image.
+        ObjectCutByBorderError: the rod runs out of the image.
+        InvalidDepthError: the depth image is unusable.
+        UntrustedImageError: a noisy image of a handle no cylinder fits.
+        InvalidInputError: a transform that is not a (4, 4) rigid one, or a length, radius,
+            hint or table height that is not finite (or, for length and radius, not
+            positive).
     """
     T_ee_cam = check_transform(T_ee_cam, "T_ee_cam")
     if T_world_ee is not None:

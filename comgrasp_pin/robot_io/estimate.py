@@ -88,8 +88,10 @@ def estimate_from_log(
             differences' covariance with the drift between and across the windows.
 
     Raises:
-        LogError, NotStaticError: a window is outside the log, has no partner or moves;
-        the errors of estimate_com.
+        LogError: the log's joints are not the arm's, or a window is outside the log or
+            has no partner.
+        NotStaticError: a window moves.
+        ComGraspError: the errors of ``estimate_com``.
     """
     if tuple(log.joint_names) != tuple(robot.joint_names):
         raise LogError(f"the log's joints {log.joint_names} are not the arm's {robot.joint_names}")
