@@ -153,7 +153,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--objects", default="obj1,obj2")
     parser.add_argument("--trials", type=int, default=1)
-    parser.add_argument("--sensors", default="ideal", help="sensor preset (config_sensors)")
+    parser.add_argument("--sensors", default="ideal", help="sensor preset (config.sensors)")
     parser.add_argument("--out", default=str(Path(__file__).parent / "results" /
                                              "episode_phases.json"))  # fmt: skip
     args = parser.parse_args()

@@ -18,7 +18,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from comgrasp_pin.config_sensors import sensor_preset
+from comgrasp_pin.config import sensor_preset
 from comgrasp_pin.perception._points import drop_flying, median, slice_medians
 from comgrasp_pin.perception.rod_axis import _cylinder_residuals
 from comgrasp_pin.simulation.depth_noise import DepthNoise

@@ -6,9 +6,9 @@ import json
 import numpy as np
 import pytest
 
-from comgrasp_pin import config_paths
 from comgrasp_pin.cli import main
 from comgrasp_pin.config import EpisodeConfig
+from comgrasp_pin.config import paths as config_paths
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.experiments.reproduce import RunOptions
 from comgrasp_pin.experiments.runner import read_rows

@@ -4,7 +4,7 @@
         --experiment accuracy --objects obj1,obj2 --trials 5 --out results/sweep
 
 Each ``--param`` names a number of the ``EpisodeConfig`` tree by its dotted path or an alias
-(``config_paths``) and lists its values; the grid is their product. Every grid point runs the
+(``config.paths``) and lists its values; the grid is their product. Every grid point runs the
 same trials with the same seeds (the scenes and sensor noise of trial k are the same at every
 point: common random numbers, so differences between points are the settings', not luck's).
 ``sweep.csv`` holds one row per trial with the swept values as its first columns; the runner
@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from comgrasp_pin import config_paths
+from comgrasp_pin.config import paths as config_paths
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.experiments.reproduce import RunOptions, run_settings
 from comgrasp_pin.experiments.runner import KEY_COLUMNS, run_trials

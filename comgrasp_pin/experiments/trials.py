@@ -13,7 +13,7 @@ from dataclasses import asdict, replace
 import numpy as np
 
 from comgrasp_pin.config import EpisodeConfig, TrialConfig, hardware_trial, sensor_preset
-from comgrasp_pin.config_paths import with_values
+from comgrasp_pin.config.paths import with_values
 from comgrasp_pin.experiments.design import grasp_for_lever, side_and_lever, target_tilt
 
 ACCURACY_COLUMNS = [

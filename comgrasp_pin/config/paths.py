@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import fields, is_dataclass, replace
 
-from comgrasp_pin.config import EpisodeConfig
+from comgrasp_pin.config.tree import EpisodeConfig
 from comgrasp_pin.errors import InvalidInputError
 
 ALIASES = {

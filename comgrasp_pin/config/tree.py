@@ -1,11 +1,11 @@
-"""Every number that tunes a run, in one nested tree (frozen dataclasses, SI units).
+"""The config tree: every number that tunes a run, nested (frozen dataclasses, SI units).
 
     EpisodeConfig
       trial:   TrialConfig     the trial grasp and its torque measurement
       regrasp: RegraspConfig   when to regrasp, how to retry, how to put the rod down
       motion:  MotionConfig    the skills: speeds, approach, gripper, carrying
       sensors: SensorConfig    torque sensor, depth cameras' errors, model error, the watch
-                               (``config_sensors``: presets "ideal", "realistic", ...)
+                               (``config.sensors``: presets "ideal", "realistic", ...)
       world:   WorldConfig     the simulated world (physics, contacts, servo)
 
 Skills and procedures take their numbers from this tree only (no defaults of their own), and
@@ -17,30 +17,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from comgrasp_pin.config_sensors import (
-    SENSOR_PRESETS,
-    DepthNoiseConfig,
-    SensorConfig,
-    TorqueSensorConfig,
-    sensor_preset,
-)
-from comgrasp_pin.config_trial import ESTIMATORS, TAU_BEFORE, TrialConfig, hardware_trial
+from comgrasp_pin.config.sensors import SensorConfig
+from comgrasp_pin.config.trial import TrialConfig
 
-__all__ = [
-    "SENSOR_PRESETS",
-    "DepthNoiseConfig",
-    "EpisodeConfig",
-    "MotionConfig",
-    "RegraspConfig",
-    "SensorConfig",
-    "TorqueSensorConfig",
-    "TrialConfig",
-    "hardware_trial",
-    "ESTIMATORS",
-    "TAU_BEFORE",
-    "WorldConfig",
-    "sensor_preset",
-]
+__all__ = ["EpisodeConfig", "MotionConfig", "RegraspConfig", "WorldConfig"]
 
 
 @dataclass(frozen=True)

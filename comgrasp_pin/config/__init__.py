@@ -1,0 +1,37 @@
+"""The config tree: every number that tunes a run (frozen dataclasses, SI units).
+
+    tree.py     EpisodeConfig -> trial, regrasp, motion, sensors, world; run.json records it
+    sensors.py  the sensors' part (torque sensor, depth cameras' errors) and its presets
+    trial.py    the trial grasp's part, and the procedure a real arm's sensors need
+    paths.py    every number of the tree by its dotted path (``motion.grip_force``), for sweeps
+
+Layer: the bottom, beside ``errors`` and ``validate``; it imports nothing else of the
+package, and every layer above reads its numbers from here. Import the names from
+``comgrasp_pin.config``; ``comgrasp_pin.config.paths`` is used as a module.
+"""
+
+from comgrasp_pin.config.sensors import (
+    SENSOR_PRESETS,
+    DepthNoiseConfig,
+    SensorConfig,
+    TorqueSensorConfig,
+    sensor_preset,
+)
+from comgrasp_pin.config.tree import EpisodeConfig, MotionConfig, RegraspConfig, WorldConfig
+from comgrasp_pin.config.trial import ESTIMATORS, TAU_BEFORE, TrialConfig, hardware_trial
+
+__all__ = [
+    "SENSOR_PRESETS",
+    "DepthNoiseConfig",
+    "EpisodeConfig",
+    "MotionConfig",
+    "RegraspConfig",
+    "SensorConfig",
+    "TorqueSensorConfig",
+    "TrialConfig",
+    "hardware_trial",
+    "ESTIMATORS",
+    "TAU_BEFORE",
+    "WorldConfig",
+    "sensor_preset",
+]
