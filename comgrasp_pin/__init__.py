@@ -55,4 +55,4 @@ __all__ = [
     "read_log",
     "robot_io",
 ]
-__version__ = "0.1.0"
+__version__ = "0.2.0"  # the one source: pyproject.toml reads it (tool.setuptools.dynamic)

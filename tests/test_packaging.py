@@ -12,6 +12,9 @@ fresh venv ships an older setuptools and no wheel) pip builds in an isolated env
 fetching those two from its configured index, as ``pip install .`` in CI does.
 """
 
+import email
+import email.message
+import re
 import shutil
 import subprocess
 import sys
@@ -106,13 +109,20 @@ def test_no_data_folder_inside_the_package_shadows_the_top_level_one():
 # --- the wheel (slow) ----------------------------------------------------------------------------
 
 
+def _version_tuple(version: str) -> tuple[int, ...]:
+    return tuple(int(part) for part in re.findall(r"\d+", version)[:3])
+
+
 def _build_requirements_installed() -> bool:
+    """Whether the running interpreter has pyproject's ``[build-system] requires``:
+    setuptools at the version it asks for (``setuptools>=X``) and wheel."""
+    (wanted,) = [r for r in PYPROJECT["build-system"]["requires"] if r.startswith("setuptools")]
     try:
-        setuptools_major = int(metadata.version("setuptools").split(".")[0])
+        installed = metadata.version("setuptools")
         metadata.version("wheel")
     except metadata.PackageNotFoundError:
         return False
-    return setuptools_major >= 68
+    return _version_tuple(installed) >= _version_tuple(wanted.split(">=")[1])
 
 
 @pytest.fixture(scope="module")
@@ -129,6 +139,11 @@ def wheel(tmp_path_factory):
     (path,) = out.glob("comgrasp_pin-*.whl")
     with zipfile.ZipFile(path) as zf:
         yield zf
+
+
+def _wheel_metadata(wheel: zipfile.ZipFile) -> email.message.Message:
+    (name,) = [n for n in wheel.namelist() if re.fullmatch(r"[^/]+\.dist-info/METADATA", n)]
+    return email.message_from_bytes(wheel.read(name))
 
 
 @pytest.mark.slow
@@ -157,3 +172,68 @@ def test_the_notebooks_find_the_committed_results(monkeypatch, tmp_path):
     monkeypatch.delenv("COMGRASP_RESULTS")
     monkeypatch.chdir(repo / "notebooks")
     assert results_dir().resolve() == (repo / "docs" / "results").resolve()
+
+
+# --- the metadata a package index shows ----------------------------------------------------------
+
+VERSION = "0.2.0"  # the release this tree is (CHANGELOG.md)
+URLS = {"Homepage", "Documentation", "Repository", "Issues", "Changelog"}
+PYTHONS = ("3.10", "3.11", "3.12")
+
+
+def _check_metadata(meta) -> None:
+    """The fields an index shows, in a distribution's METADATA (an email.message.Message or
+    importlib.metadata's PackageMetadata)."""
+    assert meta["Name"] == "comgrasp_pin"
+    assert meta["Version"] == VERSION
+    assert meta["Requires-Python"] == ">=3.10"
+    assert meta["Summary"]
+    assert meta["License-Expression"] == "BSD-3-Clause"
+    assert "LICENSE" in (meta.get_all("License-File") or [])
+    urls = dict(u.split(", ", 1) for u in meta.get_all("Project-URL") or [])
+    assert set(urls) >= URLS, f"Project-URL lacks {URLS - set(urls)}"
+    assert all(u.startswith("https://") for u in urls.values()), urls
+    classifiers = meta.get_all("Classifier") or []
+    for wanted in [
+        "Intended Audience :: Science/Research",
+        "Topic :: Scientific/Engineering",
+        *(f"Programming Language :: Python :: {v}" for v in PYTHONS),
+    ]:
+        assert wanted in classifiers, wanted
+    assert any(c.startswith("Development Status :: ") for c in classifiers), classifiers
+    assert any(c.startswith("Operating System :: ") for c in classifiers), classifiers
+    # PEP 639: the licence is the SPDX expression above; a "License ::" classifier beside it
+    # is refused by setuptools >= 77 and deprecated by the packaging guide.
+    assert not any(c.startswith("License :: ") for c in classifiers), classifiers
+    assert meta["Keywords"] and "robotics" in meta["Keywords"]
+    assert meta["Description-Content-Type"] == "text/markdown"
+    assert "comgrasp_pin" in meta.get_payload(), "the README is the long description"
+
+
+def test_one_version():
+    """comgrasp_pin.__version__ is the one source; pyproject reads it (no second literal)."""
+    import comgrasp_pin
+
+    assert comgrasp_pin.__version__ == VERSION
+    assert "version" in PYPROJECT["project"]["dynamic"] and "version" not in PYPROJECT["project"]
+    assert PYPROJECT["tool"]["setuptools"]["dynamic"]["version"] == {
+        "attr": "comgrasp_pin.__version__"
+    }
+
+
+def test_installed_distribution_metadata():
+    """What importlib.metadata reads of the installed package (an editable install included:
+    reinstall after a version or metadata change)."""
+    import comgrasp_pin
+
+    meta = metadata.metadata("comgrasp_pin")
+    assert meta["Version"] == comgrasp_pin.__version__, "installed metadata is stale: pip install"
+    _check_metadata(meta)
+
+
+@pytest.mark.slow
+def test_wheel_metadata(wheel):
+    meta = _wheel_metadata(wheel)
+    _check_metadata(meta)
+    (license_file,) = [n for n in wheel.namelist() if n.endswith(".dist-info/licenses/LICENSE")]
+    assert wheel.read(license_file) == (ROOT / "LICENSE").read_bytes()
