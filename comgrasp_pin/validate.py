@@ -3,7 +3,7 @@
 Each check returns the value in its checked form (a float, an int, a float array) or raises
 ``InvalidInputError`` with a message that names the argument, says what it got and what is
 valid. The estimator's own input checks (``estimation/inputs.py``), the command line
-(``cli_args.py``) and the other public functions use these.
+(``cli/args.py``) and the other public functions use these.
 """
 
 from __future__ import annotations

@@ -198,7 +198,7 @@ def test_a_rerun_recording_has_the_cameras_clouds_com_and_torques(tmp_path):
 
 @pytest.mark.slow
 def test_the_readme_demo_shows_every_phase_and_says_what_happened():
-    from comgrasp_pin.cli_demo import TILT, summary
+    from comgrasp_pin.cli.demo import TILT, summary
     from comgrasp_pin.experiments.trials import episode_config
     from comgrasp_pin.simulation.episode import run_episode
 

@@ -60,7 +60,7 @@ def test_extra_objects_are_listed_apart_and_everything_is_offered():
     assert EXTRA_OBJECTS == ("obj7", "obj8")
     assert list(OBJECTS) == [f"obj{i}" for i in range(1, 9)]
     assert not any(get_object(n).paper for n in EXTRA_OBJECTS)
-    from comgrasp_pin.cli import OBJECTS as CLI_OBJECTS
+    from comgrasp_pin.cli.args import OBJECTS as CLI_OBJECTS
     from comgrasp_pin.experiments.reproduce import ALL_OBJECTS
 
     assert CLI_OBJECTS == ALL_OBJECTS == PAPER_OBJECTS + EXTRA_OBJECTS

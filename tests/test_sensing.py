@@ -155,12 +155,13 @@ def test_measured_tau_before_absorbs_the_gripper_model_error(ur5):
 
 
 def test_sensors_option_reaches_the_episode_config():
-    from comgrasp_pin.cli import _options, build_parser
+    from comgrasp_pin.cli import build_parser
+    from comgrasp_pin.cli.experiments import run_options
     from comgrasp_pin.config import EpisodeConfig
     from comgrasp_pin.experiments.trials import episode_config, settings_summary
 
     args = build_parser().parse_args(["accuracy", "--sensors", "realistic", "--noise", "0.02"])
-    opts = _options(args)
+    opts = run_options(args)
     assert opts.sensors == "realistic"
     config = episode_config(opts.noise, opts.estimator, opts.sensors)
     assert config.sensors.preset == "realistic" and config.sensors.torque.noise_std == 0.02

@@ -114,16 +114,17 @@ def test_a_trial_function_that_cannot_reach_a_worker_is_refused_before_any_file(
 
 
 def test_the_limit_is_an_option_recorded_in_the_settings_and_may_change_on_resume(tmp_path):
-    from comgrasp_pin.cli import _options, build_parser
+    from comgrasp_pin.cli import build_parser
+    from comgrasp_pin.cli.experiments import run_options
     from comgrasp_pin.experiments.reproduce import run_settings
 
     parser = build_parser()
     args = parser.parse_args(["accuracy", "--trial-timeout", "42.5", "--out", str(tmp_path)])
-    settings = run_settings(_options(args))
+    settings = run_settings(run_options(args))
     assert settings["trial_timeout_s"] == 42.5
     assert json.loads(json.dumps(settings))["trial_timeout_s"] == 42.5
     assert settings_differences(settings, {**settings, "trial_timeout_s": 900.0}) == []
-    default = run_settings(_options(parser.parse_args(["sweep", "--param", "noise=0.1"])))
+    default = run_settings(run_options(parser.parse_args(["sweep", "--param", "noise=0.1"])))
     assert default["trial_timeout_s"] == 600.0
     for bad in ("0", "-1", "inf", "soon"):
         with pytest.raises(SystemExit):

@@ -1,6 +1,6 @@
 """`comgrasp plan-motion`: an excitation motion for a real arm (``robot_io.excitation``).
 
-Registered by ``cli_robot.add_subcommands``, which loads the robot (``--urdf``,
+Registered by ``cli.robot.add_subcommands``, which loads the robot (``--urdf``,
 ``--ee-frame``, ``--package-dir``, ``--gravity``) and parses ``--start``.
 """
 

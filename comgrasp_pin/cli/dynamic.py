@@ -1,6 +1,6 @@
 """`comgrasp estimate --dynamic`: the whole payload (mass, CoM, inertia) from a motion's log.
 
-The options are added to `comgrasp estimate` (``add_dynamic_args``); ``cli_robot`` hands the
+The options are added to `comgrasp estimate` (``add_dynamic_args``); ``cli.robot`` hands the
 parsed arguments here when ``--dynamic`` is given (DESIGN.md 4c).
 """
 

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from comgrasp_pin.cli_args import _argument_type
+from comgrasp_pin.cli.args import _argument_type
+from comgrasp_pin.cli.experiments import add_experiment_args, run_options
 
 
 def _param(text: str):
@@ -18,12 +19,11 @@ param = _argument_type(_param, "param")
 
 
 def _cmd_sweep(args: argparse.Namespace) -> int:
-    from comgrasp_pin.cli import _options
     from comgrasp_pin.experiments.sweep import SWEEP_TRIALS, SweepOptions, run_sweep
 
     if args.trials is None and not args.quick:
         args.trials = SWEEP_TRIALS
-    opts = SweepOptions(_options(args), args.experiment, tuple(args.param))
+    opts = SweepOptions(run_options(args), args.experiment, tuple(args.param))
     run_sweep(opts)
     out = opts.run.out
     print((out / "sweep_table.md").read_text())
@@ -31,7 +31,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     return 0
 
 
-def add_subcommand(sub, add_experiment_args) -> None:
+def add_subcommand(sub) -> None:
     """The ``sweep`` subcommand, with the experiment commands' options."""
     p = sub.add_parser(
         "sweep",

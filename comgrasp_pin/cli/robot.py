@@ -1,6 +1,7 @@
-"""The real-arm subcommands of `comgrasp`: `estimate` (logs in, payload out) and `plan-poses`.
+"""The real-arm subcommands: `estimate` (logs in, payload out), `plan-poses`, `plan-motion`.
 
-Registered by ``comgrasp_pin.cli`` through ``add_subcommands``; errors are ComGraspError
+Registered by ``comgrasp_pin.cli`` through ``add_subcommands`` (``dynamic``: estimate
+--dynamic; ``motion``: plan-motion); errors are ComGraspError
 (exit status 2 with the message, no traceback), argparse's own errors exit 2 as well.
 """
 
@@ -12,6 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
+from comgrasp_pin.cli.dynamic import add_dynamic_args, run_dynamic
+from comgrasp_pin.cli.motion import add_plan_motion, run_plan_motion
 from comgrasp_pin.errors import InvalidInputError, OutputError
 
 _DEFAULTS = argparse.ArgumentDefaultsHelpFormatter
@@ -70,8 +73,6 @@ def _cmd_estimate(args: argparse.Namespace) -> int:
 
     robot = _robot(args)
     if args.dynamic:
-        from comgrasp_pin.cli_dynamic import run_dynamic
-
         return run_dynamic(args, robot, _write_json)
     log, before, after = _log_and_windows(args, robot)
     result = rio.estimate_from_log(
@@ -133,7 +134,6 @@ def _cmd_plan(args: argparse.Namespace) -> int:
 
 
 def _cmd_plan_motion(args: argparse.Namespace) -> int:
-    from comgrasp_pin.cli_motion import run_plan_motion
 
     robot = _robot(args)
     start = None if args.start is None else _vector(args.start, "--start", robot.nq)
@@ -152,8 +152,6 @@ def _add_robot_args(p: argparse.ArgumentParser) -> None:
 
 def add_subcommands(sub: argparse._SubParsersAction) -> None:
     """Add `estimate` and `plan-poses` to the `comgrasp` subparsers ``sub``."""
-    from comgrasp_pin.cli_dynamic import add_dynamic_args
-    from comgrasp_pin.cli_motion import add_plan_motion
     from comgrasp_pin.robot_io.logs import DEFAULT_TOPIC
     from comgrasp_pin.robot_io.payload import INERTIA_HELP
     from comgrasp_pin.robot_io.windows import MAX_SPEED

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from comgrasp_pin import cli_args
+from comgrasp_pin.cli import args as cli_args
 from comgrasp_pin.errors import CameraFileError, InvalidInputError
 from comgrasp_pin.geometry import check_transform, tilt_from_level_deg
 

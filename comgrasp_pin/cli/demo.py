@@ -6,7 +6,8 @@ import argparse
 import os
 from pathlib import Path
 
-from comgrasp_pin import cli_args
+from comgrasp_pin.cli import camera_files
+from comgrasp_pin.cli.args import OBJECTS, SEED, add_sensors_arg, out_dir, sentence
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.geometry import tilt_difference_deg, tilt_from_level_deg
 from comgrasp_pin.procedures import phases as ph
@@ -80,23 +81,22 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
 
 def _cmd_views(args: argparse.Namespace) -> int:
-    from comgrasp_pin import cli_camera_files
     from comgrasp_pin.simulation.views import save_camera_views
 
-    if cli_camera_files.wants_files(args):
-        return cli_camera_files.run(args)
+    if camera_files.wants_files(args):
+        return camera_files.run(args)
 
     for path in save_camera_views(Path(args.out), args.object, args.seed):
         print(f"wrote {path}")
     return 0
 
 
-def add_subcommands(sub, objects: tuple, seed_type, add_sensors_arg, sentence) -> None:
+def add_subcommands(sub: argparse._SubParsersAction) -> None:
     """Add ``demo`` and ``views`` to the subparsers ``sub``."""
     demo_help = "one episode with a video, key frames and the estimate vs the truth"
     demo = sub.add_parser("demo", help=demo_help, description=sentence(demo_help))
-    demo.add_argument("--object", default="obj1", choices=objects, help="the rod (%(default)s)")
-    demo.add_argument("--seed", type=seed_type, default=0, help="scene seed, >= 0 (%(default)s)")
+    demo.add_argument("--object", default="obj1", choices=OBJECTS, help="the rod (%(default)s)")
+    demo.add_argument("--seed", type=SEED, default=0, help="scene seed, >= 0 (%(default)s)")
     demo.add_argument(
         "--method",
         default="regrasp",
@@ -104,7 +104,7 @@ def add_subcommands(sub, objects: tuple, seed_type, add_sensors_arg, sentence) -
         help="regrasp planner or the geometric-centre grasp (%(default)s)",
     )
     demo.add_argument(
-        "--out", type=cli_args.out_dir, default="results/demo", help="output folder (%(default)s)"
+        "--out", type=out_dir, default="results/demo", help="output folder (%(default)s)"
     )
     demo.add_argument("--viewer", action="store_true", help="also show MuJoCo's viewer (display)")
     demo.add_argument("--rerun", type=_rerun_path, default=None, metavar="FILE.rrd",
@@ -116,14 +116,12 @@ def add_subcommands(sub, objects: tuple, seed_type, add_sensors_arg, sentence) -
 
     views_help = "both camera views with mask, rectangle, axis, grasp point, CoM, legends"
     views = sub.add_parser("views", help=views_help, description=sentence(views_help))
-    views.add_argument("--object", default="obj2", choices=objects, help="the rod (%(default)s)")
-    views.add_argument("--seed", type=seed_type, default=0, help="scene seed, >= 0 (%(default)s)")
+    views.add_argument("--object", default="obj2", choices=OBJECTS, help="the rod (%(default)s)")
+    views.add_argument("--seed", type=SEED, default=0, help="scene seed, >= 0 (%(default)s)")
     views.add_argument(
-        "--out", type=cli_args.out_dir, default="results/views", help="output folder (%(default)s)"
+        "--out", type=out_dir, default="results/views", help="output folder (%(default)s)"
     )
-    from comgrasp_pin.cli_camera_files import add_arguments
-
-    add_arguments(views)  # --rgb --depth --camera-info: the user's own camera
+    camera_files.add_arguments(views)  # --rgb --depth --camera-info: the user's own camera
     views.set_defaults(func=_cmd_views)
 
 

@@ -1,7 +1,8 @@
-"""The command line's argument types: each option parsed and checked before anything runs.
+"""The command line's argument types, and the options several commands share.
 
-A bad value ends the command with argparse's usage message and exit status 2 (no traceback,
-nothing written). The checks themselves live in ``validate``.
+Each option is parsed and checked before anything runs: a bad value ends the command with
+argparse's usage message and exit status 2 (no traceback, nothing written). The checks
+themselves live in ``validate``.
 """
 
 from __future__ import annotations
@@ -12,7 +13,9 @@ from collections.abc import Callable
 from pathlib import Path
 
 from comgrasp_pin import validate
+from comgrasp_pin.config import SENSOR_PRESETS
 from comgrasp_pin.errors import InvalidInputError
+from comgrasp_pin.simulation.objects import OBJECTS as _OBJECTS
 
 
 def _argument_type(parse: Callable[[str], object], label: str) -> Callable[[str], object]:
@@ -102,3 +105,25 @@ def _parse_out_dir(text: str) -> Path:
 out_dir = _argument_type(_parse_out_dir, "folder")
 """An output folder: existing or creatable (no file in the way, its first existing
 ancestor writable)."""
+
+
+OBJECTS = tuple(_OBJECTS)
+"""The rods a command may name (``--object``, ``--objects``)."""
+
+
+def sentence(text: str) -> str:
+    """``text`` with a capital first letter: a subcommand's help as its help page's line."""
+    return text[0].upper() + text[1:]
+
+
+def add_sensors_arg(p: argparse.ArgumentParser) -> None:
+    """``--sensors PRESET``, on the experiments and ``demo``."""
+    p.add_argument("--sensors", default="ideal", choices=SENSOR_PRESETS,
+                   help="sensor preset: ideal renders and torques, or realistic (RealSense-class "
+                   "depth, link-side torque sensors, gripper model error; realistic_current: a "
+                   "UR CB3's current-based torques); ideal+SOURCE adds one realistic error "
+                   "source to the ideal sensors (%(default)s)")  # fmt: skip
+
+
+SEED = int_at_least(0)
+"""A seed: an integer >= 0."""

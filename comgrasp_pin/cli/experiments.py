@@ -1,38 +1,24 @@
-"""The `comgrasp` command line: `comgrasp --help` lists the subcommands."""
+"""`comgrasp accuracy`, `regrasp` and `reproduce`: the paper's experiments (``experiments``).
+
+``add_experiment_args`` gives their options (output folder, objects, trials, seed, workers,
+backend, sensors, resume, ...) to ``sweep`` as well; ``run_options`` turns them into the
+runner's ``RunOptions``.
+"""
 
 from __future__ import annotations
 
 import argparse
-import json
 import os
-import sys
-from pathlib import Path
 
-from comgrasp_pin import __version__, cli_args
-from comgrasp_pin.errors import ComGraspError, InvalidInputError
+from comgrasp_pin.cli import args as cli_args
+from comgrasp_pin.cli.args import OBJECTS, SEED, add_sensors_arg, sentence
+from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.experiments.runner import DEFAULT_TRIAL_TIMEOUT_S
 from comgrasp_pin.experiments.trials import MAX_TRIALS
 
-OBJECTS = tuple(__import__("comgrasp_pin.simulation.objects", fromlist=["OBJECTS"]).OBJECTS)
-SEED = cli_args.int_at_least(0)
 
-
-def _cmd_check(args: argparse.Namespace) -> int:
-    from comgrasp_pin.simulation.checks import run_checks
-
-    report = run_checks(Path(args.out))
-    print(json.dumps(report, indent=2))
-    worst = report["pinocchio_vs_mujoco_worst"]
-    ok = (
-        worst["gravity_torque_Nm"] < 1e-6
-        and worst["ee_position_m"] < 1e-9
-        and report["torque_reading_vs_model_Nm"] < 1e-3
-    )
-    print(f"\nimages and check.json written to {args.out}; physics {'OK' if ok else 'MISMATCH'}")
-    return 0 if ok else 1
-
-
-def _options(args: argparse.Namespace):
+def run_options(args: argparse.Namespace):
+    """The experiment options of ``args`` as the runner's ``RunOptions``."""
     from comgrasp_pin.config import sensor_preset
     from comgrasp_pin.experiments.ray_backend import check_backend
     from comgrasp_pin.experiments.reproduce import PAPER_TRIALS, QUICK_TRIALS, RunOptions
@@ -60,7 +46,7 @@ def _options(args: argparse.Namespace):
 def _cmd_experiment(args: argparse.Namespace) -> int:
     from comgrasp_pin.experiments import reproduce
 
-    opts = _options(args)
+    opts = run_options(args)
     if args.command == "accuracy":
         reproduce.run_accuracy(opts)
         print(f"wrote {opts.out / 'accuracy.csv'}, accuracy.png, accuracy_table.md")
@@ -74,26 +60,8 @@ def _cmd_experiment(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cmd_scene(args: argparse.Namespace) -> int:
-    from comgrasp_pin.simulation.world import save_world_xml
-
-    path = save_world_xml(Path(args.out) / "world.xml", args.object, args.seed)
-    print(f"wrote {path}: the workcell, the robot and {args.object} as one MJCF file")
-    print(f"open it in MuJoCo's viewer:  python -m mujoco.viewer --mjcf={path}")
-    return 0
-
-
-def _add_sensors_arg(p: argparse.ArgumentParser) -> None:
-    from comgrasp_pin.config import SENSOR_PRESETS
-
-    p.add_argument("--sensors", default="ideal", choices=SENSOR_PRESETS,
-                   help="sensor preset: ideal renders and torques, or realistic (RealSense-class "
-                   "depth, link-side torque sensors, gripper model error; realistic_current: a "
-                   "UR CB3's current-based torques); ideal+SOURCE adds one realistic error "
-                   "source to the ideal sensors (%(default)s)")  # fmt: skip
-
-
-def _add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
+def add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
+    """The options of the experiment commands (and ``sweep``), writing to ``default_out``."""
     p.add_argument("--out", type=cli_args.out_dir, default=default_out,
                    help="output folder (%(default)s)")  # fmt: skip
     p.add_argument("--objects", type=cli_args.object_list(OBJECTS), default=",".join(OBJECTS),
@@ -128,7 +96,7 @@ def _add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
                    help="the trial grasp's estimator: IPOPT with the side view's prior on the "
                    "CoM's distance from the rod's axis, or the closed-form least squares "
                    "(%(default)s)")  # fmt: skip
-    _add_sensors_arg(p)
+    add_sensors_arg(p)
     again = p.add_mutually_exclusive_group()
     again.add_argument("--resume", action="store_true",
                        help="continue the CSV in --out (same settings; trials and objects may "
@@ -148,25 +116,8 @@ def _add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
     p.set_defaults(func=_cmd_experiment)
 
 
-def _sentence(text: str) -> str:
-    """``text`` with a capital first letter: a subcommand's help as its help page's line."""
-    return text[0].upper() + text[1:]
-
-
-def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
-        prog="comgrasp",
-        description="Centre-of-mass-based grasp adaptation (UR5 + parallel gripper in MuJoCo).",
-    )
-    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True)
-    check_help = "render the scene from every camera and check Pinocchio against MuJoCo"
-    check = sub.add_parser("check", help=check_help, description=_sentence(check_help))
-    check.add_argument(
-        "--out", type=cli_args.out_dir, default="results/check", help="output folder (%(default)s)"
-    )
-    check.set_defaults(func=_cmd_check)
-
+def add_subcommands(sub: argparse._SubParsersAction) -> None:
+    """Add ``accuracy``, ``regrasp`` and ``reproduce`` to the subparsers ``sub``."""
     for name, help_text in (
         ("accuracy", "experiment 1: CoM accuracy against tilt (accuracy.csv, figure, table)"),
         ("regrasp", "experiment 2: pick-and-place success, baseline vs regrasp (regrasp.csv)"),
@@ -176,8 +127,8 @@ def build_parser() -> argparse.ArgumentParser:
             "realistic sensors, and ideal ones beside them for the comparison with the paper",
         ),
     ):
-        p = sub.add_parser(name, help=help_text, description=_sentence(help_text))
-        _add_experiment_args(p, f"results/{name}")
+        p = sub.add_parser(name, help=help_text, description=sentence(help_text))
+        add_experiment_args(p, f"results/{name}")
         if name == "reproduce":
             p.set_defaults(sensors="realistic")
             p.add_argument(
@@ -187,46 +138,3 @@ def build_parser() -> argparse.ArgumentParser:
                 help="also run the accuracy experiment with this seed (in OUT/seed<S>) and "
                 "report its calibration beside the first's",
             )
-
-    from comgrasp_pin import cli_demo
-
-    cli_demo.add_subcommands(sub, OBJECTS, SEED, _add_sensors_arg, _sentence)
-
-    scene = sub.add_parser(
-        "scene",
-        help="write the assembled world (sim/scene.xml, the robot, a rod) as one MJCF file",
-        description="Write the world the experiments run in, sim/scene.xml with the robot "
-        "compiled from urdf/ and a rod on the table, as one MJCF file that MuJoCo's own viewer "
-        "opens (python -m mujoco.viewer --mjcf=FILE). Keyframes 'home' and 'park' hold the "
-        "arm's named poses.",
-    )
-    scene.add_argument("--object", default="obj2", choices=OBJECTS, help="the rod (%(default)s)")
-    scene.add_argument("--seed", type=SEED, default=0, help="scene seed: where the rod lies")
-    scene.add_argument(
-        "--out", type=cli_args.out_dir, default="results/scene", help="output folder (%(default)s)"
-    )
-    scene.set_defaults(func=_cmd_scene)
-
-    from comgrasp_pin import cli_sweep
-    from comgrasp_pin.cli_robot import add_subcommands
-
-    cli_sweep.add_subcommand(sub, _add_experiment_args)
-
-    add_subcommands(sub)  # estimate, plan-poses: the real-arm path
-    return parser
-
-
-def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
-    try:
-        return args.func(args)
-    except ComGraspError as exc:
-        print(f"comgrasp {args.command}: error: {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:  # a file that cannot be written (full disk, no permission)
-        print(f"comgrasp {args.command}: error: {exc}", file=sys.stderr)
-        return 2
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,0 +1,58 @@
+"""The `comgrasp` command line: `comgrasp --help` lists the subcommands.
+
+One module a command group, each adding its subcommands to the parser:
+
+    world.py         check, scene: the simulated world
+    experiments.py   accuracy, regrasp, reproduce: the paper's experiments
+    sweep.py         sweep: an experiment over a grid of config values
+    demo.py          demo, views (camera_files.py: views on the user's own camera's frames)
+    robot.py         estimate, plan-poses, plan-motion: the real arm (dynamic.py: estimate
+                     --dynamic; motion.py: plan-motion)
+    args.py          the argument types and the options several commands share
+
+Layer: the top. It may import every other part of the package; nothing in the package
+imports it. Inside, the command modules import ``args`` (and ``sweep`` imports
+``experiments``); none imports this ``__init__``. The heavy imports (MuJoCo, the solvers)
+happen inside the commands, so ``comgrasp --help`` stays quick.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from comgrasp_pin import __version__
+from comgrasp_pin.cli import demo, experiments, robot, sweep, world
+from comgrasp_pin.errors import ComGraspError
+
+__all__ = ["build_parser", "main"]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The `comgrasp` parser with every subcommand."""
+    parser = argparse.ArgumentParser(
+        prog="comgrasp",
+        description="Centre-of-mass-based grasp adaptation (UR5 + parallel gripper in MuJoCo).",
+    )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True)
+    world.add_check(sub)
+    experiments.add_subcommands(sub)  # accuracy, regrasp, reproduce
+    demo.add_subcommands(sub)  # demo, views
+    world.add_scene(sub)
+    sweep.add_subcommand(sub)
+    robot.add_subcommands(sub)  # estimate, plan-poses, plan-motion: the real-arm path
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run `comgrasp` with ``argv`` (default: the process's); the exit status."""
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except ComGraspError as exc:
+        print(f"comgrasp {args.command}: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # a file that cannot be written (full disk, no permission)
+        print(f"comgrasp {args.command}: error: {exc}", file=sys.stderr)
+        return 2
