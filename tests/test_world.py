@@ -79,8 +79,8 @@ def test_saved_world_xml_is_the_world_the_experiments_run(tmp_path):
     """`comgrasp scene` writes one MJCF file; MuJoCo reading it back gives the same world:
     the same bodies at the same places at the home keyframe, the same masses and options."""
     from comgrasp_pin.simulation.objects import add_object, get_object
-    from comgrasp_pin.simulation.scene import Scene
-    from comgrasp_pin.simulation.world import build_spec, save_world_xml
+    from comgrasp_pin.simulation.scene import Scene, save_world_xml
+    from comgrasp_pin.simulation.world import build_spec
 
     path = save_world_xml(tmp_path / "world.xml", "obj3", seed=4)
     saved = mujoco.MjModel.from_xml_path(str(path))

@@ -25,7 +25,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
 
 
 def _cmd_scene(args: argparse.Namespace) -> int:
-    from comgrasp_pin.simulation.world import save_world_xml
+    from comgrasp_pin.simulation.scene import save_world_xml
 
     path = save_world_xml(Path(args.out) / "world.xml", args.object, args.seed)
     print(f"wrote {path}: the workcell, the robot and {args.object} as one MJCF file")

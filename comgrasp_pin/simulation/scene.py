@@ -1,13 +1,16 @@
 """The world of one trial: where the rod lies, and the simulated world built for it.
 
 ``Scene`` is a trial's randomness (drawn from a seed), ``World`` the simulation, cameras and
-robot model built for it with an ``EpisodeConfig``. Ground truth (``World.truth``) is read
+robot model built for it with an ``EpisodeConfig``; ``save_world_xml`` writes a scene's world
+as one MJCF file (``comgrasp scene``). Ground truth (``World.truth``) is read
 only to score results, never to act.
 """
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -19,7 +22,7 @@ from comgrasp_pin.simulation.cameras import CameraRig
 from comgrasp_pin.simulation.depth_noise import DepthNoise
 from comgrasp_pin.simulation.objects import ObjectState, add_object, get_object, object_state
 from comgrasp_pin.simulation.sim import Simulation
-from comgrasp_pin.simulation.world import SIDE_CAMERA, TOP_CAMERA, build_model
+from comgrasp_pin.simulation.world import SIDE_CAMERA, TOP_CAMERA, build_model, build_spec
 from comgrasp_pin.workcell import PICK_AREA, Q_PARK
 
 SCENE_MARGIN = 0.09  # rods (heads up to 0.07 m across) lie this far inside the pick area (m)
@@ -130,3 +133,20 @@ class World:
 
     def close(self) -> None:
         self.rig.close()
+
+
+def save_world_xml(path: Path, obj: str = "obj2", seed: int = 0) -> Path:
+    """Write the assembled world (scene, robot, ``obj`` where the scene of ``seed`` puts it)
+    as one MJCF file at ``path``, for MuJoCo's own viewer; meshes are referenced where
+    example-robot-data installed them. Returns ``path``."""
+    scene = Scene.sample(obj, seed)
+    rod = get_object(obj).scaled(scene.length)
+    spec = build_spec(extras=[lambda s: add_object(s, rod, (scene.x, scene.y, scene.yaw),
+                                                   pos_real=scene.pos_real)])  # fmt: skip
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="Attaching a spec with an empty prefix")
+        spec.compile()
+        xml = spec.to_xml()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(xml)
+    return path

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Callable, Sequence
-from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -172,23 +171,3 @@ def _add_sensors_and_cameras(spec: mujoco.MjSpec, config: WorldConfig) -> None:
     spec.body("side_camera").add_camera(
         name=SIDE_CAMERA, quat=list(_QUAT_OPTICAL_MUJOCO_WXYZ), fovy=config.side_camera_fovy_deg
     )
-
-
-def save_world_xml(path: Path, obj: str = "obj2", seed: int = 0) -> Path:
-    """Write the assembled world (scene, robot, ``obj`` where the scene of ``seed`` puts it)
-    as one MJCF file at ``path``, for MuJoCo's own viewer; meshes are referenced where
-    example-robot-data installed them. Returns ``path``."""
-    from comgrasp_pin.simulation.objects import add_object, get_object
-    from comgrasp_pin.simulation.scene import Scene
-
-    scene = Scene.sample(obj, seed)
-    rod = get_object(obj).scaled(scene.length)
-    spec = build_spec(extras=[lambda s: add_object(s, rod, (scene.x, scene.y, scene.yaw),
-                                                   pos_real=scene.pos_real)])  # fmt: skip
-    with warnings.catch_warnings():
-        warnings.filterwarnings("ignore", message="Attaching a spec with an empty prefix")
-        spec.compile()
-        xml = spec.to_xml()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(xml)
-    return path
