@@ -157,3 +157,57 @@ def test_depth_without_multisampling_is_the_multisampled_depth_to_the_bit():
         multisampled._renderers.pop(True)
         multisampled.close()
         rig.close()
+
+
+def _prism_world(length: float, checker: tuple):
+    """A world of one hexagonal prism (a mesh of 12 vertices, ``length`` m along x) on a
+    textured floor (a 2 x 2 checker of colours ``checker``), seen from above by ``top``."""
+    import mujoco
+
+    spec = mujoco.MjSpec()
+    spec.add_texture(name="floor_tex", type=mujoco.mjtTexture.mjTEXTURE_2D,
+                     builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER, width=64, height=64,
+                     rgb1=list(checker[0]), rgb2=list(checker[1]))  # fmt: skip
+    floor = spec.add_material(name="floor_mat", texrepeat=[2.0, 2.0])
+    floor.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = "floor_tex"
+    spec.worldbody.add_geom(type=mujoco.mjtGeom.mjGEOM_PLANE, size=[1, 1, 0.1],
+                            material="floor_mat")  # fmt: skip
+    angles = np.arange(6) * np.pi / 3
+    vertices = [[s * length / 2, 0.02 * np.cos(a), 0.02 + 0.02 * np.sin(a)]
+                for s in (-1, 1) for a in angles]  # fmt: skip
+    spec.add_mesh(name="prism", uservert=np.ravel(vertices).tolist())
+    spec.worldbody.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname="prism",
+                            rgba=[0.8, 0.1, 0.1, 1])  # fmt: skip
+    spec.worldbody.add_light(pos=[0, 0, 2], dir=[0, 0, -1], diffuse=[0.8, 0.8, 0.8])
+    spec.worldbody.add_camera(name="top", pos=[0, 0, 0.6], fovy=60.0)
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    return model, data
+
+
+def test_a_renderer_is_not_reused_for_other_meshes_or_textures_of_the_same_size():
+    """Two worlds with as many mesh vertices, faces and texels, but another prism length and
+    another floor colour: the second world's rig must draw its own prism and floor (before,
+    the renderer made for the first was reused, and drew the first one's)."""
+    model_a, data_a = _prism_world(0.2, ((0.9, 0.9, 0.9), (0.1, 0.1, 0.1)))
+    model_b, data_b = _prism_world(0.4, ((0.1, 0.3, 0.9), (0.9, 0.8, 0.1)))
+    assert (model_a.nmeshvert, model_a.ntexdata) == (model_b.nmeshvert, model_b.ntexdata)
+    first = CameraRig(model_a, 160, 120)
+    first.rgb(data_a, "top")
+    first.depth(data_a, "top")
+    first.close()
+    second = CameraRig(model_b, 160, 120)
+    try:
+        depth, rgb = second.depth(data_b, "top"), second.rgb(data_b, "top")
+    finally:
+        second.close()
+    # The truth from the model: the prism's top (3.7 cm high) spans its length along x.
+    top = 0.6 - 0.02 * (1.0 + np.sin(np.pi / 3))  # the camera's height less the prism's
+    on_prism = depth[60] < 0.59  # the image row through the prism's axis; the floor at 0.6
+    seen_length = on_prism.sum() * top / second.intrinsics("top").fx
+    assert abs(seen_length - 0.4) < 0.02, seen_length
+    floor = rgb[5, 5].astype(int)  # a corner: the floor's checker, lit from above
+    colours = np.array([[0.1, 0.3, 0.9], [0.9, 0.8, 0.1]])
+    hue = floor / max(floor.max(), 1)
+    assert min(np.abs(hue - c / c.max()).max() for c in colours) < 0.2, floor

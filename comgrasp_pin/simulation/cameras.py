@@ -6,6 +6,8 @@ converted to the optical frame used by all perception code (x right, y down, z f
 
 from __future__ import annotations
 
+import hashlib
+
 import mujoco
 import numpy as np
 
@@ -21,7 +23,19 @@ _R_MJ_OPTICAL = np.diag([1.0, -1.0, -1.0])
 # Building one costs 0.2-0.3 s (uploading the robot's meshes to OpenGL), as much as a whole
 # accuracy trial's physics; the worlds of an experiment differ only in their rod (built from
 # primitives, not assets), so a process re-points a finished world's renderer at the next one.
+# A renderer keeps what its OpenGL context was made with (meshes, textures, height fields,
+# skins, the shadow map and the primitives' resolution): the key is a digest of their content,
+# not only their counts (two hexagonal rods of one vertex count but other lengths would be
+# drawn with the first one's mesh).
 _IDLE_RENDERERS: dict[tuple, list[mujoco.Renderer]] = {}
+
+# The MjModel arrays and visual settings that mujoco.Renderer uploads when it is made.
+_ASSET_ARRAYS = (
+    "mesh_vert", "mesh_normal", "mesh_face", "mesh_facenormal", "mesh_texcoord",
+    "mesh_facetexcoord", "mesh_graph", "tex_type", "tex_height", "tex_width", "tex_nchannel",
+    "tex_colorspace", "tex_data", "hfield_size", "hfield_nrow", "hfield_ncol", "hfield_data",
+    "skin_face", "skin_texcoord", "flex_elem", "flex_texcoord",
+)  # fmt: skip
 
 # Depth is drawn without multisampling: the depth a multisampled buffer resolves to is the
 # same to the bit (Mesa llvmpipe; tests/test_cameras.py), and reading it back is about half
@@ -29,20 +43,46 @@ _IDLE_RENDERERS: dict[tuple, list[mujoco.Renderer]] = {}
 DEPTH_SAMPLES = 0
 
 
+def assets_digest(model: mujoco.MjModel) -> str:
+    """A digest of what a renderer made for ``model`` keeps: its rendering assets' content
+    and the visual settings read when the OpenGL context is made (about 1 ms for the
+    robot's world)."""
+    digest = hashlib.blake2b(digest_size=16)
+    for name in _ASSET_ARRAYS:
+        array = getattr(model, name, None)
+        if array is not None:
+            digest.update(name.encode())
+            digest.update(np.ascontiguousarray(array).tobytes())
+    q, g = model.vis.quality, model.vis.global_
+    digest.update(np.array([q.shadowsize, q.numslices, q.numstacks, q.numquads, g.offwidth,
+                            g.offheight]).tobytes())  # fmt: skip
+    return digest.hexdigest()
+
+
 def _assets_key(
-    model: mujoco.MjModel, width: int, height: int, samples: int | None = None
+    model: mujoco.MjModel,
+    width: int,
+    height: int,
+    samples: int | None = None,
+    digest: str | None = None,
 ) -> tuple:
+    """The pool's key: image size, samples per pixel and ``assets_digest`` (given, or
+    computed)."""
     samples = int(model.vis.quality.offsamples) if samples is None else samples
-    return (width, height, samples, model.nmesh, model.nmeshvert, model.nmeshface, model.ntex,
-            model.ntexdata, model.nhfield, model.nskin, model.nflex)  # fmt: skip
+    return (width, height, samples, digest or assets_digest(model))
 
 
 def _take_renderer(
-    model: mujoco.MjModel, width: int, height: int, samples: int | None = None
+    model: mujoco.MjModel,
+    width: int,
+    height: int,
+    samples: int | None = None,
+    digest: str | None = None,
 ) -> mujoco.Renderer:
     """A renderer for ``model`` drawing with ``samples`` per pixel (None: the model's): an
-    idle one with the same assets, re-pointed at it (its OpenGL context stays), or a new one."""
-    idle = _IDLE_RENDERERS.get(_assets_key(model, width, height, samples))
+    idle one made for the same assets (``digest``: ``assets_digest(model)``, computed when
+    None), re-pointed at it (its OpenGL context stays), or a new one."""
+    idle = _IDLE_RENDERERS.get(_assets_key(model, width, height, samples, digest))
     if idle:
         renderer = idle.pop()
         renderer._model = model  # the attributes mujoco.Renderer renders the model from
@@ -64,8 +104,8 @@ class CameraRig:
 
     Up to two offscreen renderers per rig, made when first needed: depth without
     multisampling, colour and segmentation with the model's; handed back by ``close`` for
-    the next rig of a model with the same assets (tests/test_cameras.py checks that the
-    images are the same).
+    the next rig of a model with the same assets (``assets_digest``; tests/test_cameras.py
+    checks that the images are the same).
 
     Attributes:
         noise: the depth errors of each camera, by name (``DepthNoise``; none: the renders
@@ -89,11 +129,18 @@ class CameraRig:
         self.shadows = shadows
         self._renderers: dict[bool, mujoco.Renderer] = {}  # by depth (True) or not
         self._closed = False
+        self._digest: str | None = None  # assets_digest(model), when first needed
+
+    def _assets_digest(self) -> str:
+        if self._digest is None:
+            self._digest = assets_digest(self.model)
+        return self._digest
 
     def close(self) -> None:
         """Hand the renderers back for reuse; the rig must not render afterwards."""
         for renderer in self._renderers.values():
-            key = _assets_key(self.model, self.width, self.height, renderer.samples)
+            key = _assets_key(self.model, self.width, self.height, renderer.samples,
+                              self._assets_digest())  # fmt: skip
             _IDLE_RENDERERS.setdefault(key, []).append(renderer)
         self._renderers.clear()
         self._closed = True
@@ -104,7 +151,8 @@ class CameraRig:
             raise ComGraspError("the camera rig was closed: it renders no more")
         if depth not in self._renderers:
             samples = DEPTH_SAMPLES if depth else None
-            self._renderers[depth] = _take_renderer(self.model, self.width, self.height, samples)
+            self._renderers[depth] = _take_renderer(self.model, self.width, self.height, samples,
+                                                    self._assets_digest())  # fmt: skip
         return self._renderers[depth]
 
     def intrinsics(self, camera: str) -> PinholeCamera:
