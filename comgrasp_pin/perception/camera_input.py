@@ -11,6 +11,7 @@ perception's form (float depth, RGB, a ``PinholeCamera``) is handed back as it i
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import cast
 
 import numpy as np
 
@@ -53,7 +54,7 @@ def metric_depth(
                 "millimetres, as a RealSense D415/D435; 0.0001 for a D405); a float image is "
                 "taken as metres"
             )
-        return depth  # float metres, checked by the perception that takes it
+        return cast(np.ndarray, depth)  # float metres, checked by the perception that takes it
     scale = validate.number(depth_scale, "depth_scale (m per unit)", low=0.0, low_open=True)
     return validate.real_array(depth, name) * scale
 
@@ -71,7 +72,12 @@ def rgb_of(colour: Colour, color_order: str = "rgb") -> Colour:
     if colour is None or color_order == "rgb":
         return colour
     if callable(colour):
-        return lambda: rgb_of(colour(), "bgr")
+        fetch = colour
+
+        def in_rgb() -> np.ndarray:
+            return cast(np.ndarray, rgb_of(fetch(), "bgr"))
+
+        return in_rgb
     image = np.asarray(colour)
     if image.ndim != 3 or image.shape[2] != 3:
         raise InvalidInputError(f"a BGR colour image must be (H, W, 3), got {image.shape}")

@@ -168,7 +168,10 @@ def _depth_scale(given: float | None, in_info: float | None, info_path: Path) ->
         )
     if given is not None and in_info is not None and not np.isclose(given, in_info, rtol=1e-9):
         raise CameraFileError(f"depth_scale {given} given, but {info_path} says {in_info}")
-    return given if given is not None else in_info
+    if given is not None:
+        return given
+    assert in_info is not None  # refused above when both are None
+    return in_info
 
 
 def _as_rgb(image: np.ndarray, color_order: str) -> np.ndarray:

@@ -187,7 +187,8 @@ def observe_held_rod(
     centre_hint = validate.optional_number(centre_hint, "centre_hint (m)")
     handle_radius = validate.optional_number(handle_radius, "handle_radius (m)", low=0.0,
                                              low_open=True)  # fmt: skip
-    rgb, depth, camera = camera_frame(rgb, depth, camera, depth_scale, color_order)
+    colour, depth, camera = camera_frame(rgb, depth, camera, depth_scale, color_order)
+    rgb = colour() if callable(colour) else colour
     depth, noise, cleaned = clean_side_depth(check_images(rgb, depth, camera))
     excluded = robot_volume(exclude_capsules)
     p, candidate = held_candidates(depth, camera, T_ee_cam, T_world_ee, table_z, excluded)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -83,7 +84,8 @@ class _Objective(ca.Callback):
     def __init__(self, grid: Grid):
         ca.Callback.__init__(self)
         self.grid, self.nx = grid, int(np.prod(grid.shape))
-        opts = {"enable_fd": True, "fd_method": "forward", "fd_options": {"h": FD_STEP}}
+        opts: dict[str, Any] = {"enable_fd": True, "fd_method": "forward",
+                                "fd_options": {"h": FD_STEP}}  # fmt: skip
         self.construct("excitation_objective", opts)
 
     def get_n_in(self):
@@ -118,8 +120,8 @@ def _solver(grid: Grid, lim: Limits, max_iter: int):
                           np.repeat(lim.acceleration, k)])  # fmt: skip
     f = _Objective(grid)
     x = ca.MX.sym("x", f.nx)
-    nlp = {"x": x, "f": f(x), "g": ca.mtimes(ca.DM(G), x)}
-    opts = {"ipopt.max_iter": max_iter, "ipopt.print_level": 0, "print_time": False,
+    nlp: dict[str, Any] = {"x": x, "f": f(x), "g": ca.mtimes(ca.DM(G), x)}
+    opts: dict[str, Any] = {"ipopt.max_iter": max_iter, "ipopt.print_level": 0, "print_time": False,
             "ipopt.sb": "yes", "ipopt.hessian_approximation": "limited-memory",
             "ipopt.tol": 1e-6}  # fmt: skip
     return ca.nlpsol("excitation", "ipopt", nlp, opts), lbg, ubg, f
