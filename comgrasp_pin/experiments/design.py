@@ -171,8 +171,10 @@ def load_calibration(path: str | None = None) -> dict:
     path = path or os.environ.get(CALIBRATION_ENV) or None
     file = Path(path) if path is not None else sim_path(CALIBRATION_FILE)
     if not file.exists():
-        raise MissingAssetError(f"no tilt calibration at {file}; run python -m "
-                                "comgrasp_pin.experiments.design --out " + str(file))  # fmt: skip
+        raise MissingAssetError(
+            f"no tilt calibration at {file}; run python -m "
+            f"comgrasp_pin.experiments.tilt_calibration --out {file}"
+        )
     return json.loads(file.read_text())
 
 
@@ -243,11 +245,3 @@ def side_and_lever(
     else:
         key = min(scores, key=scores.get)
     return SIDES[key], levers[key]
-
-
-if __name__ == "__main__":  # python -m comgrasp_pin.experiments.design: the calibration
-    import sys
-
-    from comgrasp_pin.experiments.tilt_calibration import main
-
-    sys.exit(main())

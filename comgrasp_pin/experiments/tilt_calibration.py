@@ -258,7 +258,7 @@ def calibrate(
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m comgrasp_pin.experiments.design``: measure and write the calibration."""
+    """``python -m comgrasp_pin.experiments.tilt_calibration``: measure and write it."""
     from comgrasp_pin.simulation.objects import OBJECTS
 
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
