@@ -165,7 +165,7 @@ def test_a_tiny_sweep_gives_the_experiments_row_at_the_default_point(tmp_path):
     assert np.isfinite(table[0][1]["accuracy"][0]) and "| 15 |" in markdown_table(table, one)
     from comgrasp_pin.experiments.report.sweep_plot import sweep_figures
 
-    assert len(sweep_figures(table, one, tmp_path)) == 3
+    assert len(sweep_figures(table, one, tmp_path, MEASURES)) == 3
 
 
 def test_a_line_figure_of_points_at_0_and_100_percent(tmp_path):
@@ -178,6 +178,6 @@ def test_a_line_figure_of_points_at_0_and_100_percent(tmp_path):
     rows = [{**_row(0.99, 0.05, 0.0, 0.01), "trial.approach_deg": v} for v in (0.0, 3.0) * 11]
     table = summarise(rows, params, "accuracy")
     assert all(m["success"][0] == 100.0 and m["coverage"][0] == 0.0 for _, m in table)
-    written = sweep_figures(table, params, tmp_path)
+    written = sweep_figures(table, params, tmp_path, MEASURES)
     assert [p.name for p in written] == [f"sweep_{m}.png" for m in MEASURES]
     assert all(p.stat().st_size > 5000 for p in written)

@@ -170,7 +170,7 @@ def run_sweep(opts: SweepOptions) -> list[dict]:
                       r.backend, r.ray_address, keys=(*paths, *KEY_COLUMNS),
                       trial_timeout_s=r.trial_timeout_s)  # fmt: skip
     table = summarise(rows, params, opts.experiment)
-    sweep_figures(table, params, r.out)
+    sweep_figures(table, params, r.out, MEASURES)
     (r.out / "sweep_table.md").write_text(markdown_table(table, params) + "\n")
     return rows
 

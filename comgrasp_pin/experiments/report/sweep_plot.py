@@ -50,16 +50,15 @@ def _heatmap(fig, ax, table, paths: list[str], measure: str) -> None:
     ax.set_ylabel(paths[0])
 
 
-def sweep_figures(table, params, out: Path) -> list[Path]:
-    """``sweep_<measure>.png`` in ``out`` for each measure; none for more than two params."""
-    from comgrasp_pin.experiments.sweep import MEASURES
-
+def sweep_figures(table, params, out: Path, measures: dict[str, str]) -> list[Path]:
+    """``sweep_<measure>.png`` in ``out`` for each of ``measures`` (name: label, the sweep's
+    ``MEASURES``); none for more than two params."""
     paths = [path for path, _ in params]
     if len(paths) > 2:
         return []
     plt = _pyplot()
     written = []
-    for measure, label in MEASURES.items():
+    for measure, label in measures.items():
         fig, ax = plt.subplots(figsize=(6, 4.5))
         if len(paths) == 1:
             _line(ax, table, paths[0], measure)
