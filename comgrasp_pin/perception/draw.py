@@ -10,8 +10,8 @@ import cv2
 import numpy as np
 
 from comgrasp_pin.geometry import tilt_from_level_deg
+from comgrasp_pin.perception.rod_detection import RodDetection
 from comgrasp_pin.perception.side_view import SideView
-from comgrasp_pin.perception.top_down import RodDetection
 
 OUTLINE, RECT, AXIS, POINT = (0, 255, 255), (255, 255, 0), (255, 80, 0), (255, 0, 255)
 ESTIMATE, TRUTH = (0, 140, 255), (0, 220, 0)

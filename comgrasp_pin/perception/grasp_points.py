@@ -1,21 +1,18 @@
 """Where the jaws can grasp a rod seen from above, and the whole of a rod seen in part.
 
 Positions are along the rod from its centre (m), towards the detection's +yaw; pure
-functions of a ``top_down.RodDetection`` (no images).
+functions of a ``RodDetection`` (no images).
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from comgrasp_pin.errors import ObjectCutByBorderError, ObjectNotFoundError
 from comgrasp_pin.geometry import GraspPose
-
-if TYPE_CHECKING:
-    from comgrasp_pin.perception.top_down import RodDetection
+from comgrasp_pin.perception.rod_detection import RodDetection
 
 
 def nearest_graspable(

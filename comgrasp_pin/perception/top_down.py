@@ -1,7 +1,8 @@
 """The rod on the table from the top-down RGBD camera: a grasp pose at its geometric centre.
 
-Segmentation uses depth first: the rod is what stands above the table plane inside the pick
-area, whatever its colour and whatever shadows fall on it. A real camera's depth (noise,
+The result is a ``RodDetection`` (``rod_detection``). Segmentation uses depth first: the rod
+is what stands above the table plane inside the pick area, whatever its colour and whatever
+shadows fall on it. A real camera's depth (noise,
 holes, flying pixels: ``view.cleaned``) cannot tell a rod 1 cm thick from the table at its
 ends; there, given the colour image, the rod is what differs from the table in colour
 (``table_view.differs_in_colour``) and the depth measures its height and its points. As in
@@ -14,7 +15,7 @@ millimetres towards the image edges).
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import cv2
 import numpy as np
@@ -38,6 +39,7 @@ from comgrasp_pin.perception.grasp_points import (  # noqa: F401 (their home bef
     nearest_graspable,
     nearest_on_handle,
 )
+from comgrasp_pin.perception.rod_detection import RodDetection
 from comgrasp_pin.perception.rod_shape import check_ends_seen, check_one_object, check_one_rod
 from comgrasp_pin.perception.table_view import (
     TableView,
@@ -62,41 +64,6 @@ ERODE_PX = 1  # (2 holds flying pixels better, 35 % dropouts worse)
 KEEP_EXTENT = 0.8  # ... unless the eroded rod is shorter than this share (a thin rod's handle gone)
 END_SNR = 8.0  # a rod lower than this many noise stds (after the median) may lose its ends
 EDGE_BAND = 0.01  # the table's height and noise are measured this far inside its edge (m)
-
-
-@dataclass(frozen=True)
-class RodDetection:
-    """A rod lying on the table, seen from above. World frame, SI units.
-
-    Attributes:
-        grasp: top-down grasp at the rod's geometric centre: (x, y) of the centre, z of the
-            handle's axis (half the handle's height above the table), yaw of the rod.
-        length: extent along the rod (m).
-        widths: (K, 2) the rod's width across its axis (m) in 1 cm slices, as rows
-            (position along the rod from its centre towards +yaw, width).
-        table_z: height of the table plane (m).
-        handle_height: the rod's height at its centre above the table (m).
-        mask: (H, W) bool pixels of the rod.
-        rect: OpenCV rotated rectangle ((u, v), (w, h), angle_deg) of the mask.
-        axis_px: (2, 2) pixel ends of the axis.
-        overhang: how far the rod reaches beyond the pick area (m), 0 when it lies within
-            it: a rod laid back at the table's edge is seen whole as long as the camera
-            sees it, and this says that it reaches over the edge.
-        cut_end: 0 for a rod seen whole; +1 (-1) when its end towards +yaw (-yaw) runs
-            out of the image: then ``grasp`` and ``length`` are the part seen's, and the
-            detection comes only with an ObjectCutByBorderError (its ``seen``).
-    """
-
-    grasp: GraspPose
-    length: float
-    widths: np.ndarray
-    table_z: float
-    handle_height: float
-    mask: np.ndarray
-    rect: tuple
-    axis_px: np.ndarray
-    overhang: float = 0.0
-    cut_end: int = 0
 
 
 def detect_rod_top_down(
