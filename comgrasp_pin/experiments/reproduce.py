@@ -28,8 +28,9 @@ from comgrasp_pin.experiments.trials import (
     regrasp_trial,
     settings_summary,
 )
+from comgrasp_pin.simulation.objects import OBJECTS
 
-ALL_OBJECTS = tuple(__import__("comgrasp_pin.simulation.objects", fromlist=["OBJECTS"]).OBJECTS)
+ALL_OBJECTS = tuple(OBJECTS)
 PAPER_TRIALS = 50
 QUICK_TRIALS = 3
 
