@@ -1,4 +1,12 @@
-"""Payload mass and CoM from static joint torques (Pinocchio, NumPy, CasADi; no simulator)."""
+"""Payload mass and CoM from static joint torques (Pinocchio, NumPy, CasADi; no simulator).
+
+The regressor, the ``ComEstimate`` type, ``estimate_com`` and ``estimate_com_batch``, the
+IPOPT problem, wrist pose planning, the CoM on the rod's axis, the whole payload's inertial
+fit.
+
+Layer: imports only ``robot`` and the shared modules (``geometry``, ``validate``,
+``errors``), so it runs on any serial arm's torques, simulated or real.
+"""
 
 from comgrasp_pin.estimation.batch import ComEstimateBatch, estimate_com_batch
 from comgrasp_pin.estimation.estimate import ComEstimate

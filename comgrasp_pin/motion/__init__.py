@@ -1,1 +1,5 @@
+"""The arm's motion: top-down IK, quintic trajectories, Fourier excitation paths, clearance
+against the workcell.
 
+Layer: imports only ``robot``, ``geometry``, ``workcell`` and ``errors``; no simulator.
+"""

@@ -8,7 +8,8 @@
     plan = plan_measurement_poses(robot, k=3)  # limits, no self-collision, D-optimal
     motion = plan_excitation(robot, duration_s=20)  # the inertia too: a motion to record
 
-No MuJoCo here: this runs on a real robot's logs.
+Layer: beside ``procedures``; imports ``estimation``, ``motion.fourier``, ``robot`` and the
+shared modules, never ``simulation`` (no MuJoCo here): it runs on a real robot's logs.
 """
 
 from comgrasp_pin.robot_io.estimate import LogEstimate, estimate_from_log, result_dict, summary

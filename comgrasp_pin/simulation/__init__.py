@@ -1,4 +1,12 @@
-"""The MuJoCo world that plays reality: the only part of comgrasp_pin that imports MuJoCo."""
+"""The MuJoCo world that plays reality: the only part of comgrasp_pin that imports MuJoCo.
+
+World building, the running simulation, servo, torque sensors, cameras and their depth
+errors, objects, skills, the eyes (render -> perception), the simulated ``Cell``, scoring
+against the truth, recorder, viewer, episode.
+
+Layer: above ``procedures`` (the simulated ``Cell`` runs them) and ``robot_io`` (its
+``JointLog``), and everything under them; only ``experiments`` and ``cli`` import it.
+"""
 
 import os
 

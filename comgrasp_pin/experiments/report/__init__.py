@@ -9,6 +9,9 @@ six that are in the rows); the figures draw extra objects in panels or places of
 Columns that newer runs add are used when present and reported as "not recorded" when
 absent: ``pos_std_m`` (the stated standard deviation of ``pos_esti_m``), ``extra_pose``
 (the planner measured at one more pose), ``estimator``.
+
+Layer: inside ``experiments``, under the modules that run trials: it reads rows, ``paper``,
+``stats`` and ``simulation.objects``, and imports no runner, sweep or reproduce.
 """
 
 from comgrasp_pin.experiments import paper
