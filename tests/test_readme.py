@@ -133,7 +133,7 @@ def test_the_notebooks_extra_and_the_license_are_stated():
     assert 'pip install ".[notebooks]" && jupyter lab notebooks/' in text
     pyproject = tomllib.loads((README.parent / "pyproject.toml").read_text())
     assert "notebooks" in pyproject["project"]["optional-dependencies"]
-    assert pyproject["project"]["license"]["text"] == "BSD-3-Clause"
+    assert pyproject["project"]["license"] == "BSD-3-Clause"  # SPDX (PEP 639)
     assert (README.parent / "LICENSE").read_text().startswith("BSD 3-Clause License")
     assert "BSD 3-Clause" in text.split("## License", 1)[1]
     assert "https://arxiv.org/abs/2205.01048" in text.split("## Citation", 1)[1]
