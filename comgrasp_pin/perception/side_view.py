@@ -31,11 +31,11 @@ from comgrasp_pin.perception._points import (
 )
 from comgrasp_pin.perception.camera_input import camera_frame
 from comgrasp_pin.perception.flat_face import face_points, looks_flat, strip_line
+from comgrasp_pin.perception.held_pieces import OFF_AXIS_MARGIN, check_no_gap, rod_line
 from comgrasp_pin.perception.held_region import held_candidates, robot_volume
 from comgrasp_pin.perception.rod_axis import (
     MAX_REFINE_SHIFT,
     MAX_REFINE_TURN_DEG,
-    centre_line,
     refine_axis,
 )
 from comgrasp_pin.perception.rod_ends import centre_along, end_profile
@@ -173,6 +173,8 @@ def observe_held_rod(
     Raises:
         ObjectNotFoundError: no rod in the image.
         ObjectCutByBorderError: the rod runs out of the image.
+        AmbiguousObjectError: something in line with the rod, apart from it, between the
+            jaws (``held_pieces``).
         InvalidDepthError: the depth image is unusable.
         UntrustedImageError: a noisy image of a handle no cylinder fits.
         InvalidInputError: a transform that is not a (4, 4) rigid one, or a length, radius,
@@ -195,9 +197,10 @@ def observe_held_rod(
     if not candidate.any():
         raise ObjectNotFoundError("nothing is held between the jaws (side camera)")
     mask = blobs(candidate, MIN_PIXELS, "side-camera image")
+    # Tilt lives in the ee x-z plane; the jaws fix the axis at y = 0. Not clutter in the slab.
+    mask, (x_axis, offset_xz, handle, tilt_std) = rod_line(mask, p, handle_radius,
+                                                           MAX_AXIS_FROM_TCP)  # fmt: skip
     points = p[mask]
-    # Tilt lives in the ee x-z plane; the jaws fix the axis at y = 0.
-    x_axis, offset_xz, handle, tilt_std = centre_line(points[:, [0, 2]])
     _check_held(points, x_axis, offset_xz)  # before judging the image: is anything held?
     x_axis, offset_xz, tilt_std = _axis_in_jaws(
         points, handle, (x_axis, offset_xz, tilt_std), handle_radius, noise,
@@ -208,10 +211,12 @@ def observe_held_rod(
     offset = np.array([offset_xz[0], 0.0, offset_xz[1]])
     rho = np.linalg.norm(points - offset - np.outer(along, x_axis), axis=1)
     radius = handle_radius if handle_radius else float(np.median(rho[handle]))
+    T_cam_ee = np.linalg.inv(T_ee_cam)
+    near = rho <= radius + OFF_AXIS_MARGIN  # not a stray far across the slab
+    check_no_gap(mask, along, near, (x_axis, offset), depth, camera, T_cam_ee, excluded)
     (lo, lo_sharp), (hi, hi_sharp) = (
         end_profile(along, rho, e, s, radius) for e, s in ((lo, -1.0), (hi, 1.0))
     )
-    T_cam_ee = np.linalg.inv(T_ee_cam)
     mid = centre_along(
         x_axis, (lo, hi), (lo_sharp, hi_sharp), along, offset, depth, p, candidate, mask,
         camera, T_cam_ee, rod_length, centre_hint, excluded,
