@@ -16,6 +16,14 @@ deg, and a box in line beyond its end, 4 cm away, was taken for its end (the gra
   ``drop_off_axis``; when that line misses the jaws (a second rod 10 cm below pulled it
   away, and the view said nothing was held), once more from the blobs that come within
   NEAR_JAWS of the TCP (the held rod's pieces on either side of the near finger do).
+- ``check_width``: in a clean image, a handle whose median slice is wider across the axis
+  (in the x-z plane) than the jaws' gap times WIDTH_RATIO plus WIDTH_MARGIN is two things
+  (a second rod touching it below: 1.5 deg and 7.5 mm off), refused. (A noisy image's
+  flying pixels widen a 1 cm stick to 2 cm; there no cylinder fits two rods, and the view
+  is refused as untrusted.)
+- ``check_length``: a rod whose points near its axis reach farther than its known length
+  (the top view's) by LENGTH_SLACK goes on into something else: a second rod touching its
+  end in line (taken for its end: the grasp position 20 cm off). Refused.
 - ``check_no_gap``: along the axis, the blobs seen may be apart only where something
   nearer the camera hides the rod (the near finger, the arm) or the robot's volume holds
   it. Where the camera sees past the axis over more than GAP_MIN, the rod is not there:
@@ -41,6 +49,8 @@ GAP_STEP = 0.002  # m between the gap's samples
 PAST_MARGIN = 0.005  # m: depth this far beyond the axis point is the camera seeing past it
 PAST_SHARE = 0.6  # a gap is real when this share of its samples sees past the axis
 NEAR_JAWS = 0.06  # m from the TCP: the held rod's pieces beside the near finger come nearer
+WIDTH_RATIO, WIDTH_MARGIN = 1.4, 0.004  # a handle wider than the jaws' gap by this is two
+LENGTH_SLACK = 0.10  # m beyond the known length (the project's own calls: up to 6.5 cm)
 
 
 def rod_line(
@@ -153,4 +163,55 @@ def _judge_gap(lo, hi, axis, depth, camera, T_cam_ee, excluded) -> None:
             f"two objects in line between the jaws: the side camera sees past the rod's "
             f"axis over {100 * (hi - lo):.0f} cm between {100 * lo:.0f} and {100 * hi:.0f} "
             "cm along it; the rod cannot be told from what lies beyond its end"
+        )
+
+
+def check_width(
+    points: np.ndarray,
+    along: np.ndarray,
+    handle: np.ndarray,
+    axis: tuple[np.ndarray, np.ndarray],
+    half_gap: float | None,
+) -> None:
+    """Refuse a handle wider than the jaws hold.
+
+    ``points`` (N, 3) the rod's points (ee frame, m), ``along`` (N,) their positions along
+    the axis, ``handle`` (N,) bool its handle's; ``axis``: (direction (3,), point (3,));
+    ``half_gap``: the jaws' half opening (m) or None (then nothing is judged).
+
+    Raises:
+        AmbiguousObjectError: a handle wider than the jaws' gap (two things).
+    """
+    if half_gap is None or handle.sum() < 3:
+        return
+    x_axis, offset = axis
+    normal = np.array([-x_axis[2], 0.0, x_axis[0]])  # across the axis in the x-z plane
+    across = (points[handle] - offset) @ normal
+    bins = np.floor(along[handle] / 0.01).astype(int)
+    widths = [np.ptp(np.percentile(across[bins == b], [2, 98])) for b in np.unique(bins)
+              if (bins == b).sum() >= 5]  # fmt: skip
+    width = float(np.median(widths)) if widths else 0.0
+    if width > 2 * half_gap * WIDTH_RATIO + WIDTH_MARGIN:
+        raise AmbiguousObjectError(
+            f"the held handle is {1e3 * width:.0f} mm wide across its axis, the jaws hold "
+            f"{2e3 * half_gap:.0f} mm: two things between the jaws (a second rod against it)"
+        )
+
+
+def check_length(along_near: np.ndarray, rod_length: float | None) -> None:
+    """Refuse a rod whose points near its axis reach too far for its length.
+
+    ``along_near`` (N,): the positions along the axis of the rod's points near it (m);
+    ``rod_length``: its known length (m; the top view's), or None (nothing is judged).
+
+    Raises:
+        AmbiguousObjectError: something in line with the rod, touching it.
+    """
+    if rod_length is None or len(along_near) < 2:
+        return
+    lo, hi = np.percentile(along_near, [0.1, 99.9])
+    if hi - lo > rod_length + LENGTH_SLACK:
+        raise AmbiguousObjectError(
+            f"the held rod is seen {100 * (hi - lo):.0f} cm long along its axis, "
+            f"{100 * rod_length:.0f} cm known: something in line with it, touching it"
         )

@@ -31,7 +31,13 @@ from comgrasp_pin.perception._points import (
 )
 from comgrasp_pin.perception.camera_input import camera_frame
 from comgrasp_pin.perception.flat_face import face_points, looks_flat, strip_line
-from comgrasp_pin.perception.held_pieces import OFF_AXIS_MARGIN, check_no_gap, rod_line
+from comgrasp_pin.perception.held_pieces import (
+    OFF_AXIS_MARGIN,
+    check_length,
+    check_no_gap,
+    check_width,
+    rod_line,
+)
 from comgrasp_pin.perception.held_region import held_candidates, robot_volume
 from comgrasp_pin.perception.rod_axis import (
     MAX_REFINE_SHIFT,
@@ -214,6 +220,9 @@ def observe_held_rod(
     T_cam_ee = np.linalg.inv(T_ee_cam)
     near = rho <= radius + OFF_AXIS_MARGIN  # not a stray far across the slab
     check_no_gap(mask, along, near, (x_axis, offset), depth, camera, T_cam_ee, excluded)
+    check_length(along[near], rod_length)
+    if not cleaned:  # a noisy image of two rods fits no cylinder (UntrustedImageError)
+        check_width(points, along, handle, (x_axis, offset), handle_radius)
     (lo, lo_sharp), (hi, hi_sharp) = (
         end_profile(along, rho, e, s, radius) for e, s in ((lo, -1.0), (hi, 1.0))
     )

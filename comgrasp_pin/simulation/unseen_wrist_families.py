@@ -34,6 +34,11 @@ BLACK, WHITE, RED = (0.08, 0.08, 0.08, 1.0), (0.92, 0.92, 0.9, 1.0), (0.75, 0.15
 PLAIN = HeldRod("cylinder", 0.3, 0.012, np.radians(15.0), 0.03)  # a 2.4 cm brown stick
 
 
+def _on_plain_axis(along: float) -> tuple:
+    """(3,) the point ``along`` (m) from the TCP on PLAIN's axis, in the ee frame."""
+    return tuple(np.round(along * PLAIN.T_ee_obj()[:3, 0], 6))
+
+
 def _shapes() -> list[WristScene]:
     rods = {
         "cylinder_1.2cm": HeldRod("cylinder", 0.25, 0.006, np.radians(10), 0.02, rgba=RED),
@@ -47,6 +52,10 @@ def _shapes() -> list[WristScene]:
         ),  # fmt: skip
         "hex_2.4cm": HeldRod("hex", 0.3, 0.012, np.radians(-25), 0.03, rgba=BLACK),
         "hex_3cm": HeldRod("hex", 0.35, 0.015, np.radians(30), -0.04, rgba=WHITE),
+        "cylinder_0.8cm": HeldRod("cylinder", 0.25, 0.004, np.radians(-5), 0.0, rgba=BLACK),
+        "cylinder_8cm": HeldRod("cylinder", 0.4, 0.04, np.radians(15), 0.03, rgba=WHITE),
+        "hammer_green": HeldRod("obj2", 0.32, tilt=np.radians(20), offset=0.05, rgba=GREEN),
+        "torch_white": HeldRod("obj4", 0.3, tilt=np.radians(-15), offset=0.04, rgba=WHITE),
     }
     return [WristScene("rod_shapes", name, rod, should_measure=True) for name, rod in rods.items()]
 
@@ -96,6 +105,8 @@ def _clutter() -> list[WristScene]:
         "behind_in_slab": ((0.02, 0.06, 0.0), False),
         "at_the_end": ((0.2, 0.0, -0.04), False),
         "below": ((0.0, 0.0, 0.12), True),
+        "below_near": ((0.05, 0.0, 0.08), False),
+        "beside_in_slab": ((-0.12, 0.05, -0.1), False),
     }
     for name, (centre, measure) in boxes.items():
         box = Thing("box", (centre,), (0.04, 0.02, 0.03))
@@ -117,6 +128,9 @@ def _clutter() -> list[WristScene]:
         "crossing_in_slab": (np.pi / 2, (0.02, 0.05, 0.0), False),
         "crossing_30deg_in_slab": (np.radians(-30), (0.0, 0.05, 0.0), False),
         "parallel_below": (0.0, (0.03, 0.0, 0.1), False),
+        "parallel_below_touching": (np.radians(15), (0.0, 0.0, 0.024), False),
+        "in_line_2cm_apart": (np.radians(15), _on_plain_axis(0.27), False),
+        "in_line_touching": (np.radians(15), _on_plain_axis(0.247), False),  # fmt: skip
     }
     for name, (tilt, centre, measure) in seconds.items():
         other = HeldRod("cylinder", 0.25, 0.01, tilt, rgba=GREEN, centre_ee=centre)
