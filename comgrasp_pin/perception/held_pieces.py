@@ -91,11 +91,12 @@ def drop_off_axis(
     ``points`` (H, W, 3) ee-frame points of the pixels (m); the axis: direction
     ``x_axis_xz`` (2,) through ``offset_xz`` (2,) in the ee x-z plane, at y = 0.
     """
-    count, labels = cv2.connectedComponents(mask.astype(np.uint8), connectivity=8)
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(mask.astype(np.uint8),
+                                                                connectivity=8)  # fmt: skip
     if count <= 2:
         return mask
-    sizes = np.bincount(labels.ravel(), minlength=count)
-    large = np.flatnonzero(sizes[1:] >= OFF_AXIS_MIN_SHARE * mask.sum()) + 1
+    sizes = stats[:, cv2.CC_STAT_AREA]
+    large = np.flatnonzero(sizes[1:] >= OFF_AXIS_MIN_SHARE * sizes[1:].sum()) + 1
     if len(large) < 2:
         return mask
     reach = (half_gap or WIDEST_HALF_GAP) + OFF_AXIS_MARGIN
