@@ -182,3 +182,20 @@ def test_cli_writes_the_inertia_and_exports_carry_it(robot, tmp_path, capsys):
     assert main(args[:6] + ["--csv", str(still), "--out", str(out2)]) == 2
     assert "barely moves" in capsys.readouterr().err
     assert not out2.exists()
+
+
+def test_a_line_of_mass_converges_at_the_spread_bound():
+    """A rod of no thickness: its mass has no spread about its axis, the optimum lies on the
+    consistency boundary (d at minus infinity); the fit converges within LOG_SPREAD_MIN,
+    recovers the rod, and its covariance stays finite."""
+    from comgrasp_pin.estimation.inertial_fit import LOG_SPREAD_MIN
+
+    rng = np.random.default_rng(3)
+    rod = pin.Inertia(0.6, np.array([0.06, 0.0, 0.0]), np.diag([0.0, 4.5e-3, 4.5e-3]))
+    A = rng.standard_normal((400, 10)) * np.array([10, 1, 1, 1, 30, 30, 30, 30, 30, 30])
+    b = A @ rod.toDynamicParameters()  # exact: the optimum has no spread at all
+    fit = fit_inertial(A, np.zeros((400, 0)), b, np.full(400, 1e4))
+    assert fit.return_status in ("Solve_Succeeded", "Solved_To_Acceptable_Level")
+    assert fit.theta[1:4].min() >= LOG_SPREAD_MIN - 1e-9
+    np.testing.assert_allclose(fit.pi, rod.toDynamicParameters(), atol=2e-4)
+    assert np.all(np.isfinite(fit.cov))

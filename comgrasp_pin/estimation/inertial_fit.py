@@ -35,6 +35,11 @@ from comgrasp_pin.estimation.ipopt import IPOPT_OPTIONS
 N_PARAMS = 10
 EIG_FLOOR = 1e-9
 """Smallest eigenvalue (kg m^2) a start's pseudo-inertia is lifted to."""
+LOG_SPREAD_MIN = -12.0
+"""Lower bound of d1, d2, d3: a spread of the mass of e^-12 (6e-6) times a metre along an
+axis, whose second moment (about 1e-11 kg m^2) no torque sees. A payload thin along an axis
+(a rod about its own axis) has its optimum there; unbounded, IPOPT walks d towards minus
+infinity and never converges."""
 
 
 @dataclass(frozen=True)
@@ -142,7 +147,9 @@ def fit_inertial(
     theta, status, iters, H = _solve(G_eff, g_eff, theta_of_pi(pi_ls), prior)
     pi = pi_of_theta(theta)
     D = _jacobian(theta)
-    cov = D @ np.linalg.inv(H) @ D.T
+    # a spread at its bound leaves H (nearly) flat there: the pseudo-inverse gives that
+    # direction, which no torque sees, no variance instead of an overflow
+    cov = D @ np.linalg.pinv(H, rcond=1e-12, hermitian=True) @ D.T
     x = Gxx_inv @ (g[n:] - G[n:, :n] @ pi)
     x_std = np.sqrt(np.clip(np.diag(Gxx_inv), 0, None)) if A_x.shape[1] else np.zeros(0)
     return InertialFit(pi, 0.5 * (cov + cov.T), x, x_std, theta, pi_ls, status, iters)
@@ -158,12 +165,15 @@ def _solve(G, g, theta0, prior):
         s_th = ca.vertcat(pi[0], th[7], th[8], th[9])  # (m, c) = (e^(2 alpha), t)
         dev = s_th - ca.DM(np.asarray(mean, float))
         f += 0.5 * ca.mtimes([dev.T, ca.DM(np.linalg.inv(cov)), dev])
+    lbx = np.full(N_PARAMS, -np.inf)
+    lbx[1:4] = LOG_SPREAD_MIN
+    theta0 = np.maximum(theta0, lbx + 0.5)  # a start strictly inside the bound
     f0 = float(ca.Function("f0", [th], [f])(theta0))
     f_scaled = f / max(abs(f0), 1.0)  # IPOPT's tolerances on an O(1) objective
     opts = dict(IPOPT_OPTIONS)
     opts["ipopt.max_iter"] = 500
     solver = ca.nlpsol("inertial_fit", "ipopt", {"x": th, "f": f_scaled}, opts)
-    sol = solver(x0=theta0)
+    sol = solver(x0=theta0, lbx=lbx)
     stats = solver.stats()
     status = str(stats["return_status"])
     if status not in ("Solve_Succeeded", "Solved_To_Acceptable_Level"):
