@@ -46,6 +46,13 @@ LIMIT_MARGIN = 1e-3
 """A joint closer than this to its limit (rad or m) is at its stop."""
 MAX_ABOVE_CUTOFF = 0.05
 """Largest share (rms) of a joint's motion above the cutoff before a log is too jerky."""
+MOTION_SPEED = 0.05
+"""A joint faster than this (rad/s, filtered) is moving: where a log's motion starts and ends
+(``find_motion``). Well above a still arm's filtered velocity noise (UR, Panda: < 0.005)."""
+MOTION_MARGIN_S = 0.25
+"""Seconds kept before the first and after the last moving sample (``find_motion``): the
+motion's slow start and end below ``MOTION_SPEED``. Short, so that an empty run recorded with
+little still time around the same motion still covers the loaded one's found motion."""
 
 
 @dataclass(frozen=True)
@@ -76,12 +83,60 @@ def motion_samples(
     log: JointLog,
     window: tuple[float, float] | None = None,
     cutoff_hz: float = CUTOFF_HZ,
+    crop: bool = False,
 ) -> MotionSamples:
-    """``filtered_signals`` thinned to nearly independent samples (the edges dropped)."""
+    """``filtered_signals`` thinned to nearly independent samples (the edges dropped).
+
+    Args:
+        robot: the arm, as ``filtered_signals``.
+        log: the motion's readings.
+        window: (t0, t1) s from the log's first message, or None for the whole log.
+        cutoff_hz: low-pass cutoff (Hz).
+        crop: where ``window`` is None, keep only the motion (``find_motion``: the first to
+            the last moving sample, ``MOTION_MARGIN_S`` around): the still parts before and
+            after it are left out, so that an empty run of the same motion with shorter still
+            parts still covers the samples (``alignment.align_empty``). A given ``window`` is
+            kept as it is.
+
+    Raises:
+        MotionLogError: as ``filtered_signals``; with ``crop``, a motion shorter than
+            ``MIN_DURATION_S``.
+    """
     full = filtered_signals(robot, log, window, cutoff_hz)
     stride = max(1, int(round(full.rate_hz / (SAMPLES_PER_CUTOFF * cutoff_hz))))
-    inner = np.flatnonzero((full.t >= full.t[0] + EDGE_S) & (full.t <= full.t[-1] - EDGE_S))
-    return _take(full, inner[::stride])
+    keep = (full.t >= full.t[0] + EDGE_S) & (full.t <= full.t[-1] - EDGE_S)
+    if crop and window is None:
+        t0, t1 = find_motion(full)
+        if t1 - t0 < MIN_DURATION_S:
+            raise MotionLogError(
+                f"{log.source or 'the log'}'s motion lasts {t1 - t0:.2f} s ({t0:.2f}-{t1:.2f} "
+                f"s); at least {MIN_DURATION_S} s are needed: play an excitation motion "
+                "(comgrasp plan-motion), or give --window around the motion"
+            )
+        keep &= (full.t >= t0) & (full.t <= t1)
+    return _take(full, np.flatnonzero(keep)[::stride])
+
+
+def find_motion(full: MotionSamples, speed: float = MOTION_SPEED) -> tuple[float, float]:
+    """(t0, t1) s: the first and last time any joint moves faster than ``speed`` (rad/s).
+
+    ``full`` is a log's filtered signals (``filtered_signals``, velocities filtered). The span
+    is widened by ``MOTION_MARGIN_S`` at each end and clipped to the log's.
+
+    Raises:
+        MotionLogError: no joint reaches ``speed``.
+    """
+    fastest = np.max(np.abs(full.qd), axis=1)
+    moving = np.flatnonzero(fastest > speed)
+    if not moving.size:
+        raise MotionLogError(
+            f"nothing moves in {full.t[0]:.2f}-{full.t[-1]:.2f} s: the fastest joint reaches "
+            f"{float(fastest.max()):.3f} rad/s, a motion is found above {speed} rad/s; give "
+            "the log of an excitation motion (comgrasp plan-motion) or a lower speed"
+        )
+    t0 = max(float(full.t[moving[0]]) - MOTION_MARGIN_S, float(full.t[0]))
+    t1 = min(float(full.t[moving[-1]]) + MOTION_MARGIN_S, float(full.t[-1]))
+    return t0, t1
 
 
 def filtered_signals(
