@@ -1,0 +1,176 @@
+"""What a motion's payload estimate does not know: every error source, propagated.
+
+The payload's parameters pi come from a weighted linear system over the motion's samples
+(``dynamic``): ``b = A_pi pi + A_x x + e`` with k samples of n joints, rows sample-major.
+Three sources of error enter pi's covariance, each measured or given, never a factor:
+
+1. **The data and what the model leaves out** (noise, friction not modelled, the filter,
+   the arm model's structural error): a delete-a-block jackknife (Kuensch 1989). The motion
+   is cut into contiguous blocks of ``BLOCK_S`` seconds; the fit without each block gives
+   pi_b, and (B - 1)/B sum (pi_b - mean)^2 is pi's variance. Blocks a few seconds long hold
+   errors that are correlated over seconds (friction over a stroke, a mismodelled link
+   over a swing), which a white-noise Laplace or a few-lag Newey-West estimate miss. Its
+   ratio to the white-noise variance widens each parameter's Laplace std (floored at 1:
+   the sensor's noise is always there).
+2. **The drive gains** (a log of motor currents): the efforts are K_j I_j. A relative error
+   delta_j of gain j scales joint j's efforts, and moves b's rows of joint j by delta_j
+   times the part of b that scales with it (``b_gain``). d pi / d delta from the linear
+   map, then J cov(delta) J^T.
+3. **The arm's own model** (``--arm-model``): its parameters' covariance, mapped through
+   d pi / d beta = -P Phi.
+
+All three are linearised through the unconstrained weighted least squares (``sensitivity``),
+the consistent fit's own map where no constraint binds.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+BLOCK_S = 2.5
+"""Length (s) of the jackknife's blocks: ten times the filter's correlation time at its
+4 Hz cutoff, long enough to hold a slow model error within one block."""
+MIN_BLOCKS, MAX_BLOCKS = 8, 20
+"""The jackknife's block count: at least 8 (a variance from fewer is too noisy), at most 20."""
+FOLDS = 5
+"""Contiguous folds of the held-out validation: each fifth predicted from the other four."""
+
+
+@dataclass(frozen=True)
+class Validation:
+    """The payload model's prediction on parts of the motion it was not fitted on.
+
+    Attributes:
+        rms_Nm: (n,) per joint, the held-out residual's RMS (N m).
+        explained: (n,) per joint, 1 - sum(residual^2) / sum(measured^2) on held-out
+            samples, the measured payload torque taken without its offsets: the fraction
+            of the torque difference the payload explains.
+        explained_total: the same over all joints.
+        t: (k,) the samples' times (s).
+        measured: (k, n) the payload's torque as measured, offsets removed (N m).
+        predicted: (k, n) its held-out prediction (N m).
+        folds: number of contiguous folds.
+    """
+
+    rms_Nm: np.ndarray
+    explained: np.ndarray
+    explained_total: float
+    t: np.ndarray
+    measured: np.ndarray
+    predicted: np.ndarray
+    folds: int
+
+    def as_dict(self) -> dict:
+        """RESULT.json's ``validation``."""
+        return {
+            "method": f"{self.folds} contiguous folds, each predicted from the others",
+            "rms_Nm": self.rms_Nm.tolist(),
+            "explained": self.explained.tolist(),
+            "explained_total": self.explained_total,
+        }
+
+
+def contiguous_blocks(k: int, count: int) -> list[np.ndarray]:
+    """``count`` contiguous index blocks of 0..k-1, of nearly equal size."""
+    return [b for b in np.array_split(np.arange(k), count) if b.size]
+
+
+def block_count(duration_s: float) -> int:
+    """The jackknife's number of blocks for a motion of ``duration_s`` seconds."""
+    return int(np.clip(round(duration_s / BLOCK_S), MIN_BLOCKS, MAX_BLOCKS))
+
+
+def _normal(A: np.ndarray, b: np.ndarray, w: np.ndarray, k: int, n: int):
+    """Per-sample normal equations (k, p, p) and (k, p) of the weighted system."""
+    Aw = (A * w[:, None]).reshape(k, n, -1)
+    bw = (b * w).reshape(k, n)
+    return np.einsum("kna,knb->kab", Aw, Aw), np.einsum("kna,kn->ka", Aw, bw)
+
+
+def jackknife_cov(
+    A,
+    b,
+    w,
+    k: int,
+    n: int,
+    blocks: list[np.ndarray],
+    p: int = 10,
+    prior: tuple[np.ndarray, np.ndarray] | None = None,
+):
+    """(p, p) delete-a-block jackknife covariance of the first p unknowns of the LS fit.
+
+    ``prior``: (precision (m,), mean (m,)) of a diagonal Gaussian prior on all m unknowns.
+    """
+    Gs, gs = _normal(A, b, w, k, n)
+    G, g = Gs.sum(axis=0), gs.sum(axis=0)
+    if prior is not None:
+        G, g = G + np.diag(prior[0]), g + prior[0] * prior[1]
+    est = np.array([np.linalg.lstsq(G - Gs[i].sum(0), g - gs[i].sum(0), rcond=None)[0][:p]
+                    for i in blocks])  # fmt: skip
+    dev = est - est.mean(axis=0)
+    B = len(blocks)
+    return (B - 1) / B * dev.T @ dev
+
+
+def white_cov(A, b, w, p: int = 10) -> np.ndarray:
+    """(p, p) the LS fit's covariance with white, independent rows (residual-scaled)."""
+    Aw = A * w[:, None]
+    beta, *_ = np.linalg.lstsq(Aw, b * w, rcond=None)
+    r = Aw @ beta - b * w
+    s2 = float(r @ r) / max(len(b) - A.shape[1], 1)
+    return s2 * np.linalg.pinv(Aw.T @ Aw)[:p, :p]
+
+
+def sensitivity(A: np.ndarray, w: np.ndarray, p: int = 10) -> np.ndarray:
+    """(p, r) d pi / d b of the weighted least squares (its first p unknowns)."""
+    Aw = A * w[:, None]
+    return np.linalg.pinv(Aw)[:p] * w[None, :]
+
+
+def gains_cov(P: np.ndarray, b_gain: np.ndarray, rel_cov: np.ndarray) -> np.ndarray:
+    """(p, p) pi's covariance from the gains' relative covariance (n, n).
+
+    ``b_gain`` (k, n): the part of the measured system that scales with each joint's gain.
+    """
+    k, n = b_gain.shape
+    J = np.column_stack([P[:, j::n] @ b_gain[:, j] for j in range(n)])
+    return J @ rel_cov @ J.T
+
+
+def gains_jacobian(P: np.ndarray, b_gain: np.ndarray) -> np.ndarray:
+    """(p, n) d pi / d delta_j, delta_j the relative error of joint j's gain."""
+    n = b_gain.shape[1]
+    return np.column_stack([P[:, j::n] @ b_gain[:, j] for j in range(n)])
+
+
+def held_out(A_pi, A_x, b, w, t, k: int, n: int, folds: int = FOLDS) -> Validation:
+    """Fit on all folds but one, predict that one: every sample predicted out of sample."""
+    A = np.column_stack([A_pi, A_x])
+    Gs, gs = _normal(A, b, w, k, n)
+    G, g = Gs.sum(axis=0), gs.sum(axis=0)
+    measured, predicted = np.empty((k, n)), np.empty((k, n))
+    for idx in contiguous_blocks(k, folds):
+        beta = np.linalg.lstsq(G - Gs[idx].sum(0), g - gs[idx].sum(0), rcond=None)[0]
+        rows = (idx[:, None] * n + np.arange(n)).ravel()
+        offsets = A_x[rows] @ beta[A_pi.shape[1] :]
+        measured[idx] = (b[rows] - offsets).reshape(-1, n)
+        predicted[idx] = (A_pi[rows] @ beta[: A_pi.shape[1]]).reshape(-1, n)
+    res = measured - predicted
+    rms = np.sqrt(np.mean(res**2, axis=0))
+    scale = np.maximum(np.sum(measured**2, axis=0), 1e-300)
+    explained = 1 - np.sum(res**2, axis=0) / scale
+    total = 1 - float(np.sum(res**2) / max(np.sum(measured**2), 1e-300))
+    return Validation(rms, explained, total, np.asarray(t), measured, predicted, folds)
+
+
+def split_halves(A, b, w, k: int, n: int, p: int = 10):
+    """Per half of the motion: (pi (p,), white cov (p, p), rows mask); unconstrained LS."""
+    out = []
+    for idx in contiguous_blocks(k, 2):
+        rows = (idx[:, None] * n + np.arange(n)).ravel()
+        Aw = A[rows] * w[rows, None]
+        beta, *_ = np.linalg.lstsq(Aw, b[rows] * w[rows], rcond=None)
+        out.append((beta[:p], white_cov(A[rows], b[rows], w[rows], p), rows))
+    return out
