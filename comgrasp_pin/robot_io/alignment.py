@@ -222,13 +222,18 @@ def _covering(S: MotionSamples, full: MotionSamples, shift: float, gap: float, w
             f"the end of the loaded motion: its last {missing_end:.2f} s (loaded "
             f"{t1 - missing_end:.2f}-{t1:.2f} s) fall after {where} ends"
         )
+    if "window" in where:
+        fix = f"Widen the empty run's window ({full.t[0]:.2f}-{full.t[-1]:.2f} s now)"
+    else:
+        fix = (
+            "Record the empty run a little longer before and after the motion (a second or "
+            "two still at each end)"
+        )
     raise MotionLogError(
         f"the empty run misses {' and '.join(parts)}, at the best alignment (empty time = "
-        f"loaded time {shift:+.2f} s, positions {gap:.4f} rad apart rms). Record the empty "
-        "run a little longer before and after the motion (a second or two still at each "
-        f"end), or give the loaded run --window {t0 + missing_start:.2f}:"
-        f"{t1 - missing_end:.2f} to use only the part both runs cover"
-        + (", or widen the empty run's window" if "window" in where else "")
+        f"loaded time {shift:+.2f} s, positions {gap:.4f} rad apart rms). {fix}, or give the "
+        f"loaded run --window {t0 + missing_start:.2f}:{t1 - missing_end:.2f} to use only "
+        "the part both runs cover"
     )
 
 
