@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from comgrasp_pin.cli.dynamic import add_dynamic_args, run_dynamic
+from comgrasp_pin.cli.gains_args import add_gains_args, gains_from_args
 from comgrasp_pin.cli.motion import add_plan_motion, run_plan_motion
 from comgrasp_pin.errors import InvalidInputError, OutputError
 
@@ -58,11 +59,12 @@ def _log_and_windows(args: argparse.Namespace, robot):
     if not args.auto:
         before = rio.parse_windows(args.before, "--before")
         after = rio.parse_windows(args.after, "--after")
+    gains = gains_from_args(args, robot)  # None: the log's efforts are torques
     if args.bag is not None:  # with windows, only the messages near them are decoded
         wanted = None if args.auto else before + after
-        log = rio.read_bag(args.bag, robot.joint_names, args.topic, wanted)
+        log = rio.read_bag(args.bag, robot.joint_names, args.topic, wanted, gains)
     else:
-        log = rio.read_csv(args.csv, robot.joint_names)
+        log = rio.read_csv(args.csv, robot.joint_names, gains)
     if args.auto:
         before, after = rio.pair_by_configuration(log, args.grasp_time, args.max_speed)
     return log, before, after
@@ -170,7 +172,11 @@ def add_subcommands(sub: argparse._SubParsersAction) -> None:
     _add_robot_args(est)
     est.add_argument("--bag", default=None, help="ROS 2 bag (folder, .db3 or .mcap)")
     est.add_argument("--topic", default=DEFAULT_TOPIC, help="sensor_msgs/msg/JointState topic")
-    est.add_argument("--csv", default=None, help="CSV with time, J.position, J.effort columns")
+    est.add_argument("--csv", default=None,
+                     help="CSV with time, J.position, J.effort columns, or a UR recording as "
+                     "RTDE's record.py or ur_rtde writes it (timestamp, actual_q_i, "
+                     "actual_current_i...)")  # fmt: skip
+    add_gains_args(est)
     est.add_argument("--before", default=None, help="empty-arm windows T0:T1[,T0:T1...] (s)")
     est.add_argument("--after", default=None, help="holding windows, paired with --before")
     est.add_argument("--auto", action="store_true",

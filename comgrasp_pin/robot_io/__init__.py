@@ -2,6 +2,8 @@
 
     robot = load_robot(urdf, ee_frame, gravity_base=(0, 0, -9.81))
     log = read_log("run.mcap" or "run.csv", robot.joint_names)
+    gains = parse_gains("10,10.7,8.46,9.0,9.48,10.1", robot.nq, gain_std=0.1)  # N m per A
+    ur_log = read_log("record.csv", robot.joint_names, gains=gains)  # a UR's motor currents
     result = estimate_from_log(robot, log, before=[(1, 2)], after=[(8, 9)])
     payload = payload_in_flange(robot, result.estimate, "tool0", inertia="point")
     write_urscript(payload, "payload.script")
@@ -26,11 +28,13 @@ from comgrasp_pin.robot_io.exports import (
     write_ros2,
     write_urscript,
 )
+from comgrasp_pin.robot_io.gains import Gains, gains_json, parse_gains
 from comgrasp_pin.robot_io.logs import JointLog, read_bag, read_csv, read_log
 from comgrasp_pin.robot_io.mount import load_robot
 from comgrasp_pin.robot_io.payload import Payload, T_flange_ee, payload_in_flange
 from comgrasp_pin.robot_io.planning import PosePlan, plan_measurement_poses
 from comgrasp_pin.robot_io.record import write_bag, write_csv
+from comgrasp_pin.robot_io.rtde import read_rtde
 from comgrasp_pin.robot_io.windows import (
     StaticReading,
     find_static_windows,
@@ -42,6 +46,7 @@ from comgrasp_pin.robot_io.windows import (
 __all__ = [
     "ExcitationMotion",
     "ExcitationSettings",
+    "Gains",
     "JointLog",
     "LogEstimate",
     "Payload",
@@ -51,8 +56,10 @@ __all__ = [
     "estimate_from_log",
     "find_static_windows",
     "franka_load",
+    "gains_json",
     "load_robot",
     "pair_by_configuration",
+    "parse_gains",
     "parse_windows",
     "payload_in_flange",
     "plan_excitation",
@@ -60,6 +67,7 @@ __all__ = [
     "read_bag",
     "read_csv",
     "read_log",
+    "read_rtde",
     "read_window",
     "result_dict",
     "ros2_yaml",

@@ -9,6 +9,14 @@
 - CSV: a header row with ``time`` (s) and, per joint J, ``J.position`` (rad or m) and
   ``J.effort`` (N m or N), and ``J.velocity`` (rad/s or m/s) where the log has it for
   every joint; extra columns ignored.
+- A Universal Robots recording as it comes (the RTDE client's ``record.py``, space-separated,
+  or ur_rtde's ``startFileRecording``, comma-separated), recognised by its header
+  (``timestamp``, ``actual_q_0``...): read by ``rtde.read_rtde``.
+
+Drive gains (``Gains``, N m per A) turn motor currents into joint torques: a UR recording's
+``actual_current_i``, or a bag's or CSV's efforts where the driver logged currents there
+(``ur_robot_driver`` publishes ``actual_current`` as JointState effort unless told
+otherwise). The JointLog keeps them (``current_gains``).
 
 Times are seconds from the log's first message.
 """
@@ -16,50 +24,18 @@ Times are seconds from the log's first message.
 from __future__ import annotations
 
 import csv
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from comgrasp_pin import file_checks, validate
+from comgrasp_pin import file_checks
 from comgrasp_pin.errors import LogError
+from comgrasp_pin.robot_io import rtde
+from comgrasp_pin.robot_io.gains import Gains, apply_gains
+from comgrasp_pin.robot_io.joint_log import JointLog, assemble_log
 
 JOINT_STATE = "sensor_msgs/msg/JointState"
 DEFAULT_TOPIC = "/joint_states"
-
-
-@dataclass(frozen=True)
-class JointLog:
-    """Joint readings over time for the arm's joints, in the robot model's joint order.
-
-    Attributes:
-        time: (N,) seconds from the log's first message, non-decreasing.
-        joint_names: the n joint names, in the order of the columns.
-        position: (N, n) joint positions (rad for revolute, m for prismatic joints).
-        effort: (N, n) joint efforts (N m for revolute, N for prismatic joints).
-        source: the file the log was read from.
-        velocity: (N, n) joint velocities (rad/s or m/s) as the robot reported them, or
-            None where the log has none (a motion's estimate then differentiates positions).
-    """
-
-    time: np.ndarray
-    joint_names: tuple[str, ...]
-    position: np.ndarray
-    effort: np.ndarray
-    source: str = ""
-    velocity: np.ndarray | None = None
-
-    def __post_init__(self) -> None:
-        """Refuse complex, boolean, string and object arrays (validate.real_array)."""
-        for name in ("time", "position", "effort", "velocity"):
-            value = getattr(self, name)
-            if value is not None:
-                object.__setattr__(self, name, validate.real_array(value, f"JointLog.{name}"))
-
-    @property
-    def duration(self) -> float:
-        """Seconds from the first to the last sample."""
-        return float(self.time[-1] - self.time[0]) if len(self.time) else 0.0
 
 
 def read_log(
@@ -67,12 +43,17 @@ def read_log(
     joint_names: list[str] | tuple[str, ...],
     topic: str = DEFAULT_TOPIC,
     windows: list[tuple[float, float]] | None = None,
+    gains: Gains | None = None,
 ) -> JointLog:
-    """A bag (a folder, or a ``.db3`` / ``.mcap`` file) or a ``.csv`` file, by its name."""
+    """A bag (a folder, or a ``.db3`` / ``.mcap`` file) or a ``.csv`` file, by its name.
+
+    ``gains``: the drive gains that turn the log's motor currents into joint torques (see
+    ``read_csv`` and ``read_bag``), or None where it logs torques.
+    """
     path = Path(path)
     if path.suffix.lower() == ".csv":
-        return read_csv(path, joint_names)
-    return read_bag(path, joint_names, topic, windows)
+        return read_csv(path, joint_names, gains)
+    return read_bag(path, joint_names, topic, windows, gains)
 
 
 def read_bag(
@@ -80,12 +61,15 @@ def read_bag(
     joint_names: list[str] | tuple[str, ...],
     topic: str = DEFAULT_TOPIC,
     windows: list[tuple[float, float]] | None = None,
+    gains: Gains | None = None,
 ) -> JointLog:
     """Read the ``joint_names`` columns of a ROS 2 bag's JointState topic.
 
     ``windows`` ((t0, t1), s from the first message): read only the messages within a second
     of them (and the last, so the log's length stays known); deserializing every message of
     a long bag costs about 20 us each. None reads every message.
+    ``gains``: the messages' efforts are motor currents (A), the torques are gains times
+    them (``gains.apply_gains``); None: the efforts are the joint torques.
 
     Raises:
         LogError: the bag cannot be opened or fails ``file_checks.bag_folder`` (a FIFO, a
@@ -110,7 +94,8 @@ def read_bag(
         raise
     except Exception as exc:  # rosbags raises its own error types for broken bags
         raise LogError(f"cannot read the bag {bag}: {type(exc).__name__}: {exc}") from None
-    return _assemble(rows, names, str(bag))
+    log = _assemble(rows, names, str(bag))
+    return log if gains is None else apply_gains(log, gains)
 
 
 def _joint_rows(
@@ -179,19 +164,27 @@ def _row(reader, conn, t_bag, raw, names, cache, seen):
     return stamp, int(t_bag), msg.position[idx], msg.effort[idx], velocity
 
 
-def read_csv(path: str | Path, joint_names: list[str] | tuple[str, ...]) -> JointLog:
+def read_csv(
+    path: str | Path, joint_names: list[str] | tuple[str, ...], gains: Gains | None = None
+) -> JointLog:
     """Read a wide CSV: ``time`` and ``J.position``, ``J.effort`` per joint J.
 
-    ``J.velocity`` is read too where every joint has it.
+    ``J.velocity`` is read too where every joint has it. A Universal Robots recording
+    (``rtde.is_rtde_header``: ``timestamp`` and ``actual_q_0`` in its first line, comma- or
+    space-separated) is read by ``rtde.read_rtde`` instead. ``gains``: the drive gains
+    (N m per A) that turn motor currents into joint torques: a UR recording's
+    ``actual_current_i``, or here the ``J.effort`` columns where they hold currents (A).
 
     Raises:
         LogError: the file is missing, not a regular file (a FIFO, a device), larger than
             ``file_checks.MAX_CSV_BYTES``, not UTF-8; a column is missing (named), or a
-            value is not a number.
+            value is not a number; see ``rtde.read_rtde`` for a UR recording.
     """
     path = Path(path)
     line = file_checks.first_line(path, "CSV log", file_checks.MAX_CSV_BYTES,
                                   file_checks.MAX_CSV_HEADER_BYTES, LogError)  # fmt: skip
+    if rtde.is_rtde_header(line):
+        return rtde.read_rtde(path, joint_names, gains)
     try:
         header = [h.strip() for h in next(csv.reader([line]), [])]
     except csv.Error as exc:  # a field past csv's size limit (128 kB)
@@ -202,7 +195,8 @@ def read_csv(path: str | Path, joint_names: list[str] | tuple[str, ...]) -> Join
     if missing:
         raise LogError(
             f"CSV {path} lacks the columns {missing}; it needs 'time' and, per arm joint J of "
-            f"the URDF ({list(names)}), 'J.position' and 'J.effort'"
+            f"the URDF ({list(names)}), 'J.position' and 'J.effort' (or, a UR recording, "
+            "'timestamp' and 'actual_q_0'... as RTDE's record.py and ur_rtde write them)"
         )
     velocity = [f"{n}.velocity" for n in names]
     if all(v in header for v in velocity):
@@ -220,30 +214,25 @@ def read_csv(path: str | Path, joint_names: list[str] | tuple[str, ...]) -> Join
         (r[0], r[1 : 1 + n], r[1 + n : 1 + 2 * n], r[1 + 2 * n :] if has_velocity else None)
         for r in data
     ]
-    return _assemble(rows, names, str(path))
+    log = _assemble(rows, names, str(path))
+    return log if gains is None else apply_gains(log, gains)
 
 
 def _assemble(rows, names: tuple[str, ...], source: str) -> JointLog:
-    """The JointLog of (t, position, effort, velocity or None) rows.
+    """The JointLog of (t, position, effort, velocity or None) rows (``assemble_log``).
 
-    Time from the first sample, sorted; velocities only where every row has them.
+    Velocities only where every row has them.
     """
     if len(rows) < 2:
         raise LogError(f"{source} has {len(rows)} usable sample(s); a log needs at least two")
-    t = np.array([r[0] for r in rows], dtype=float)
-    position = np.array([r[1] for r in rows], dtype=float)
-    effort = np.array([r[2] for r in rows], dtype=float)
     velocity = None
     if all(r[3] is not None for r in rows):
         velocity = np.array([r[3] for r in rows], dtype=float)
-    order = np.argsort(t, kind="stable")
-    t, position, effort = t[order], position[order], effort[order]
-    if not (np.all(np.isfinite(position)) and np.all(np.isfinite(effort))):
-        raise LogError(f"{source} has NaN or inf joint positions or efforts")
-    if velocity is not None:
-        velocity = velocity[order]
-        if not np.all(np.isfinite(velocity)):
-            raise LogError(f"{source} has NaN or inf joint velocities")
-    for a in (t, position, effort) + (() if velocity is None else (velocity,)):
-        a.flags.writeable = False
-    return JointLog(t - t[0], names, position, effort, source, velocity)
+    return assemble_log(
+        np.array([r[0] for r in rows], dtype=float),
+        np.array([r[1] for r in rows], dtype=float),
+        np.array([r[2] for r in rows], dtype=float),
+        velocity,
+        names,
+        source,
+    )
