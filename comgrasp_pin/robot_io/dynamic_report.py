@@ -1,11 +1,12 @@
-"""A motion's payload estimate as RESULT.json (DESIGN.md 4c) and as a few lines for a person."""
+"""A motion's payload estimate as RESULT.json (DESIGN.md 4c, 4d) and as a few lines for a person."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from comgrasp_pin.estimation.payload_regressor import PARAMETER_NAMES
-from comgrasp_pin.robot_io.dynamic import DynamicEstimate
+from comgrasp_pin.robot_io.dynamic import EMPTY_RUN, NOMINAL, DynamicEstimate
+from comgrasp_pin.robot_io.verdict import Z95
 
 
 def dynamic_result_dict(est: DynamicEstimate, frame: str) -> dict:
@@ -19,7 +20,16 @@ def dynamic_result_dict(est: DynamicEstimate, frame: str) -> dict:
         "unobservable": None,
         "n_poses": None,
         "residual_rms_Nm": est.residual_rms.tolist(),
-        "std": {"mass_kg": float(std[0]), "com_m": std[1:].tolist()},
+        "std": {"mass_kg": float(std[0]), "com_m": std[1:].tolist(),
+                "covers": "noise and the model's error (block jackknife), the drive gains, "
+                "the arm model", "mass_kg_by_source": est.std_parts},
+        "interval95_mass_kg": [est.mass - Z95 * float(std[0]), est.mass + Z95 * float(std[0])],
+        "verdict": est.verdict,
+        "reasons": list(est.reasons),
+        "validation": est.validation.as_dict(),
+        "halves_mass_kg": list(est.halves_mass),
+        "alignment": est.alignment,
+        "gains": est.gains_source,
         "inertia_kgm2": est.inertia_com_ee.tolist(),
         "inertia_std_kgm2": est.inertia_std.tolist(),
         "inertia_about": "the CoM, axes of frame",
@@ -52,15 +62,16 @@ def dynamic_summary(est: DynamicEstimate, frame: str) -> str:
     # std of each principal moment: the inertia's covariance projected on u u^T
     moment_std = [float(np.sqrt(max(np.kron(u, u) @ est.inertia_cov @ np.kron(u, u), 0)))
                   for u in axes.T]  # fmt: skip
-    arm = (
-        "the empty-arm run subtracted"
-        if est.arm_model == "empty run"
-        else "the URDF's model stands for the arm (no empty-arm run), friction identified"
-    )
+    arm = {
+        EMPTY_RUN: "the empty-arm run subtracted",
+        NOMINAL: "the URDF's NOMINAL model stands for the arm (last resort), friction identified",
+    }.get(est.arm_model, "the arm's identified model (identify-arm) stands for the arm")
     lines = [
         f"payload from a {est.duration_s:.1f} s motion ({est.n_samples} samples after a "
         f"{est.cutoff_hz:g} Hz zero-phase filter; velocities from {est.velocity_from}); {arm}",
-        f"  mass  {est.mass:.4f} +- {std[0]:.4f} kg",
+        f"  mass  {est.mass:.4f} +- {std[0]:.4f} kg (std; 95 %: {est.mass - Z95 * std[0]:.3f} "
+        f"to {est.mass + Z95 * std[0]:.3f} kg)",
+        "        std by source: " + ", ".join(f"{k} {v:.4f}" for k, v in est.std_parts.items()),
         f"  CoM in {frame}:  x {c[0]:8.2f} +- {1e3 * std[1]:.2f} mm",
         f"                 y {c[1]:8.2f} +- {1e3 * std[2]:.2f} mm",
         f"                 z {c[2]:8.2f} +- {1e3 * std[3]:.2f} mm",
@@ -71,5 +82,17 @@ def dynamic_summary(est: DynamicEstimate, frame: str) -> str:
     lines += [
         f"  condition number of the logged motion {est.condition_number:.1f} (scaled regressor)",
         f"  residual RMS per joint {np.array2string(est.residual_rms, precision=3)} N m",
+        f"  held out ({est.validation.folds} folds): RMS per joint "
+        f"{np.array2string(est.validation.rms_Nm, precision=3)} N m, "
+        f"{100 * est.validation.explained_total:.1f} % of the torque difference explained",
+        f"  the motion's halves alone: {est.halves_mass[0]:.4f} and {est.halves_mass[1]:.4f} kg",
     ]
+    if est.alignment is not None:
+        a = est.alignment
+        lines.append(f"  empty run aligned: its time = loaded time {a['shift_s']:+.3f} s, "
+                     f"positions {1e3 * a['rms_gap_rad']:.2f} mrad apart (rms)")  # fmt: skip
+    if est.gains_source is not None:
+        lines.append(f"  motor currents turned into torques with gains: {est.gains_source}")
+    lines.append(f"VERDICT: {est.verdict}")
+    lines += [f"  - {r}" for r in est.reasons]
     return "\n".join(lines)
