@@ -224,7 +224,7 @@ def gains_json(
     values: np.ndarray | Sequence[float],
     cov: np.ndarray | Sequence[Sequence[float]],
     joint_names: Sequence[str] | None,
-    **extra,
+    **extra: object,
 ) -> dict:
     """The calibrate-gains JSON (a dict for ``json.dump``) that ``parse_gains`` reads back.
 
