@@ -22,7 +22,7 @@ import argparse
 import sys
 
 from comgrasp_pin import __version__
-from comgrasp_pin.cli import demo, experiments, robot, sweep, world
+from comgrasp_pin.cli import arm, demo, experiments, robot, sweep, world
 from comgrasp_pin.errors import ComGraspError
 
 __all__ = ["build_parser", "main"]
@@ -42,6 +42,7 @@ def build_parser() -> argparse.ArgumentParser:
     world.add_scene(sub)
     sweep.add_subcommand(sub)
     robot.add_subcommands(sub)  # estimate, plan-poses, plan-motion: the real-arm path
+    arm.add_arm_subcommands(sub)  # identify-arm, calibrate-gains: an arm's own model, once
     return parser
 
 

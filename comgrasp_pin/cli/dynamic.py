@@ -35,6 +35,12 @@ def add_dynamic_args(est: argparse.ArgumentParser) -> None:
     g.add_argument("--empty-window", default=None, help="T0:T1 of the empty-arm log (s)")
     g.add_argument("--cutoff", type=float, default=CUTOFF_HZ,
                    help="zero-phase low-pass cutoff for positions and efforts (Hz)")  # fmt: skip
+    g.add_argument("--arm-model", default=None,
+                   help="ARM.json of comgrasp identify-arm: the arm's own identified dynamics "
+                   "stand for it, and the loaded run may be of any motion")  # fmt: skip
+    g.add_argument("--plot", default=None,
+                   help="PNG: per joint, the payload's measured torque against its held-out "
+                   "prediction, and the verdict")  # fmt: skip
     g.add_argument("--prior", default=None,
                    help="a static estimate's RESULT.json (same ee frame): its mass and CoM "
                    "enter as a Gaussian prior")  # fmt: skip
@@ -50,12 +56,22 @@ def run_dynamic(args: argparse.Namespace, robot, write_json) -> int:
     if args.before or args.after or args.auto:
         raise InvalidInputError("--dynamic uses the whole motion (or --window): leave out "
                                 "--before, --after and --auto")  # fmt: skip
-    log = _one_log(args.bag, args.csv, "--bag", "--csv", robot, args.topic, required=True)
-    empty = _one_log(args.empty_bag, args.empty_csv, "--empty-bag", "--empty-csv", robot,
-                     args.topic, required=False)  # fmt: skip
+    from comgrasp_pin.cli.gains_args import gains_from_args
+    from comgrasp_pin.robot_io.arm_model import load_arm_model
+    from comgrasp_pin.robot_io.dynamic_plot import plot_validation
+
+    gains = gains_from_args(args, robot)
+    if args.arm_model is not None and (args.empty_bag or args.empty_csv):
+        raise InvalidInputError("give an empty-arm run (--empty-csv/--empty-bag) or "
+                                "--arm-model, not both")  # fmt: skip
+    arm = None if args.arm_model is None else load_arm_model(args.arm_model)
+    log = one_log(args.bag, args.csv, "--bag", "--csv", robot, args.topic, gains, required=True)
+    empty = one_log(args.empty_bag, args.empty_csv, "--empty-bag", "--empty-csv", robot,
+                    args.topic, gains, required=False)  # fmt: skip
     est = estimate_payload_dynamic(
         robot, log, empty, _window(args.window, "--window"),
         _window(args.empty_window, "--empty-window"), args.cutoff, _prior(args.prior),
+        arm, None if gains is None else gains.cov, None if gains is None else gains.source,
     )  # fmt: skip
     exports = ((args.export_ur, rio.write_urscript), (args.export_franka, rio.write_franka),
                (args.export_ros2, rio.write_ros2))  # fmt: skip
@@ -68,11 +84,14 @@ def run_dynamic(args: argparse.Namespace, robot, write_json) -> int:
         for path, write in exports:
             if path:
                 print(f"wrote {write(payload, path)}")
+    if args.plot:
+        print(f"wrote {plot_validation(est, robot.joint_names, args.plot)}")
     print(f"wrote {args.out}")
     return 0
 
 
-def _one_log(bag, csv, bag_opt, csv_opt, robot, topic, required: bool):
+def one_log(bag, csv, bag_opt, csv_opt, robot, topic, gains=None, required: bool = True):
+    """The log of ``--bag`` or ``--csv`` (one of them), read with ``gains``; None if neither."""
     from comgrasp_pin import robot_io as rio
 
     if bag is not None and csv is not None:
@@ -82,8 +101,8 @@ def _one_log(bag, csv, bag_opt, csv_opt, robot, topic, required: bool):
             raise InvalidInputError(f"give the motion's log: {bag_opt} PATH or {csv_opt} PATH")
         return None
     if bag is not None:
-        return rio.read_bag(bag, robot.joint_names, topic)
-    return rio.read_csv(csv, robot.joint_names)
+        return rio.read_bag(bag, robot.joint_names, topic, None, gains)
+    return rio.read_csv(csv, robot.joint_names, gains)
 
 
 def _window(text: str | None, option: str):

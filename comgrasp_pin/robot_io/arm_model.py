@@ -193,9 +193,12 @@ def check_matches(model: ArmModel, robot: RobotModel, log: JointLog) -> None:
             f"{list(robot.joint_names)}: identify this arm (comgrasp identify-arm)"
         )
     gains = log.current_gains
-    if (model.gains is None) != (gains is None) or (
-        gains is not None and not np.allclose(model.gains, gains, rtol=1e-9)
-    ):
+    same = (model.gains is None and gains is None) or (
+        model.gains is not None
+        and gains is not None
+        and np.allclose(model.gains, np.asarray(gains, float), rtol=1e-9)
+    )
+    if not same:
         raise InvalidInputError(
             f"the arm model was identified with drive gains {_text(model.gains)}, this log "
             f"is read with {_text(gains)}: use the same --current-gains for both (or "
@@ -246,8 +249,14 @@ def load_arm_model(path: str | Path) -> ArmModel:
     """
     try:
         d = json.loads(Path(path).read_text())
-        if d.get("format") != FORMAT:
-            raise KeyError("format")
+    except (OSError, ValueError) as exc:
+        raise LogError(f"--arm-model {path}: cannot read it as JSON ({exc})") from None
+    if not isinstance(d, dict) or d.get("format") != FORMAT:
+        raise LogError(
+            f"--arm-model {path}: not an arm model written by comgrasp identify-arm (its "
+            f"'format' must be {FORMAT!r})"
+        )
+    try:
         names = tuple(str(x) for x in d["joint_names"])
         cols = np.array(d["base_columns"], dtype=int)
         params, cov = np.array(d["params"], float), np.array(d["cov"], float)

@@ -200,7 +200,7 @@ def estimate_payload_dynamic(
     J_gain = du.gains_jacobian(P, b_gain)
     cov_gain = J_gain @ rel @ J_gain.T
     cov_arm = np.zeros((10, 10))
-    if arm_jac is not None:
+    if arm_model is not None and arm_jac is not None:
         PA = P @ arm_jac
         cov_arm = PA @ arm_model.cov @ PA.T
     pi_ls = P @ b_rows

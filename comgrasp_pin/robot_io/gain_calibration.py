@@ -84,7 +84,7 @@ def calibrate_gains(
                 "calibrated from a UR recording's actual_current columns"
             )
     nominal = np.asarray(loaded.current_gains, float)
-    if not np.allclose(nominal, empty.current_gains):
+    if not np.allclose(nominal, np.asarray(empty.current_gains, float)):
         raise InvalidInputError("read both logs with the same --current-gains")
     S = motion_samples(robot, loaded, None, cutoff_hz, crop=True)
     E, found = align_empty(robot, S, empty, None, cutoff_hz)
