@@ -156,3 +156,36 @@ def test_the_readme_is_short_and_every_link_resolves():
             continue
         path = (README.parent / target.split("#")[0]).resolve()
         assert path.exists(), f"README links to {target}, which is not in the repository"
+
+
+REALDATA = Path(__file__).resolve().parents[2] / "shared" / "realdata"
+UR_FILES = {"ur10e.urdf": "ur10e.urdf", "loaded.csv": "excitation_loaded_2805g.csv",
+            "empty.csv": "excitation_empty.csv"}  # fmt: skip
+
+
+@pytest.mark.skipif(not (REALDATA / "ur10e_rtde").is_dir(),
+                    reason=f"the real UR10e recording is not in {REALDATA}")  # fmt: skip
+def test_the_ur_commands_run_as_written_on_the_real_recording(tmp_path, monkeypatch, capsys):
+    """The README's UR block, command by command, on the real files it names (issue 32)."""
+    import shlex
+
+    from comgrasp_pin.cli import main
+
+    text = README.read_text()
+    start = text.index("**An arm that logs motor currents")
+    block = re.search(r"```bash\n(.*?)```", text[start:], flags=re.S).group(1)
+    commands = [shlex.split(c) for c in block.replace("\\\n", " ").splitlines() if c.strip()]
+    assert [c[1] for c in commands] == ["calibrate-gains", "identify-arm", "estimate"]
+    for name, real in UR_FILES.items():  # the README's names, the real files
+        (tmp_path / name).symlink_to(REALDATA / "ur10e_rtde" / real)
+    monkeypatch.chdir(tmp_path)
+    for argv in commands:
+        assert argv[0] == "comgrasp"
+        assert main(argv[1:]) == 0, argv
+    out = capsys.readouterr().out
+    assert "VERDICT:" in out
+    result = json.loads((tmp_path / "RESULT.json").read_text())
+    lo, hi = result["interval95_mass_kg"]
+    assert lo < 2.805 < hi  # the gains were weighed with this load: it must hold it
+    assert (tmp_path / "fit.png").stat().st_size > 0
+    assert "set_target_payload" in (tmp_path / "payload.script").read_text()

@@ -44,7 +44,13 @@ class Checks:
 def verdict(c: Checks) -> tuple[str, list[str]]:
     """(``identified`` or ``unreliable``, reasons): every rule that objects gives one."""
     reasons = []
-    if c.mass_kg - Z95 * c.mass_std_kg <= 0:
+    if c.mass_kg + Z95 * c.mass_std_kg < 0:
+        reasons.append(
+            f"the mass comes out negative ({c.mass_kg:.3f} +- {Z95 * c.mass_std_kg:.3f} kg): "
+            "the arm's own model predicts more torque than the arm needs; identify the arm "
+            "(comgrasp identify-arm) or record an empty run of the same motion"
+        )
+    elif c.mass_kg - Z95 * c.mass_std_kg <= 0:
         reasons.append(
             f"no payload seen: the mass's 95 % interval ({c.mass_kg:.3f} +- "
             f"{Z95 * c.mass_std_kg:.3f} kg) holds 0"
