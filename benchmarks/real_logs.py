@@ -56,7 +56,7 @@ from comgrasp_pin.robot_io import load_robot
 from comgrasp_pin.robot_io.arm_model import identify_arm
 from comgrasp_pin.robot_io.dynamic import estimate_payload_dynamic
 from comgrasp_pin.robot_io.gain_calibration import calibrate_gains
-from comgrasp_pin.robot_io.gains import Gains, parse_gains
+from comgrasp_pin.robot_io.gains import GAIN_CORRELATION, Gains, parse_gains, relative_cov
 from comgrasp_pin.robot_io.logs import JointLog, read_csv
 from comgrasp_pin.robot_io.motion_signals import filtered_signals, find_motion
 
@@ -189,6 +189,11 @@ def ur_section(data: Path) -> dict:
         **mass_figures(est_a, UR_LOAD_KG),
     }
     a["wall_s_first_call"] = wall_a
+    a["gain_correlation"] = GAIN_CORRELATION
+    for rho in (0.0, 1.0):  # the interval under both ends of the gains' error model
+        cov = relative_cov(K, UR_GAIN_STD_REL, rho)
+        est = estimate_payload_dynamic(robot, loaded, empty, gain_cov=cov)
+        a[f"with_gain_correlation_{rho:g}"] = mass_figures(est, UR_LOAD_KG)
 
     # b. gains calibrated on the pair, then the motion's halves
     cal, wall_cal = timed(calibrate_gains, robot, loaded, empty, UR_LOAD_KG, UR_LOAD_STD_KG)

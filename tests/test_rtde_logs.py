@@ -181,10 +181,17 @@ def test_the_project_csv_and_a_bag_take_gains_for_current_efforts(tmp_path):
 
 
 def test_parse_gains_from_text():
-    g = parse_gains(" 10, 10.6956,8.4566,9.0029,9.48,10.1232", 6, 0.1)
+    g = parse_gains(" 10, 10.6956,8.4566,9.0029,9.48,10.1232", 6, 0.1, correlation=0.0)
     np.testing.assert_array_equal(g.values, K)
     np.testing.assert_allclose(g.cov, np.diag((0.1 * K) ** 2))
     np.testing.assert_allclose(g.std, 0.1 * K)
+    shared = parse_gains(",".join(map(str, K)), 6, 0.1)  # default: half the variance common
+    np.testing.assert_allclose(shared.std, 0.1 * K)
+    np.testing.assert_allclose(shared.cov[0, 1], 0.5 * 0.01 * K[0] * K[1])
+    one = parse_gains(",".join(map(str, K)), 6, 0.1, correlation=1.0)  # one common error
+    assert np.linalg.matrix_rank(one.cov) == 1
+    with pytest.raises(InvalidInputError, match="between 0"):
+        parse_gains(",".join(map(str, K)), 6, 0.1, correlation=1.5)
     assert "10 %" in g.source and g.joint_names is None
     exact = parse_gains(",".join(map(str, K)), 6, None)
     assert np.all(exact.cov == 0) and "not given" in exact.source
@@ -219,7 +226,7 @@ def test_gains_json_round_trip(tmp_path):
     np.testing.assert_allclose(g.cov, cov, rtol=1e-15)
     assert g.joint_names == NAMES and g.source == str(path)
     assert json.loads(path.read_text())["known_mass_kg"] == 2.805
-    replaced = parse_gains(str(path), 6, 0.1, NAMES)  # --gain-std replaces the JSON's cov
+    replaced = parse_gains(str(path), 6, 0.1, NAMES, 0.0)  # --gain-std replaces the JSON's cov
     np.testing.assert_allclose(replaced.cov, np.diag((0.1 * K) ** 2))
     assert "replaced" in replaced.source
     with pytest.raises(InvalidInputError, match="format's own keys"):

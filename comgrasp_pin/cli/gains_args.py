@@ -24,6 +24,11 @@ def add_gains_args(p: argparse.ArgumentParser | argparse._ArgumentGroup) -> None
     p.add_argument("--current-gains", default=None, metavar="K1,...,Kn|GAINS.json",
                    help=CURRENT_GAINS_HELP)  # fmt: skip
     p.add_argument("--gain-std", type=float, default=None, metavar="R", help=GAIN_STD_HELP)
+    p.add_argument("--gain-correlation", type=float, default=None, metavar="RHO",
+                   help="correlation of two joints' gain errors under --gain-std, 0 "
+                   "(independent) to 1 (one common error); default 0.5: a torque "
+                   "constant's temperature and data-sheet error is common, the unit spread "
+                   "is not")  # fmt: skip
 
 
 def gains_from_args(args: argparse.Namespace, robot):
@@ -48,4 +53,8 @@ def gains_from_args(args: argparse.Namespace, robot):
                 "--gain-std out"
             )
         return None
-    return parse_gains(text, robot.nq, gain_std, robot.joint_names)
+    from comgrasp_pin.robot_io.gains import GAIN_CORRELATION
+
+    rho = getattr(args, "gain_correlation", None)
+    return parse_gains(text, robot.nq, gain_std, robot.joint_names,
+                       GAIN_CORRELATION if rho is None else rho)  # fmt: skip

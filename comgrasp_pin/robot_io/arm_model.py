@@ -12,15 +12,19 @@ arm's torques are identified from an excitation run, as robot identification doe
   numerical route (Gautier 1991; FIGAROH does the same). We use Pinocchio and SciPy rather
   than FIGAROH: the library already holds Pinocchio's model and the weighting, filtering and
   uncertainty machinery, and FIGAROH brings a YAML configuration and plotting we would not use.
-- Friction per joint, viscous and Coulomb; offsets and their drift per run (not kept: a
-  current sensor's offset changes between runs and is identified again with the payload).
+- Friction per joint, viscous and Coulomb; offsets and their drift per run, and the
+  efforts' delay behind the positions (``parallel_filter.delay_column``), none of them kept:
+  they change between runs and are identified again with the payload.
 - A weak prior pulls each base parameter towards the URDF's value (its std is the value
   itself, or a floor): directions the run does not excite stay at the vendor's figure, and
   the covariance stays finite.
 
-The covariance comes from the same machinery as the payload's (``dynamic_uncertainty``):
-the white Laplace widened by a delete-a-block jackknife; it is what ``--arm-model`` carries
-into a payload's interval.
+What ``--arm-model`` carries into a payload's interval: the identification's delete-a-block
+jackknife replicates (``dynamic_uncertainty``), each pushed through the payload's fit, so
+that the arm model's noise and model error reach the payload's parameters replicate by
+replicate (a per-parameter widening of the 40-odd correlated base parameters' covariance
+overstated the payload's std five times on the Panda). The model's terms are filtered like
+the torques (``parallel_filter``).
 """
 
 from __future__ import annotations
@@ -45,6 +49,7 @@ from comgrasp_pin.robot_io.motion_system import (
     offset_columns,
     row_noise,
 )
+from comgrasp_pin.robot_io.parallel_filter import delay_column, fast_signals, lowpassed
 
 PRIOR_FLOOR = {"mass": 0.5, "first": 0.05, "inertia": 0.01}
 """The prior's std where the URDF's base parameter is near zero: kg, kg m, kg m^2."""
@@ -63,7 +68,10 @@ class ArmModel:
         base_columns: (p,) indices of W's columns that are base parameters.
         params: (p + 2 n,) the base parameters, then viscous (N m s/rad) and Coulomb (N m)
             friction per joint.
-        cov: their covariance.
+        cov: their covariance, the white noise's (Laplace, prior included): for a reader.
+        replicates: (B, p + 2 n) delete-a-block jackknife replicates (``dynamic_uncertainty.
+            jackknife_replicates``): how the identification's noise and model error reach
+            a payload estimated with this model, replicate by replicate.
         nominal: (p + 2 n,) the URDF's base parameters (zero friction), for comparison.
         residual_rms_Nm: (n,) on the identification run.
         validation: held-out check on the identification run (``Validation.as_dict``).
@@ -76,6 +84,7 @@ class ArmModel:
     base_columns: np.ndarray
     params: np.ndarray
     cov: np.ndarray
+    replicates: np.ndarray
     nominal: np.ndarray
     residual_rms_Nm: np.ndarray
     validation: dict
@@ -148,8 +157,11 @@ def identify_arm(
     S = motion_samples(robot, log, window, cutoff_hz)
     k, n = S.q.shape
     cols = base_columns(robot)
-    Phi = arm_columns(robot, cols, S)
-    A_x = joint_columns(offset_columns(S))
+    fast = fast_signals(robot, log, window, cutoff_hz)
+    Phi = lowpassed(
+        fast, cutoff_hz, lambda F: arm_columns(robot, cols, F).reshape(len(F.t), n, -1), S.t
+    ).reshape(k * n, -1)
+    A_x = np.column_stack([joint_columns(offset_columns(S)), delay_column(fast, S)])
     A = np.column_stack([Phi, A_x])
     b = S.tau.reshape(-1)
     nominal = nominal_params(robot, cols)
@@ -166,11 +178,10 @@ def identify_arm(
     residual = (A @ beta - b).reshape(k, n)
     scale = float(np.mean((residual / sigma) ** 2))  # the rows' noise as the residuals say
     blocks = du.contiguous_blocks(k, du.block_count(float(S.t[-1] - S.t[0])))
-    jk = du.jackknife_cov(A, b, w, k, n, blocks, p, (P_inv, prior_mean))
-    factor = np.sqrt(np.maximum(np.diag(jk) / np.maximum(scale * np.diag(laplace), 1e-300), 1))
-    cov = scale * laplace * np.outer(factor, factor)
+    replicates = du.jackknife_replicates(A, b, w, k, n, blocks, p, (P_inv, prior_mean))
+    cov = scale * laplace
     return ArmModel(
-        tuple(robot.joint_names), cols, beta[:p], cov, nominal,
+        tuple(robot.joint_names), cols, beta[:p], cov, replicates, nominal,
         np.sqrt(np.mean(residual**2, axis=0)), du.held_out(Phi, A_x, b, w, S.t, k, n).as_dict(),
         None if log.current_gains is None else np.asarray(log.current_gains, float),
         urdf_sha256(robot), log.source, float(S.t[-1] - S.t[0]), S.cutoff_hz,
@@ -226,6 +237,7 @@ def arm_model_dict(model: ArmModel) -> dict:
         "base_columns (10 per link: m, m c, I at the joint), then viscous friction (N m s/rad) "
         "and Coulomb friction (N m) per joint",
         "cov": model.cov.tolist(),
+        "replicates": model.replicates.tolist(),
         "nominal_params": model.nominal.tolist(),
         "friction": {"viscous_Nms_per_rad": model.params[-2 * n : -n].tolist(),
                      "coulomb_Nm": model.params[-n:].tolist(),
@@ -260,10 +272,11 @@ def load_arm_model(path: str | Path) -> ArmModel:
         names = tuple(str(x) for x in d["joint_names"])
         cols = np.array(d["base_columns"], dtype=int)
         params, cov = np.array(d["params"], float), np.array(d["cov"], float)
+        replicates = np.array(d["replicates"], float)
         nominal = np.array(d["nominal_params"], float)
         gains = d.get("current_gains_Nm_per_A")
         model = ArmModel(
-            names, cols, params, cov, nominal, np.array(d["residual_rms_Nm"], float),
+            names, cols, params, cov, replicates, nominal, np.array(d["residual_rms_Nm"], float),
             dict(d["validation"]), None if gains is None else np.array(gains, float),
             str(d["urdf_sha256"]), str(d["source"]), float(d["duration_s"]),
             float(d["cutoff_hz"]),
@@ -273,6 +286,7 @@ def load_arm_model(path: str | Path) -> ArmModel:
             f"--arm-model {path}: not an arm model written by comgrasp identify-arm ({exc})"
         ) from None
     p = len(cols) + 2 * len(names)
-    if params.shape != (p,) or cov.shape != (p, p) or not np.all(np.isfinite(cov)):
+    if (params.shape != (p,) or cov.shape != (p, p) or replicates.ndim != 2
+            or replicates.shape[1] != p or not np.all(np.isfinite(replicates))):  # fmt: skip
         raise LogError(f"--arm-model {path}: {len(params)} parameters, {p} expected")
     return model

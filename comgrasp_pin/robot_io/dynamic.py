@@ -52,6 +52,7 @@ from comgrasp_pin.robot_io.motion_system import (
     prior_of,
     row_noise,
 )
+from comgrasp_pin.robot_io.parallel_filter import delay_column, fast_signals, lowpassed
 from comgrasp_pin.robot_io.verdict import Z95, Checks, verdict
 
 EMPTY_RUN, ARM_MODEL, NOMINAL = "empty run", "identified arm model", "URDF model + friction"
@@ -93,6 +94,8 @@ class DynamicEstimate:
         halves_mass: (m1, m2) kg, each half of the motion alone.
         alignment: the empty run's alignment (``alignment.Alignment.as_dict``), or None.
         gains_source: where the drive gains came from, or None (torques logged).
+        delay_s: the efforts' delay behind the positions found (s), or None with an empty
+            run (the same delay in both runs cancels).
     """
 
     mass: float
@@ -126,6 +129,7 @@ class DynamicEstimate:
     halves_mass: tuple[float, float]
     alignment: dict | None
     gains_source: str | None
+    delay_s: float | None
 
 
 def estimate_payload_dynamic(
@@ -170,22 +174,35 @@ def estimate_payload_dynamic(
         raise InvalidInputError("give an empty run or an arm model, not both")
     S = motion_samples(robot, log, window, cutoff_hz, crop=empty_log is not None)
     k, n = S.q.shape
+    fast = fast_signals(robot, log, window, cutoff_hz)
+
+    def filtered(terms, source=fast, times=S.t):  # the model's terms filtered like tau
+        return lowpassed(source, cutoff_hz, terms, times)
+
     alignment, arm_jac = None, None
+    Y = filtered(lambda F: regressor_rows(robot, F.q, F.qd, F.qdd))
     if empty_log is not None:
         E, found = align_empty(robot, S, empty_log, empty_window, cutoff_hz)
         alignment = found.as_dict()
-        b = (S.tau - _rnea(robot, S)) - (E.tau - _rnea(robot, E))
+        fast_empty = fast_signals(robot, empty_log, empty_window, cutoff_hz)
+        rnea_empty = filtered(lambda F: _rnea(robot, F), fast_empty, E.t)
+        b = (S.tau - filtered(lambda F: _rnea(robot, F))) - (E.tau - rnea_empty)
         b_gain, columns, source = S.tau - E.tau, offset_columns(S), EMPTY_RUN
     elif arm_model is not None:
         check_matches(arm_model, robot, log)
-        arm_jac = arm_columns(robot, arm_model.base_columns, S)
+        arm_jac = filtered(
+            lambda F: arm_columns(robot, arm_model.base_columns, F).reshape(len(F.t), n, -1)
+        ).reshape(k * n, -1)
         b = S.tau - (arm_jac @ arm_model.params).reshape(k, n)
         b_gain, columns, source = b, offset_columns(S), ARM_MODEL
     else:
-        b = S.tau - _rnea(robot, S)
-        b_gain, columns, source = S.tau, offset_columns(S) + friction_columns(S), NOMINAL
-    Y = regressor_rows(robot, S.q, S.qd, S.qdd)
+        b = S.tau - filtered(lambda F: _rnea(robot, F))
+        friction = filtered(lambda F: np.stack(friction_columns(F), axis=1))
+        b_gain, source = S.tau, NOMINAL
+        columns = offset_columns(S) + [friction[:, 0], friction[:, 1]]
     A_pi, A_x, b_rows = Y.reshape(-1, 10), joint_columns(columns), b.reshape(-1)
+    if source != EMPTY_RUN:  # the same delay in both runs cancels in their difference
+        A_x = np.column_stack([A_x, delay_column(fast, S)])
     A = np.column_stack([A_pi, A_x])
     sigma = row_noise(A, b_rows, k, n)
     w = np.tile(1.0 / sigma, k)
@@ -201,8 +218,8 @@ def estimate_payload_dynamic(
     cov_gain = J_gain @ rel @ J_gain.T
     cov_arm = np.zeros((10, 10))
     if arm_model is not None and arm_jac is not None:
-        PA = P @ arm_jac
-        cov_arm = PA @ arm_model.cov @ PA.T
+        D = P @ arm_jac @ arm_model.replicates.T  # each replicate's effect on pi
+        cov_arm = D @ D.T
     pi_ls = P @ b_rows
 
     data_cov = white * np.outer(factor, factor)
@@ -218,7 +235,8 @@ def estimate_payload_dynamic(
     tau_fit = (A_pi @ pi).reshape(k, n)
     tau_payload = (b_rows - A_x @ x).reshape(k, n)
     residual = tau_fit - tau_payload
-    extras = x.reshape(len(columns), n)
+    delay = float(x[-1]) if source != EMPTY_RUN else None
+    extras = x[: len(columns) * n].reshape(len(columns), n)
     mass, com, inertia_c, cov4, inertia_cov = about_com(pi, params_cov)
     inertia_std = np.sqrt(np.clip(np.diag(inertia_cov), 0, None)).reshape(3, 3)
     validation = du.held_out(A_pi, A_x, b_rows, w, S.t, k, n)
@@ -239,7 +257,7 @@ def estimate_payload_dynamic(
         extras[1 + DRIFT_DEGREE :].T if source == NOMINAL else None,
         k, float(S.t[-1] - S.t[0]), S.cutoff_hz, S.velocity_from, status, pi_ls, S.t,
         tau_payload, tau_fit, parts, validation, word, tuple(reasons), halves, alignment,
-        gains_source if log.current_gains is not None else None,
+        gains_source if log.current_gains is not None else None, delay,
     )  # fmt: skip
 
 

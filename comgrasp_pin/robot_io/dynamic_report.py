@@ -30,6 +30,7 @@ def dynamic_result_dict(est: DynamicEstimate, frame: str) -> dict:
         "halves_mass_kg": list(est.halves_mass),
         "alignment": est.alignment,
         "gains": est.gains_source,
+        "effort_delay_s": est.delay_s,
         "inertia_kgm2": est.inertia_com_ee.tolist(),
         "inertia_std_kgm2": est.inertia_std.tolist(),
         "inertia_about": "the CoM, axes of frame",
@@ -91,6 +92,8 @@ def dynamic_summary(est: DynamicEstimate, frame: str) -> str:
         a = est.alignment
         lines.append(f"  empty run aligned: its time = loaded time {a['shift_s']:+.3f} s, "
                      f"positions {1e3 * a['rms_gap_rad']:.2f} mrad apart (rms)")  # fmt: skip
+    if est.delay_s is not None:
+        lines.append(f"  the efforts lag the positions by {1e3 * est.delay_s:.1f} ms (found)")
     if est.gains_source is not None:
         lines.append(f"  motor currents turned into torques with gains: {est.gains_source}")
     lines.append(f"VERDICT: {est.verdict}")

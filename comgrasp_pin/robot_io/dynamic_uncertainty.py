@@ -47,7 +47,8 @@ class Validation:
         explained: (n,) per joint, 1 - sum(residual^2) / sum(measured^2) on held-out
             samples, the measured payload torque taken without its offsets: the fraction
             of the torque difference the payload explains.
-        explained_total: the same over all joints.
+        explained_total: the same over all joints, each weighed by 1 / its noise std (so
+            that newtons and newton metres, big and small joints, are not pooled raw).
         t: (k,) the samples' times (s).
         measured: (k, n) the payload's torque as measured, offsets removed (N m).
         predicted: (k, n) its held-out prediction (N m).
@@ -89,7 +90,7 @@ def _normal(A: np.ndarray, b: np.ndarray, w: np.ndarray, k: int, n: int):
     return np.einsum("kna,knb->kab", Aw, Aw), np.einsum("kna,kn->ka", Aw, bw)
 
 
-def jackknife_cov(
+def jackknife_replicates(
     A,
     b,
     w,
@@ -98,10 +99,14 @@ def jackknife_cov(
     blocks: list[np.ndarray],
     p: int = 10,
     prior: tuple[np.ndarray, np.ndarray] | None = None,
-):
-    """(p, p) delete-a-block jackknife covariance of the first p unknowns of the LS fit.
+) -> np.ndarray:
+    """(B, p) delete-a-block replicates R of the first p unknowns, scaled: cov = R^T R.
 
-    ``prior``: (precision (m,), mean (m,)) of a diagonal Gaussian prior on all m unknowns.
+    Row b is sqrt((B - 1)/B) (theta_without_block_b - mean). A linear function c theta then
+    has the jackknife variance |R c|^2: how an error source reaches a derived quantity is
+    carried replicate by replicate, not through a covariance matrix that B replicates only
+    fill in B - 1 directions. ``prior``: (precision (m,), mean (m,)) of a diagonal Gaussian
+    prior on all m unknowns.
     """
     Gs, gs = _normal(A, b, w, k, n)
     G, g = Gs.sum(axis=0), gs.sum(axis=0)
@@ -109,9 +114,14 @@ def jackknife_cov(
         G, g = G + np.diag(prior[0]), g + prior[0] * prior[1]
     est = np.array([np.linalg.lstsq(G - Gs[i].sum(0), g - gs[i].sum(0), rcond=None)[0][:p]
                     for i in blocks])  # fmt: skip
-    dev = est - est.mean(axis=0)
     B = len(blocks)
-    return (B - 1) / B * dev.T @ dev
+    return np.sqrt((B - 1) / B) * (est - est.mean(axis=0))
+
+
+def jackknife_cov(A, b, w, k: int, n: int, blocks: list[np.ndarray], p: int = 10, prior=None):
+    """(p, p) delete-a-block jackknife covariance of the first p unknowns of the LS fit."""
+    R = jackknife_replicates(A, b, w, k, n, blocks, p, prior)
+    return R.T @ R
 
 
 def white_cov(A, b, w, p: int = 10) -> np.ndarray:
@@ -161,7 +171,8 @@ def held_out(A_pi, A_x, b, w, t, k: int, n: int, folds: int = FOLDS) -> Validati
     rms = np.sqrt(np.mean(res**2, axis=0))
     scale = np.maximum(np.sum(measured**2, axis=0), 1e-300)
     explained = 1 - np.sum(res**2, axis=0) / scale
-    total = 1 - float(np.sum(res**2) / max(np.sum(measured**2), 1e-300))
+    W = w.reshape(k, n)  # pooled in each joint's noise units: N and N m not mixed
+    total = 1 - float(np.sum((W * res) ** 2) / max(np.sum((W * measured) ** 2), 1e-300))
     return Validation(rms, explained, total, np.asarray(t), measured, predicted, folds)
 
 

@@ -146,6 +146,7 @@ def filtered_signals(
     log: JointLog,
     window: tuple[float, float] | None = None,
     cutoff_hz: float = CUTOFF_HZ,
+    bridge_hz: float | None = None,
 ) -> MotionSamples:
     """Filtered positions, velocities, accelerations and efforts at the log's own rate.
 
@@ -154,6 +155,8 @@ def filtered_signals(
         log: the motion's readings.
         window: (t0, t1) s from the log's first message, or None for the whole log.
         cutoff_hz: low-pass cutoff (Hz), below half the log's sample rate.
+        bridge_hz: the bandwidth the longest gap bridged is judged against (default: the
+            cutoff; a filter run only to differentiate passes the estimation's cutoff).
 
     Raises:
         MotionLogError: see the module's list.
@@ -165,7 +168,7 @@ def filtered_signals(
             f"the log's joints {log.joint_names} are not the arm's {robot.joint_names}"
         )
     t, q, tau, qd_log = _cut(log, window)
-    rate = _uniform_rate(t, log.source, cutoff_hz)
+    rate = _uniform_rate(t, log.source, cutoff_hz if bridge_hz is None else bridge_hz)
     t, q, tau, qd_log = _on_grid(t, rate, q, tau, qd_log)
     if not (np.isfinite(cutoff_hz) and 0 < cutoff_hz < rate / 2):
         raise MotionLogError(
