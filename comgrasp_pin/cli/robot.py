@@ -46,7 +46,7 @@ def _write_json(path: str, data: dict) -> None:
 
 
 def _log_and_windows(args: argparse.Namespace, robot):
-    """The log and its paired windows, as the options ask."""
+    """The log, its paired windows and the drive gains (or None), as the options ask."""
     from comgrasp_pin import robot_io as rio
 
     if (args.bag is None) == (args.csv is None):
@@ -67,7 +67,7 @@ def _log_and_windows(args: argparse.Namespace, robot):
         log = rio.read_csv(args.csv, robot.joint_names, gains)
     if args.auto:
         before, after = rio.pair_by_configuration(log, args.grasp_time, args.max_speed)
-    return log, before, after
+    return log, before, after, gains
 
 
 def _cmd_estimate(args: argparse.Namespace) -> int:
@@ -76,10 +76,10 @@ def _cmd_estimate(args: argparse.Namespace) -> int:
     robot = _robot(args)
     if args.dynamic:
         return run_dynamic(args, robot, _write_json)
-    log, before, after = _log_and_windows(args, robot)
-    result = rio.estimate_from_log(
-        robot, log, before, after, args.torque_std, args.method, args.max_speed, args.drift_std
-    )
+    log, before, after, gains = _log_and_windows(args, robot)
+    gain_cov = None if gains is None else gains.cov  # the gains' error enters the covariance
+    result = rio.estimate_from_log(robot, log, before, after, args.torque_std, args.method,
+                                   args.max_speed, args.drift_std, gain_cov)  # fmt: skip
     exports = ((args.export_ur, rio.write_urscript), (args.export_franka, rio.write_franka),
                (args.export_ros2, rio.write_ros2))  # fmt: skip
     payload = None

@@ -19,6 +19,8 @@ the generalised least squares. A servo's sag between the windows is not in eithe
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,6 +28,7 @@ import numpy as np
 from comgrasp_pin.errors import InvalidInputError, LogError
 from comgrasp_pin.estimation import ComEstimate, estimate_com
 from comgrasp_pin.estimation.drift import difference_covariance
+from comgrasp_pin.estimation.estimate import delta_method
 from comgrasp_pin.estimation.regressor import G0
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.logs import JointLog
@@ -34,6 +37,10 @@ from comgrasp_pin.robot_io.windows import MAX_SPEED, StaticReading, read_window
 
 NOISE_FLOOR = 1e-6
 """Smallest torque std (N m) taken from the samples (a noise-free log has spread 0)."""
+GAIN_STEP = 1e-4
+"""Relative gain change of the central difference in ``_gains_covariance`` (the estimate's
+(m, m c) is linear in it: any step is exact up to rounding; a small one keeps the stepped
+estimates clear of the empty-gripper refusal)."""
 
 
 @dataclass(frozen=True)
@@ -49,6 +56,9 @@ class LogEstimate:
         noise_from: "given" (torque_std passed) or "samples" (the windows' spread).
         before, after: the k static readings of each window.
         drift_std: the sensor's drift taken into the covariance (N m / sqrt(s); 0: none).
+        gains_cov: (4, 4) the part of ``estimate.cov`` (mass, com_ee) that comes from the
+            drive gains' uncertainty (added to the noise's), or None: no gains' covariance
+            given, or the log holds torques.
     """
 
     estimate: ComEstimate
@@ -60,6 +70,19 @@ class LogEstimate:
     before: tuple[StaticReading, ...]
     after: tuple[StaticReading, ...]
     drift_std: float = 0.0
+    gains_cov: np.ndarray | None = None
+
+    @property
+    def mass_std_by_source(self) -> dict[str, float] | None:
+        """The mass's std (kg) per source, {"noise": ..., "gains": ...}, or None.
+
+        None without ``gains_cov``. The two add in quadrature to ``estimate.std[0]``.
+        """
+        if self.gains_cov is None or self.estimate.cov is None:
+            return None
+        gains = float(self.gains_cov[0, 0])
+        noise = float(self.estimate.cov[0, 0]) - gains
+        return {"noise": float(np.sqrt(max(noise, 0.0))), "gains": float(np.sqrt(max(gains, 0.0)))}
 
 
 def estimate_from_log(
@@ -71,6 +94,7 @@ def estimate_from_log(
     method: str = "lstsq",
     max_speed: float = MAX_SPEED,
     drift_std: float = 0.0,
+    gain_cov: np.ndarray | None = None,
 ) -> LogEstimate:
     """Estimate the payload from paired static windows of ``log``.
 
@@ -86,6 +110,14 @@ def estimate_from_log(
         max_speed: static threshold (rad/s).
         drift_std: the torque sensor's drift, a random walk (N m / sqrt(s)); > 0: the
             differences' covariance with the drift between and across the windows.
+        gain_cov: (n, n) covariance of the drive gains ((N m / A)^2, absolute; ``Gains.cov``)
+            the log's currents were turned into torques with. Where ``log.current_gains`` is
+            set, its relative form gain_cov / outer(K, K) is propagated through the
+            estimator (d (m, m c) / d delta by a central difference of the closed-form
+            estimate re-run with each joint's efforts scaled, exact as (m, m c) is linear in
+            them; ``_gains_covariance``) and added to the estimate's covariance
+            (``LogEstimate.gains_cov`` holds that part). Ignored when None or when the log
+            holds torques.
 
     Raises:
         LogError: the log's joints are not the arm's, or a window is outside the log or
@@ -102,6 +134,7 @@ def estimate_from_log(
         )
     if not before:
         raise LogError("no windows given: at least one before/after pair is needed")
+    rel = _relative_gain_cov(gain_cov, log.current_gains, robot.nq)
     rb = tuple(read_window(log, *w, max_speed, f"before window {i}") for i, w in enumerate(before))
     ra = tuple(read_window(log, *w, max_speed, f"after window {i}") for i, w in enumerate(after))
     Q = np.array([r.q for r in ra])
@@ -121,10 +154,78 @@ def estimate_from_log(
     # the regression is written for |g| = G0: scale torques measured under another |g|
     scale = G0 / gravity_magnitude(robot)
     cov = _drift_covariance(rb, ra, sigma, noise_from, drift_std)
-    est = estimate_com(robot, Q, scale * tau_b, scale * tau_a, method,
-                       torque_std=None if cov is not None else scale * sigma,
-                       dtau_cov=None if cov is None else scale**2 * cov)  # fmt: skip
-    return LogEstimate(est, Q, tau_b, tau_a, sigma, noise_from, rb, ra, float(drift_std))
+
+    def solve(factor: np.ndarray | None, how: str) -> ComEstimate:
+        """The estimate with each joint's efforts scaled by ``factor`` (None: as read).
+
+        The model's carry-over term (tau_b's g(q_after) - g(q_before)) is not scaled.
+        """
+        b, a = tau_b, tau_a
+        if factor is not None:
+            b = np.array([factor * r.tau for r in rb]) + (tau_b - np.array([r.tau for r in rb]))
+            a = factor * tau_a
+        return estimate_com(robot, Q, scale * b, scale * a, how,
+                            torque_std=None if cov is not None else scale * sigma,
+                            dtau_cov=None if cov is None else scale**2 * cov)  # fmt: skip
+
+    est = solve(None, method)
+    result = LogEstimate(est, Q, tau_b, tau_a, sigma, noise_from, rb, ra, float(drift_std))
+    if rel is None:
+        return result
+    part = _gains_covariance(lambda f: solve(f, "lstsq"), est, rel)
+    total = part.copy() if est.cov is None else est.cov + part
+    for a in (part, total):  # read-only, as the estimate's own arrays
+        a.setflags(write=False)
+    estimate = dataclasses.replace(est, cov=total)
+    return dataclasses.replace(result, estimate=estimate, gains_cov=part)
+
+
+def _relative_gain_cov(gain_cov, gains, n: int) -> np.ndarray | None:
+    """(n, n) the gains' relative covariance gain_cov / outer(K, K), or None.
+
+    None: no gains' covariance, or a log of torques (nothing to add).
+    """
+    if gain_cov is None or gains is None:
+        return None
+    g = np.asarray(gains, dtype=float)
+    c = np.asarray(gain_cov, dtype=float)
+    if c.shape != (n, n) or not np.all(np.isfinite(c)):
+        raise InvalidInputError(
+            f"gain_cov must be a finite ({n}, {n}) covariance of the drive gains ((N m / A)^2), "
+            f"got shape {c.shape}"
+        )
+    if g.shape != (n,):
+        raise InvalidInputError(f"the log's current_gains must be ({n},), got shape {g.shape}")
+    return c / np.outer(g, g)
+
+
+def _gains_covariance(
+    solve: Callable[[np.ndarray], ComEstimate], est: ComEstimate, rel: np.ndarray
+) -> np.ndarray:
+    """(4, 4) covariance of (mass, com_ee) from the gains' relative covariance ``rel``.
+
+    theta = (m, m c) is the weighted least squares' solution, linear in the torque
+    differences; joint j's differences scale by (1 + delta_j), so d theta / d delta_j is
+    exact by a central difference of the estimate re-run with joint j's efforts scaled by
+    1 +- GAIN_STEP (the closed form: IPOPT's l2 fit has the same minimiser and weights).
+    cov_theta = J rel J^T goes to (m, c) by the delta method at the estimate, as the noise's.
+    Joints without a gains' variance are skipped.
+    """
+    n = rel.shape[0]
+    J = np.zeros((4, n))
+    for j in range(n):
+        if not (np.any(rel[j]) or np.any(rel[:, j])):
+            continue
+        steps = []
+        for sign in (1.0, -1.0):
+            factor = np.ones(n)
+            factor[j] += sign * GAIN_STEP
+            e = solve(factor)
+            steps.append(np.r_[e.mass, e.mass * e.com_ee])
+        J[:, j] = (steps[0] - steps[1]) / (2 * GAIN_STEP)
+    theta = np.r_[est.mass, est.mass * est.com_ee]
+    part = delta_method(theta, J @ rel @ J.T)
+    return (part + part.T) / 2
 
 
 def _drift_covariance(rb, ra, sigma, noise_from, drift_std) -> np.ndarray | None:
@@ -158,7 +259,7 @@ def result_dict(result: LogEstimate, frame: str) -> dict:
         "unobservable": None if u is None else [float(v) for v in u],
         "n_poses": est.n_poses,
         "residual_rms_Nm": est.residual_rms,
-        "std": None if std is None else {"mass_kg": float(std[0]), "com_m": std[1:].tolist()},
+        "std": None if std is None else _std_dict(result, std),
         "torque_std_Nm": result.torque_std.tolist(),
         "torque_std_from": result.noise_from,
         "torque_drift_Nm_per_sqrt_s": result.drift_std,
@@ -171,6 +272,16 @@ def result_dict(result: LogEstimate, frame: str) -> dict:
             "after": [[r.t0, r.t1, r.n_samples] for r in result.after],
         },
     }
+
+
+def _std_dict(result: LogEstimate, std: np.ndarray) -> dict:
+    """RESULT.json's ``std``; with the gains' covariance, the mass's std per source."""
+    out: dict = {"mass_kg": float(std[0]), "com_m": std[1:].tolist()}
+    parts = result.mass_std_by_source
+    if parts is not None:
+        out["covers"] = "the torque noise and the drive gains"
+        out["mass_kg_by_source"] = parts
+    return out
 
 
 def summary(result: LogEstimate, frame: str) -> str:
@@ -189,6 +300,10 @@ def summary(result: LogEstimate, frame: str) -> str:
         f"                 z {1e3 * c[2]:8.2f} +- {1e3 * s[3]:.2f} mm",
         f"  residual RMS {est.residual_rms:.3g} N m",
     ]
+    parts = result.mass_std_by_source
+    if parts is not None:
+        lines.insert(2, f"  mass std from the noise {parts['noise']:.4f} kg, from the drive "
+                        f"gains {parts['gains']:.4f} kg")  # fmt: skip
     if est.unobservable_ee is not None:
         u = np.array2string(np.asarray(est.unobservable_ee), precision=3)
         lines.insert(2, f"  CoM: a line in {frame}; below, its point nearest the origin")
