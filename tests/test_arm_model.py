@@ -23,7 +23,7 @@ from comgrasp_pin.robot_io.arm_model import (
     identify_arm,
     load_arm_model,
 )
-from comgrasp_pin.robot_io.dynamic import estimate_payload_dynamic
+from comgrasp_pin.robot_io.dynamic import check_on_log, estimate_payload_dynamic
 from comgrasp_pin.robot_io.excitation import ExcitationSettings, plan_excitation
 from comgrasp_pin.robot_io.gain_calibration import calibrate_gains
 from comgrasp_pin.robot_io.verdict import Checks, verdict
@@ -56,6 +56,7 @@ def runs():
         "empty_A": simulate_motion("ur5", None, *a, seed=11, offsets_seed=1),
         "empty_B": simulate_motion("ur5", None, *b, seed=12, offsets_seed=2),
         "loaded_B": simulate_motion("ur5", box(), *b, seed=13, offsets_seed=3),
+        "loaded_A": simulate_motion("ur5", box(), *a, seed=14, offsets_seed=4),
     }
 
 
@@ -194,3 +195,14 @@ def test_identify_arm_then_estimate_from_the_command_line(runs, tmp_path, capsys
                  str(tmp_path / "loaded.csv"), "--arm-model", str(arm_json), "--empty-csv",
                  str(tmp_path / "empty.csv"), "--out", str(out)])  # fmt: skip
     assert code == 2 and "not both" in capsys.readouterr().err
+
+
+def test_a_second_log_of_the_same_payload_confirms_it_and_an_empty_one_does_not(
+    runs, wrong, arm
+):
+    est = estimate_payload_dynamic(wrong, runs["loaded_B"], arm_model=arm)
+    same = check_on_log(wrong, est, runs["loaded_A"], arm)  # the box again, motion A
+    assert same.second_log.explained_total > 0.95 and same.verdict == "identified"
+    other = check_on_log(wrong, est, runs["empty_B"], arm)  # nothing held
+    assert other.second_log.explained_total < 0.5
+    assert other.verdict == "unreliable" and "second log" in other.reasons[-1]

@@ -38,6 +38,10 @@ def add_dynamic_args(est: argparse.ArgumentParser) -> None:
     g.add_argument("--arm-model", default=None,
                    help="ARM.json of comgrasp identify-arm: the arm's own identified dynamics "
                    "stand for it, and the loaded run may be of any motion")  # fmt: skip
+    g.add_argument("--validate", default=None, metavar="LOG",
+                   help="a second log (CSV, UR recording or bag) of the same payload, any "
+                   "motion: the payload found predicts its torques (with --arm-model or "
+                   "the URDF's model); the log's held-out folds are checked anyway")  # fmt: skip
     g.add_argument("--plot", default=None,
                    help="PNG: per joint, the payload's measured torque against its held-out "
                    "prediction, and the verdict")  # fmt: skip
@@ -73,6 +77,17 @@ def run_dynamic(args: argparse.Namespace, robot, write_json) -> int:
         _window(args.empty_window, "--empty-window"), args.cutoff, _prior(args.prior),
         arm, None if gains is None else gains.cov, None if gains is None else gains.source,
     )  # fmt: skip
+    if args.validate is not None:
+        from comgrasp_pin.robot_io.dynamic import check_on_log
+
+        if empty is not None:
+            raise InvalidInputError(
+                "--validate predicts a second log with the arm model or the URDF's model: "
+                "with an empty run of the first motion it has no arm torques of its own; "
+                "use --arm-model (comgrasp identify-arm)"
+            )
+        second = rio.read_log(args.validate, robot.joint_names, args.topic, None, gains)
+        est = check_on_log(robot, est, second, arm, args.cutoff)
     exports = ((args.export_ur, rio.write_urscript), (args.export_franka, rio.write_franka),
                (args.export_ros2, rio.write_ros2))  # fmt: skip
     payload = None

@@ -25,37 +25,33 @@ covariance propagated. Validation: each fifth of the motion predicted from the r
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
-import pinocchio as pin
 
 from comgrasp_pin.estimation import ComEstimate
 from comgrasp_pin.estimation.inertial_fit import fit_inertial
 from comgrasp_pin.estimation.payload_regressor import (
     condition_number,
     parameter_scale,
-    regressor_rows,
 )
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io import dynamic_uncertainty as du
-from comgrasp_pin.robot_io.alignment import align_empty
-from comgrasp_pin.robot_io.arm_model import ArmModel, arm_columns, check_matches
+from comgrasp_pin.robot_io.arm_model import ArmModel
 from comgrasp_pin.robot_io.logs import JointLog
-from comgrasp_pin.robot_io.motion_signals import CUTOFF_HZ, MotionSamples, motion_samples
+from comgrasp_pin.robot_io.motion_signals import CUTOFF_HZ
 from comgrasp_pin.robot_io.motion_system import (
     DRIFT_DEGREE,
     about_com,
-    friction_columns,
-    joint_columns,
-    offset_columns,
     prior_of,
     row_noise,
 )
-from comgrasp_pin.robot_io.parallel_filter import delay_column, fast_signals, lowpassed
+from comgrasp_pin.robot_io.payload_system import (
+    EMPTY_RUN,
+    NOMINAL,
+    payload_system,
+)
 from comgrasp_pin.robot_io.verdict import Z95, Checks, verdict
-
-EMPTY_RUN, ARM_MODEL, NOMINAL = "empty run", "identified arm model", "URDF model + friction"
 
 
 @dataclass(frozen=True)
@@ -96,6 +92,8 @@ class DynamicEstimate:
         gains_source: where the drive gains came from, or None (torques logged).
         delay_s: the efforts' delay behind the positions found (s), or None with an empty
             run (the same delay in both runs cancels).
+        second_log: the payload predicting a second log of the same payload
+            (``check_on_log``), or None.
     """
 
     mass: float
@@ -130,6 +128,7 @@ class DynamicEstimate:
     alignment: dict | None
     gains_source: str | None
     delay_s: float | None
+    second_log: du.Validation | None = None
 
 
 def estimate_payload_dynamic(
@@ -172,37 +171,11 @@ def estimate_payload_dynamic(
 
     if empty_log is not None and arm_model is not None:
         raise InvalidInputError("give an empty run or an arm model, not both")
-    S = motion_samples(robot, log, window, cutoff_hz, crop=empty_log is not None)
+    system = payload_system(robot, log, empty_log, window, empty_window, cutoff_hz, arm_model)
+    S, source, alignment, arm_jac = system.S, system.source, system.alignment, system.arm_jac
     k, n = S.q.shape
-    fast = fast_signals(robot, log, window, cutoff_hz)
-
-    def filtered(terms, source=fast, times=S.t):  # the model's terms filtered like tau
-        return lowpassed(source, cutoff_hz, terms, times)
-
-    alignment, arm_jac = None, None
-    Y = filtered(lambda F: regressor_rows(robot, F.q, F.qd, F.qdd))
-    if empty_log is not None:
-        E, found = align_empty(robot, S, empty_log, empty_window, cutoff_hz)
-        alignment = found.as_dict()
-        fast_empty = fast_signals(robot, empty_log, empty_window, cutoff_hz)
-        rnea_empty = filtered(lambda F: _rnea(robot, F), fast_empty, E.t)
-        b = (S.tau - filtered(lambda F: _rnea(robot, F))) - (E.tau - rnea_empty)
-        b_gain, columns, source = S.tau - E.tau, offset_columns(S), EMPTY_RUN
-    elif arm_model is not None:
-        check_matches(arm_model, robot, log)
-        arm_jac = filtered(
-            lambda F: arm_columns(robot, arm_model.base_columns, F).reshape(len(F.t), n, -1)
-        ).reshape(k * n, -1)
-        b = S.tau - (arm_jac @ arm_model.params).reshape(k, n)
-        b_gain, columns, source = b, offset_columns(S), ARM_MODEL
-    else:
-        b = S.tau - filtered(lambda F: _rnea(robot, F))
-        friction = filtered(lambda F: np.stack(friction_columns(F), axis=1))
-        b_gain, source = S.tau, NOMINAL
-        columns = offset_columns(S) + [friction[:, 0], friction[:, 1]]
-    A_pi, A_x, b_rows = Y.reshape(-1, 10), joint_columns(columns), b.reshape(-1)
-    if source != EMPTY_RUN:  # the same delay in both runs cancels in their difference
-        A_x = np.column_stack([A_x, delay_column(fast, S)])
+    Y, b_gain, columns = system.Y, system.b_gain, system.per_joint
+    A_pi, A_x, b_rows = Y.reshape(-1, 10), system.A_x, system.b.reshape(-1)
     A = np.column_stack([A_pi, A_x])
     sigma = row_noise(A, b_rows, k, n)
     w = np.tile(1.0 / sigma, k)
@@ -236,7 +209,7 @@ def estimate_payload_dynamic(
     tau_payload = (b_rows - A_x @ x).reshape(k, n)
     residual = tau_fit - tau_payload
     delay = float(x[-1]) if source != EMPTY_RUN else None
-    extras = x[: len(columns) * n].reshape(len(columns), n)
+    extras = x[: columns * n].reshape(columns, n)
     mass, com, inertia_c, cov4, inertia_cov = about_com(pi, params_cov)
     inertia_std = np.sqrt(np.clip(np.diag(inertia_cov), 0, None)).reshape(3, 3)
     validation = du.held_out(A_pi, A_x, b_rows, w, S.t, k, n)
@@ -261,13 +234,6 @@ def estimate_payload_dynamic(
     )  # fmt: skip
 
 
-def _rnea(robot: RobotModel, S: MotionSamples) -> np.ndarray:
-    """(k, n) the URDF model's inverse dynamics (RNEA) at the samples (N m)."""
-    model, data = robot.model, robot.data
-    return np.array([pin.rnea(model, data, q, qd, qdd).copy()
-                     for q, qd, qdd in zip(S.q, S.qd, S.qdd)])  # fmt: skip
-
-
 def _relative(gain_cov, gains, n: int) -> np.ndarray:
     """(n, n) the gains' relative covariance (zero without gains or without their cov)."""
     if gains is None or gain_cov is None:
@@ -284,3 +250,37 @@ def _halves(A, b_rows, w, k, n, factor, b_gain, rel):
     J2 = du.gains_jacobian(du.sensitivity(A[r2], w[r2]), b_gain[len(r1) // n :])
     d = J1[0] - J2[0]
     return (float(p1[0]), float(p2[0])), float(np.sqrt(var + d @ rel @ d))
+
+
+def check_on_log(
+    robot: RobotModel,
+    est: DynamicEstimate,
+    log: JointLog,
+    arm_model: ArmModel | None = None,
+    cutoff_hz: float = CUTOFF_HZ,
+) -> DynamicEstimate:
+    """``est`` with its payload checked on a second log of the same payload (any motion).
+
+    The arm's torques come from ``arm_model`` or the URDF's nominal model (a second log has
+    no empty run of its own); the second log's offsets, drift, friction and delay are
+    fitted to it, the payload is not. Where the payload explains less of the second log
+    than ``verdict.MIN_EXPLAINED``, the verdict becomes ``unreliable`` with that reason.
+    """
+    from comgrasp_pin.robot_io.motion_system import row_noise
+    from comgrasp_pin.robot_io.verdict import MIN_EXPLAINED, UNRELIABLE
+
+    system = payload_system(robot, log, None, None, None, cutoff_hz, arm_model)
+    k, n = system.b.shape
+    A = np.column_stack([system.Y.reshape(-1, 10), system.A_x])
+    w = np.tile(1.0 / row_noise(A, system.b.reshape(-1), k, n), k)
+    v = du.predicted_on(system.Y, system.A_x, system.b, w, system.S.t, est.params)
+    word, reasons = est.verdict, est.reasons
+    if v.explained_total < MIN_EXPLAINED:
+        word = UNRELIABLE
+        reasons = reasons + (
+            f"the payload explains {100 * v.explained_total:.0f} % of the second log's torque "
+            f"difference ({log.source}; at least {100 * MIN_EXPLAINED:.0f} % expected): it is "
+            "not the same payload, or the payload moved in the gripper, or the arm model "
+            "does not hold on that motion",
+        )
+    return replace(est, second_log=v, verdict=word, reasons=reasons)

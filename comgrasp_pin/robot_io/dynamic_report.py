@@ -27,6 +27,11 @@ def dynamic_result_dict(est: DynamicEstimate, frame: str) -> dict:
         "verdict": est.verdict,
         "reasons": list(est.reasons),
         "validation": est.validation.as_dict(),
+        "validation_log": None if est.second_log is None else {
+            "rms_Nm": est.second_log.rms_Nm.tolist(),
+            "explained": est.second_log.explained.tolist(),
+            "explained_total": est.second_log.explained_total,
+        },
         "halves_mass_kg": list(est.halves_mass),
         "alignment": est.alignment,
         "gains": est.gains_source,
@@ -88,6 +93,10 @@ def dynamic_summary(est: DynamicEstimate, frame: str) -> str:
         f"{100 * est.validation.explained_total:.1f} % of the torque difference explained",
         f"  the motion's halves alone: {est.halves_mass[0]:.4f} and {est.halves_mass[1]:.4f} kg",
     ]
+    if est.second_log is not None:
+        v = est.second_log
+        lines.append(f"  on the second log: RMS per joint {np.array2string(v.rms_Nm, precision=3)}"
+                     f" N m, {100 * v.explained_total:.1f} % explained")  # fmt: skip
     if est.alignment is not None:
         a = est.alignment
         lines.append(f"  empty run aligned: its time = loaded time {a['shift_s']:+.3f} s, "

@@ -176,6 +176,25 @@ def held_out(A_pi, A_x, b, w, t, k: int, n: int, folds: int = FOLDS) -> Validati
     return Validation(rms, explained, total, np.asarray(t), measured, predicted, folds)
 
 
+def predicted_on(Y, A_x, b, w, t, pi: np.ndarray) -> Validation:
+    """A fitted payload ``pi`` predicting another log's payload torques.
+
+    Only the other log's own nuisances (offsets, drift, friction, delay: ``A_x``) are fitted
+    to it; the payload is not. Y: (k, n, 10); b: (k, n); w: (k n,) row weights.
+    """
+    k, n = b.shape
+    predicted = (Y.reshape(-1, 10) @ pi).reshape(k, n)
+    x = np.linalg.lstsq(A_x * w[:, None], (b.reshape(-1) - predicted.reshape(-1)) * w,
+                        rcond=None)[0]  # fmt: skip
+    measured = b - (A_x @ x).reshape(k, n)
+    res = measured - predicted
+    W = w.reshape(k, n)
+    explained = 1 - np.sum(res**2, axis=0) / np.maximum(np.sum(measured**2, axis=0), 1e-300)
+    total = 1 - float(np.sum((W * res) ** 2) / max(np.sum((W * measured) ** 2), 1e-300))
+    rms = np.sqrt(np.mean(res**2, axis=0))
+    return Validation(rms, explained, total, np.asarray(t), measured, predicted, 1)
+
+
 def split_halves(A, b, w, k: int, n: int, p: int = 10):
     """Per half of the motion: (pi (p,), white cov (p, p), rows mask); unconstrained LS."""
     out = []

@@ -175,7 +175,7 @@ def filtered_signals(
             f"the cutoff {cutoff_hz} Hz must be > 0 and below half the log's sample rate "
             f"({rate:.1f} Hz): record faster or choose a lower cutoff"
         )
-    _check_limits(robot, q)
+    _check_limits(robot, q, t)
     sos = butter(FILTER_ORDER, cutoff_hz, fs=rate, output="sos")
     q_f = sosfiltfilt(sos, q, axis=0)
     _check_smooth(robot, q, q_f, cutoff_hz)
@@ -284,16 +284,25 @@ def _on_grid(t, rate: float, *arrays):
     return (grid, *(interp(a) for a in arrays))
 
 
-def _check_limits(robot: RobotModel, q: np.ndarray) -> None:
+def _check_limits(robot: RobotModel, q: np.ndarray, t: np.ndarray) -> None:
     low = q - robot.q_lower < LIMIT_MARGIN
     high = robot.q_upper - q < LIMIT_MARGIN
     hit = np.flatnonzero((low | high).any(axis=0))
     if hit.size:
         j = int(hit[0])
+        at = np.flatnonzero(low[:, j] | high[:, j])
+        beyond = float(max(robot.q_lower[j] - q[:, j].min(), q[:, j].max() - robot.q_upper[j]))
+        where = f"{t[at[0]]:.2f}-{t[at[-1]]:.2f} s"
+        why = (
+            f"it goes {beyond:.4g} beyond the URDF's limit: a limit that is not this robot's "
+            "or an offset in the positions; if the arm really was at its stop there, "
+            if beyond > LIMIT_MARGIN
+            else "a stop's torques are not the payload's; "
+        )
         raise MotionLogError(
             f"joint {robot.joint_names[j]} reaches its limit ({robot.q_lower[j]:.3f} to "
-            f"{robot.q_upper[j]:.3f}) in the motion: the stop's torques are not the payload's; "
-            "plan the motion within the limits"
+            f"{robot.q_upper[j]:.3f}) at {where}: {why}give a --window that leaves {where} "
+            "out, or plan the motion within the limits"
         )
 
 
