@@ -46,9 +46,20 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     from comgrasp_pin.cli.robot import _write_json
     from comgrasp_pin.robot_io.arm_model import arm_model_dict, identify_arm
 
+    from comgrasp_pin.errors import LogError
+
+    guessed = args.ee_frame is None
     robot = _robot(args)
     gains = gains_from_args(args, robot)
-    log = one_log(args.bag, args.csv, "--bag", "--csv", robot, args.topic, gains)
+    try:
+        log = one_log(args.bag, args.csv, "--bag", "--csv", robot, args.topic, gains)
+    except LogError as exc:
+        if not guessed:
+            raise
+        raise LogError(
+            f"{exc}. The arm's end was taken as {args.ee_frame!r}, the end of the URDF's "
+            "longest chain: give --ee-frame, the flange (e.g. tool0, panda_link8)"
+        ) from None
     model = identify_arm(robot, log, _window(args.window, "--window"), args.cutoff)
     _write_json(args.out, arm_model_dict(model))
     n = robot.nq
