@@ -44,9 +44,8 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     from comgrasp_pin.cli.dynamic import _window, one_log
     from comgrasp_pin.cli.gains_args import gains_from_args
     from comgrasp_pin.cli.robot import _write_json
-    from comgrasp_pin.robot_io.arm_model import arm_model_dict, identify_arm
-
     from comgrasp_pin.errors import LogError
+    from comgrasp_pin.robot_io.arm_model import arm_model_dict, identify_arm
 
     guessed = args.ee_frame is None
     robot = _robot(args)
