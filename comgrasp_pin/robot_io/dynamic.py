@@ -83,8 +83,8 @@ class DynamicEstimate:
         t: (k,) the fitted samples' times (s from the log's start).
         tau_payload: (k, n) the payload's torques as measured (N m).
         tau_payload_fit: (k, n) the fitted payload's torques, Y pi (N m).
-        std_parts: the mass's std (kg) from each source: "data and model" (jackknife),
-            "gains", "arm model".
+        std_parts: the mass's std (kg) from each source that applies: "data and model
+            (block jackknife)", "gains" (a log of currents), "arm model" (``arm_model``).
         validation: the held-out prediction (``dynamic_uncertainty.Validation``).
         verdict: "identified" or "unreliable"; reasons: why, one line each.
         halves_mass: (m1, m2) kg, each half of the motion alone.
@@ -218,11 +218,11 @@ def estimate_payload_dynamic(
     checks = Checks(mass, float(np.sqrt(params_cov[0, 0])), source,
                     validation.explained_total, halves, halves_std)  # fmt: skip
     word, reasons = verdict(checks)
-    parts = {
-        "data and model (block jackknife)": float(np.sqrt(data_cov[0, 0])),
-        "gains": float(np.sqrt(cov_gain[0, 0])),
-        "arm model": float(np.sqrt(cov_arm[0, 0])),
-    }
+    parts = {"data and model (block jackknife)": float(np.sqrt(data_cov[0, 0]))}
+    if log.current_gains is not None:
+        parts["gains"] = float(np.sqrt(cov_gain[0, 0]))
+    if arm_model is not None:
+        parts["arm model"] = float(np.sqrt(cov_arm[0, 0]))
     return DynamicEstimate(
         mass, com, inertia_c, pi, params_cov, cov4, inertia_std, inertia_cov, cond,
         np.sqrt(np.mean(residual**2, axis=0)), sigma, source, extras[0],
