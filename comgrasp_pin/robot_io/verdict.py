@@ -42,8 +42,14 @@ class Checks:
 
 
 def verdict(c: Checks) -> tuple[str, list[str]]:
-    """(``identified`` or ``unreliable``, reasons): every rule that objects gives one."""
+    """(``identified`` or ``unreliable``, reasons): every rule that objects gives one.
+
+    Where no payload is seen (the mass's interval holds 0, or lies below it) the rules about
+    the payload's fit (the share explained, the halves) are not asked: there is no payload
+    to explain, and their reasons would blame a model that may be right.
+    """
     reasons = []
+    payload_seen = c.mass_kg - Z95 * c.mass_std_kg > 0
     if c.mass_kg + Z95 * c.mass_std_kg < 0:
         reasons.append(
             f"the mass comes out negative ({c.mass_kg:.3f} +- {Z95 * c.mass_std_kg:.3f} kg): "
@@ -62,7 +68,7 @@ def verdict(c: Checks) -> tuple[str, list[str]]:
             "run of the same motion (--empty-csv/--empty-bag) or an identified arm model "
             "(comgrasp identify-arm, then --arm-model)"
         )
-    if c.explained < MIN_EXPLAINED:
+    if payload_seen and c.explained < MIN_EXPLAINED:
         reasons.append(
             f"the payload explains {100 * c.explained:.0f} % of the held-out torque "
             f"difference (at least {100 * MIN_EXPLAINED:.0f} % expected): the torques hold "
@@ -71,7 +77,7 @@ def verdict(c: Checks) -> tuple[str, list[str]]:
         )
     m1, m2 = c.halves_mass_kg
     z = abs(m1 - m2) / max(c.halves_diff_std_kg, 1e-300)
-    if z > MAX_HALVES_Z:
+    if payload_seen and z > MAX_HALVES_Z:
         reasons.append(
             f"the motion's two halves disagree: {m1:.3f} and {m2:.3f} kg, {z:.1f} std apart "
             f"(at most {MAX_HALVES_Z:g}): an error the model leaves out changes along the "
