@@ -39,7 +39,7 @@ def plot_validation(est, joint_names, path: str | Path, title: str = "") -> Path
     axes[0, 0].legend(loc="upper left", fontsize=8, ncol=2)
     axes[-1, 0].set_xlabel("time in the motion (s); grey lines: the folds")
     m_std = float(np.sqrt(est.cov[0, 0]))
-    head = (f"{title + ': ' if title else ''}payload {est.mass:.3f} +- {m_std:.3f} kg, verdict "
+    head = (f"{title + ': ' if title else ''}payload {est.mass:.3f} ± {m_std:.3f} kg, verdict "
             f"{est.verdict.upper()}: {100 * v.explained_total:.0f} % of the held-out torque "
             "difference explained")  # fmt: skip
     fig.suptitle(head, fontsize=10)
