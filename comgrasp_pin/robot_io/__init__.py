@@ -9,11 +9,16 @@
     write_urscript(payload, "payload.script")
     plan = plan_measurement_poses(robot, k=3)  # limits, no self-collision, D-optimal
     motion = plan_excitation(robot, duration_s=20)  # the inertia too: a motion to record
+    arm = identify_arm(robot, empty_log)  # the empty arm's own model, from any motion
+    est = estimate_payload_dynamic(robot, loaded_log, arm_model=arm)  # est.verdict, .reasons
+    cal = calibrate_gains(robot, loaded_log, empty_log, known_mass_kg=2.805)  # weigh it once
 
 Layer: beside ``procedures``; imports ``estimation``, ``motion.fourier``, ``robot`` and the
 shared modules, never ``simulation`` (no MuJoCo here): it runs on a real robot's logs.
 """
 
+from comgrasp_pin.robot_io.arm_model import ArmModel, identify_arm, load_arm_model
+from comgrasp_pin.robot_io.dynamic import DynamicEstimate, check_on_log, estimate_payload_dynamic
 from comgrasp_pin.robot_io.estimate import LogEstimate, estimate_from_log, result_dict, summary
 from comgrasp_pin.robot_io.excitation import (
     ExcitationMotion,
@@ -28,6 +33,7 @@ from comgrasp_pin.robot_io.exports import (
     write_ros2,
     write_urscript,
 )
+from comgrasp_pin.robot_io.gain_calibration import GainCalibration, calibrate_gains
 from comgrasp_pin.robot_io.gains import Gains, gains_json, parse_gains
 from comgrasp_pin.robot_io.logs import JointLog, read_bag, read_csv, read_log
 from comgrasp_pin.robot_io.mount import load_robot
@@ -44,8 +50,11 @@ from comgrasp_pin.robot_io.windows import (
 )
 
 __all__ = [
+    "ArmModel",
+    "DynamicEstimate",
     "ExcitationMotion",
     "ExcitationSettings",
+    "GainCalibration",
     "Gains",
     "JointLog",
     "LogEstimate",
@@ -53,10 +62,15 @@ __all__ = [
     "PosePlan",
     "StaticReading",
     "T_flange_ee",
+    "calibrate_gains",
+    "check_on_log",
     "estimate_from_log",
+    "estimate_payload_dynamic",
     "find_static_windows",
     "franka_load",
     "gains_json",
+    "identify_arm",
+    "load_arm_model",
     "load_robot",
     "pair_by_configuration",
     "parse_gains",
