@@ -186,7 +186,8 @@ def estimate_payload_dynamic(
     jk = du.jackknife_cov(A, b_rows, w, k, n, blocks)
     factor = np.sqrt(np.maximum(np.diag(jk) / np.maximum(np.diag(white), 1e-300), 1.0))
     P = du.sensitivity(A, w)
-    rel = _relative(gain_cov, log.current_gains, n)
+    rel = du.relative_gain_cov(gain_cov, log.current_gains, n)
+    rel = np.zeros((n, n)) if rel is None else rel
     J_gain = du.gains_jacobian(P, b_gain)
     cov_gain = J_gain @ rel @ J_gain.T
     cov_arm = np.zeros((10, 10))
@@ -232,14 +233,6 @@ def estimate_payload_dynamic(
         tau_payload, tau_fit, parts, validation, word, tuple(reasons), halves, alignment,
         gains_source if log.current_gains is not None else None, delay,
     )  # fmt: skip
-
-
-def _relative(gain_cov, gains, n: int) -> np.ndarray:
-    """(n, n) the gains' relative covariance (zero without gains or without their cov)."""
-    if gains is None or gain_cov is None:
-        return np.zeros((n, n))
-    g = np.asarray(gains, float)
-    return np.asarray(gain_cov, float) / np.outer(g, g)
 
 
 def _halves(A, b_rows, w, k, n, factor, b_gain, rel):

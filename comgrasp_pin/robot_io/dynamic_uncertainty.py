@@ -15,7 +15,7 @@ Three sources of error enter pi's covariance, each measured or given, never a fa
 2. **The drive gains** (a log of motor currents): the efforts are K_j I_j. A relative error
    delta_j of gain j scales joint j's efforts, and moves b's rows of joint j by delta_j
    times the part of b that scales with it (``b_gain``). d pi / d delta from the linear
-   map, then J cov(delta) J^T.
+   map (``gains_jacobian``), then J cov(delta) J^T (``relative_gain_cov``).
 3. **The arm's own model** (``--arm-model``): its parameters' covariance, mapped through
    d pi / d beta = -P Phi.
 
@@ -28,6 +28,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from comgrasp_pin.errors import InvalidInputError
 
 BLOCK_S = 2.5
 """Length (s) of the jackknife's blocks: ten times the filter's correlation time at its
@@ -144,14 +146,27 @@ def sensitivity(A: np.ndarray, w: np.ndarray, p: int = 10) -> np.ndarray:
     return np.linalg.pinv(Aw)[:p] * w[None, :]
 
 
-def gains_cov(P: np.ndarray, b_gain: np.ndarray, rel_cov: np.ndarray) -> np.ndarray:
-    """(p, p) pi's covariance from the gains' relative covariance (n, n).
+def relative_gain_cov(gain_cov, gains, n: int) -> np.ndarray | None:
+    """(n, n) the drive gains' relative covariance gain_cov / outer(K, K), or None.
 
-    ``b_gain`` (k, n): the part of the measured system that scales with each joint's gain.
+    ``gain_cov``: the gains' absolute covariance ((N m / A)^2, ``Gains.cov``); ``gains``: the
+    log's ``current_gains`` (N m / A). None: no gains' covariance, or a log of torques.
+
+    Raises:
+        InvalidInputError: a covariance or gains of the wrong shape, or not finite.
     """
-    k, n = b_gain.shape
-    J = np.column_stack([P[:, j::n] @ b_gain[:, j] for j in range(n)])
-    return J @ rel_cov @ J.T
+    if gain_cov is None or gains is None:
+        return None
+    g = np.asarray(gains, dtype=float)
+    c = np.asarray(gain_cov, dtype=float)
+    if c.shape != (n, n) or not np.all(np.isfinite(c)):
+        raise InvalidInputError(
+            f"gain_cov must be a finite ({n}, {n}) covariance of the drive gains ((N m / A)^2), "
+            f"got shape {c.shape}"
+        )
+    if g.shape != (n,):
+        raise InvalidInputError(f"the log's current_gains must be ({n},), got shape {g.shape}")
+    return c / np.outer(g, g)
 
 
 def gains_jacobian(P: np.ndarray, b_gain: np.ndarray) -> np.ndarray:
@@ -172,13 +187,7 @@ def held_out(A_pi, A_x, b, w, t, k: int, n: int, folds: int = FOLDS) -> Validati
         offsets = A_x[rows] @ beta[A_pi.shape[1] :]
         measured[idx] = (b[rows] - offsets).reshape(-1, n)
         predicted[idx] = (A_pi[rows] @ beta[: A_pi.shape[1]]).reshape(-1, n)
-    res = measured - predicted
-    rms = np.sqrt(np.mean(res**2, axis=0))
-    scale = np.maximum(np.sum(measured**2, axis=0), 1e-300)
-    explained = 1 - np.sum(res**2, axis=0) / scale
-    W = w.reshape(k, n)  # pooled in each joint's noise units: N and N m not mixed
-    total = 1 - float(np.sum((W * res) ** 2) / max(np.sum((W * measured) ** 2), 1e-300))
-    return Validation(rms, explained, total, np.asarray(t), measured, predicted, folds)
+    return _validation(measured, predicted, w, t, folds)
 
 
 def predicted_on(Y, A_x, b, w, t, pi: np.ndarray) -> Validation:
@@ -192,12 +201,17 @@ def predicted_on(Y, A_x, b, w, t, pi: np.ndarray) -> Validation:
     x = np.linalg.lstsq(A_x * w[:, None], (b.reshape(-1) - predicted.reshape(-1)) * w,
                         rcond=None)[0]  # fmt: skip
     measured = b - (A_x @ x).reshape(k, n)
+    return _validation(measured, predicted, w, t, 1)
+
+
+def _validation(measured, predicted, w, t, folds: int) -> Validation:
+    """The scores of a prediction ((k, n) each): RMS and share explained, per joint and all."""
     res = measured - predicted
-    W = w.reshape(k, n)
     explained = 1 - np.sum(res**2, axis=0) / np.maximum(np.sum(measured**2, axis=0), 1e-300)
+    W = w.reshape(measured.shape)  # pooled in each joint's noise units: N and N m not mixed
     total = 1 - float(np.sum((W * res) ** 2) / max(np.sum((W * measured) ** 2), 1e-300))
     rms = np.sqrt(np.mean(res**2, axis=0))
-    return Validation(rms, explained, total, np.asarray(t), measured, predicted, 1)
+    return Validation(rms, explained, total, np.asarray(t), measured, predicted, folds)
 
 
 def split_halves(A, b, w, k: int, n: int, p: int = 10):

@@ -31,6 +31,7 @@ from comgrasp_pin.estimation.drift import difference_covariance
 from comgrasp_pin.estimation.estimate import delta_method
 from comgrasp_pin.estimation.regressor import G0
 from comgrasp_pin.robot import RobotModel
+from comgrasp_pin.robot_io.dynamic_uncertainty import relative_gain_cov
 from comgrasp_pin.robot_io.logs import JointLog
 from comgrasp_pin.robot_io.mount import gravity_magnitude
 from comgrasp_pin.robot_io.windows import MAX_SPEED, StaticReading, read_window
@@ -134,7 +135,7 @@ def estimate_from_log(
         )
     if not before:
         raise LogError("no windows given: at least one before/after pair is needed")
-    rel = _relative_gain_cov(gain_cov, log.current_gains, robot.nq)
+    rel = relative_gain_cov(gain_cov, log.current_gains, robot.nq)
     rb = tuple(read_window(log, *w, max_speed, f"before window {i}") for i, w in enumerate(before))
     ra = tuple(read_window(log, *w, max_speed, f"after window {i}") for i, w in enumerate(after))
     Q = np.array([r.q for r in ra])
@@ -178,25 +179,6 @@ def estimate_from_log(
         a.setflags(write=False)
     estimate = dataclasses.replace(est, cov=total)
     return dataclasses.replace(result, estimate=estimate, gains_cov=part)
-
-
-def _relative_gain_cov(gain_cov, gains, n: int) -> np.ndarray | None:
-    """(n, n) the gains' relative covariance gain_cov / outer(K, K), or None.
-
-    None: no gains' covariance, or a log of torques (nothing to add).
-    """
-    if gain_cov is None or gains is None:
-        return None
-    g = np.asarray(gains, dtype=float)
-    c = np.asarray(gain_cov, dtype=float)
-    if c.shape != (n, n) or not np.all(np.isfinite(c)):
-        raise InvalidInputError(
-            f"gain_cov must be a finite ({n}, {n}) covariance of the drive gains ((N m / A)^2), "
-            f"got shape {c.shape}"
-        )
-    if g.shape != (n,):
-        raise InvalidInputError(f"the log's current_gains must be ({n},), got shape {g.shape}")
-    return c / np.outer(g, g)
 
 
 def _gains_covariance(

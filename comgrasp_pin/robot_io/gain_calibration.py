@@ -24,7 +24,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import pinocchio as pin
 
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.estimation.payload_regressor import regressor_rows
@@ -35,6 +34,7 @@ from comgrasp_pin.robot_io.logs import JointLog
 from comgrasp_pin.robot_io.motion_signals import CUTOFF_HZ, motion_samples
 from comgrasp_pin.robot_io.motion_system import joint_columns, offset_columns, row_noise
 from comgrasp_pin.robot_io.parallel_filter import fast_signals, lowpassed
+from comgrasp_pin.robot_io.payload_system import rnea
 
 GN_ITERATIONS = 20
 """Gauss-Newton steps at most (it converges in a few: the problem is bilinear)."""
@@ -100,12 +100,8 @@ def calibrate_gains(
     fast_loaded = fast_signals(robot, loaded, None, cutoff_hz)
     fast_empty = fast_signals(robot, empty, None, cutoff_hz)
 
-    def rnea(F):
-        return np.array([pin.rnea(robot.model, robot.data, q, v, a)
-                         for q, v, a in zip(F.q, F.qd, F.qdd)])  # fmt: skip
-
-    d_rnea = lowpassed(fast_loaded, cutoff_hz, rnea, S.t) - lowpassed(
-        fast_empty, cutoff_hz, rnea, E.t
+    d_rnea = lowpassed(fast_loaded, cutoff_hz, lambda F: rnea(robot, F), S.t) - lowpassed(
+        fast_empty, cutoff_hz, lambda F: rnea(robot, F), E.t
     )
     Y = lowpassed(
         fast_loaded, cutoff_hz, lambda F: regressor_rows(robot, F.q, F.qd, F.qdd), S.t
