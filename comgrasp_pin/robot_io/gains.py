@@ -14,7 +14,6 @@ relative std), or as the JSON that ``comgrasp calibrate-gains`` writes (``gains_
 
 from __future__ import annotations
 
-import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -22,8 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from comgrasp_pin import file_checks, validate
-from comgrasp_pin.errors import InvalidInputError, LogError
-from comgrasp_pin.robot_io.joint_log import JointLog
+from comgrasp_pin.errors import InvalidInputError
 
 GAINS_KEY = "gains_Nm_per_A"
 COV_KEY = "cov"
@@ -279,32 +277,3 @@ def gains_json(
     if gains.joint_names is not None:
         out[NAMES_KEY] = list(gains.joint_names)
     return {**out, **extra}
-
-
-def apply_gains(log: JointLog, gains: Gains) -> JointLog:
-    """``log`` whose efforts, motor currents (A), become joint torques: gains * currents.
-
-    Raises:
-        LogError: the log has another number of joints than gains, other joint names than
-            the gains' JSON, or its efforts were made from currents already.
-    """
-    names = tuple(log.joint_names)
-    if len(gains.values) != len(names):
-        raise LogError(
-            f"{len(gains.values)} drive gains ({gains.source}) for the "
-            f"{len(names)} joints of {log.source}; give one per joint {list(names)}"
-        )
-    if gains.joint_names is not None and gains.joint_names != names:
-        raise LogError(
-            f"the drive gains ({gains.source}) belong to the joints "
-            f"{list(gains.joint_names)}, the log to {list(names)}"
-        )
-    if log.current_gains is not None:
-        raise LogError(
-            f"{log.source}: its efforts are torques made from currents already; give the gains once"
-        )
-    effort = log.effort * gains.values
-    effort.flags.writeable = False
-    values = gains.values.copy()
-    values.flags.writeable = False
-    return dataclasses.replace(log, effort=effort, current_gains=values)

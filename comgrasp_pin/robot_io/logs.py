@@ -24,6 +24,7 @@ Times are seconds from the log's first message.
 from __future__ import annotations
 
 import csv
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -31,7 +32,7 @@ import numpy as np
 from comgrasp_pin import file_checks
 from comgrasp_pin.errors import LogError
 from comgrasp_pin.robot_io import rtde
-from comgrasp_pin.robot_io.gains import Gains, apply_gains
+from comgrasp_pin.robot_io.gains import Gains
 from comgrasp_pin.robot_io.joint_log import JointLog, assemble_log
 
 JOINT_STATE = "sensor_msgs/msg/JointState"
@@ -69,7 +70,7 @@ def read_bag(
     of them (and the last, so the log's length stays known); deserializing every message of
     a long bag costs about 20 us each. None reads every message.
     ``gains``: the messages' efforts are motor currents (A), the torques are gains times
-    them (``gains.apply_gains``); None: the efforts are the joint torques.
+    them (``apply_gains``); None: the efforts are the joint torques.
 
     Raises:
         LogError: the bag cannot be opened or fails ``file_checks.bag_folder`` (a FIFO, a
@@ -236,3 +237,32 @@ def _assemble(rows, names: tuple[str, ...], source: str) -> JointLog:
         names,
         source,
     )
+
+
+def apply_gains(log: JointLog, gains: Gains) -> JointLog:
+    """``log`` whose efforts, motor currents (A), become joint torques: gains * currents.
+
+    Raises:
+        LogError: the log has another number of joints than gains, other joint names than
+            the gains' JSON, or its efforts were made from currents already.
+    """
+    names = tuple(log.joint_names)
+    if len(gains.values) != len(names):
+        raise LogError(
+            f"{len(gains.values)} drive gains ({gains.source}) for the "
+            f"{len(names)} joints of {log.source}; give one per joint {list(names)}"
+        )
+    if gains.joint_names is not None and gains.joint_names != names:
+        raise LogError(
+            f"the drive gains ({gains.source}) belong to the joints "
+            f"{list(gains.joint_names)}, the log to {list(names)}"
+        )
+    if log.current_gains is not None:
+        raise LogError(
+            f"{log.source}: its efforts are torques made from currents already; give the gains once"
+        )
+    effort = log.effort * gains.values
+    effort.flags.writeable = False
+    values = gains.values.copy()
+    values.flags.writeable = False
+    return dataclasses.replace(log, effort=effort, current_gains=values)

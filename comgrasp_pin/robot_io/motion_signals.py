@@ -28,6 +28,7 @@ import numpy as np
 
 from comgrasp_pin.errors import MotionLogError
 from comgrasp_pin.robot import RobotModel
+from comgrasp_pin.robot_io.log_grid import on_grid, uniform_rate
 from comgrasp_pin.robot_io.logs import JointLog
 
 CUTOFF_HZ = 4.0
@@ -44,8 +45,6 @@ MIN_PEAK_SPEED = 0.2
 """The fastest joint must reach this speed (rad/s) somewhere, or inertia is not seen."""
 LIMIT_MARGIN = 1e-3
 """A joint closer than this to its limit (rad or m) is at its stop."""
-MAX_GAP_PERIODS = 0.1
-"""Longest gap in a log bridged by interpolation, in periods of the cutoff (25 ms at 4 Hz)."""
 MAX_ABOVE_CUTOFF = 0.05
 """Largest share (rms) of a joint's motion above the cutoff before a log is too jerky."""
 MOTION_SPEED = 0.05
@@ -168,8 +167,8 @@ def filtered_signals(
             f"the log's joints {log.joint_names} are not the arm's {robot.joint_names}"
         )
     t, q, tau, qd_log = _cut(log, window)
-    rate = _uniform_rate(t, log.source, cutoff_hz if bridge_hz is None else bridge_hz)
-    t, q, tau, qd_log = _on_grid(t, rate, q, tau, qd_log)
+    rate = uniform_rate(t, log.source, cutoff_hz if bridge_hz is None else bridge_hz)
+    t, q, tau, qd_log = on_grid(t, rate, q, tau, qd_log)
     if not (np.isfinite(cutoff_hz) and 0 < cutoff_hz < rate / 2):
         raise MotionLogError(
             f"the cutoff {cutoff_hz} Hz must be > 0 and below half the log's sample rate "
@@ -213,12 +212,6 @@ def at_times(full: MotionSamples, times: np.ndarray) -> MotionSamples:
     )  # fmt: skip
 
 
-def motion_start(full: MotionSamples, speed: float = 0.05) -> float:
-    """The first time (s) any joint moves faster than ``speed`` (rad/s)."""
-    moving = np.flatnonzero(np.max(np.abs(full.qd), axis=1) > speed)
-    return float(full.t[moving[0]]) if moving.size else float(full.t[0])
-
-
 def _take(full: MotionSamples, idx: np.ndarray) -> MotionSamples:
     return MotionSamples(
         full.t[idx], full.q[idx], full.qd[idx], full.qdd[idx], full.tau[idx], full.cutoff_hz,
@@ -246,42 +239,6 @@ def _cut(log: JointLog, window):
         )
     qd = None if log.velocity is None else np.asarray(log.velocity, float)[sel]
     return t[sel], np.asarray(log.position, float)[sel], np.asarray(log.effort, float)[sel], qd
-
-
-def _uniform_rate(t: np.ndarray, source: str, cutoff_hz: float) -> float:
-    """The median sample rate (Hz); refuses a gap the filter cannot bridge.
-
-    A gap up to ``MAX_GAP_PERIODS`` periods of the cutoff, or 5 samples, is bridged (a
-    controller's dropped cycles, a logger's jitter): linear interpolation across it errs by
-    less than (2 pi f_c gap)^2 / 8 of the motion's amplitude at the cutoff.
-    """
-    dt = np.diff(t)
-    step = float(np.median(dt))
-    if not step > 0:
-        raise MotionLogError(f"{source or 'the log'}: the samples' times do not increase")
-    longest = max(5 * step, MAX_GAP_PERIODS / cutoff_hz) if cutoff_hz > 0 else 5 * step
-    if dt.max() > longest:
-        i = int(np.argmax(dt))
-        raise MotionLogError(
-            f"{source or 'the log'} has a gap of {dt[i]:.3f} s at {t[i]:.2f} s (samples every "
-            f"{step * 1e3:.1f} ms; gaps up to {longest * 1e3:.0f} ms are bridged): record "
-            "without gaps, or give a --window that leaves it out"
-        )
-    return 1.0 / step
-
-
-def _on_grid(t, rate: float, *arrays):
-    """The samples interpolated onto a uniform grid at ``rate`` (the filter assumes one)."""
-    grid = t[0] + np.arange(int(np.floor((t[-1] - t[0]) * rate + 1e-9)) + 1) / rate
-    if len(grid) == len(t) and np.allclose(grid, t, rtol=0, atol=1e-9):
-        return (t, *arrays)
-
-    def interp(a):
-        if a is None:
-            return None
-        return np.column_stack([np.interp(grid, t, col) for col in np.asarray(a).T])
-
-    return (grid, *(interp(a) for a in arrays))
 
 
 def _check_limits(robot: RobotModel, q: np.ndarray, t: np.ndarray) -> None:
