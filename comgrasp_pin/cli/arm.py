@@ -111,19 +111,16 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
 
 def _common(p: argparse.ArgumentParser, ee_required: bool) -> None:
     from comgrasp_pin.cli.gains_args import add_gains_args
+    from comgrasp_pin.cli.robot import _add_robot_args
     from comgrasp_pin.robot_io.motion_signals import CUTOFF_HZ
 
-    p.add_argument("--urdf", required=True, help="the robot's URDF file")
     ee_help = (
         "the payload's frame (the flange or TCP)"
         if ee_required
         else "a frame at the arm's end (default: one on the URDF's longest chain; give the "
         "flange, e.g. tool0 or panda_link8, where the URDF has a gripper)"
     )
-    p.add_argument("--ee-frame", required=ee_required, default=None, help=ee_help)
-    p.add_argument("--package-dir", action="append", default=None,
-                   help="folder where package:// mesh URIs resolve (repeatable)")  # fmt: skip
-    p.add_argument("--gravity", default="0,0,-9.81", help="gravity GX,GY,GZ in the base frame")
+    _add_robot_args(p, ee_help, ee_required)
     p.add_argument("--cutoff", type=float, default=CUTOFF_HZ, help="low-pass cutoff (Hz)")
     add_gains_args(p)
 

@@ -142,9 +142,14 @@ def _cmd_plan_motion(args: argparse.Namespace) -> int:
     return run_plan_motion(args, robot, start)
 
 
-def _add_robot_args(p: argparse.ArgumentParser) -> None:
+def _add_robot_args(
+    p: argparse.ArgumentParser,
+    ee_help: str = "the frame the CoM is estimated in",
+    ee_required: bool = True,
+) -> None:
+    """--urdf, --ee-frame (None when optional and not given), --package-dir, --gravity."""
     p.add_argument("--urdf", required=True, help="the robot's URDF file")
-    p.add_argument("--ee-frame", required=True, help="the frame the CoM is estimated in")
+    p.add_argument("--ee-frame", required=ee_required, default=None, help=ee_help)
     p.add_argument("--package-dir", action="append", default=None,
                    help="folder where package:// mesh URIs resolve (repeatable)")  # fmt: skip
     p.add_argument("--gravity", default="0,0,-9.81",
