@@ -205,21 +205,6 @@ def read_description(path: str | Path, what: str = "URDF",
     return text
 
 
-def load_mjcf(path: str | Path, package_dirs: Sequence[str | Path] = ()):
-    """A ``mujoco.MjModel`` from an MJCF file checked by ``read_description``.
-
-    Raises:
-        InvalidInputError: the file fails a check, or MuJoCo cannot compile it.
-    """
-    import mujoco
-
-    read_description(path, "MJCF", package_dirs)
-    try:
-        return mujoco.MjModel.from_xml_path(str(path))
-    except (ValueError, UnicodeError) as exc:
-        raise InvalidInputError(f"MuJoCo cannot load the MJCF file {path}: {exc}") from None
-
-
 def read_json(path: str | Path, what: str, error: type[ComGraspError] = InvalidInputError):
     """The value of a JSON file of at most MAX_SETTINGS_BYTES.
 

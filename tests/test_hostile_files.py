@@ -14,12 +14,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from comgrasp_pin import file_checks
 from comgrasp_pin._paths import urdf_path
 from comgrasp_pin.errors import ComGraspError, LogError, ResumeError
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io import JointLog, read_bag, read_csv, write_bag
 from comgrasp_pin.robot_io.mount import load_robot
+from comgrasp_pin.simulation.mjcf_files import load_mjcf
 
 UR5 = urdf_path("ur5_gripper.urdf").read_text()
 JOINTS = ("shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint",
@@ -265,15 +265,15 @@ def test_hostile_mjcf_is_refused(tmp_path, attack, text, message):
     path = tmp_path / "scene.xml"
     path.write_text(text)
     with pytest.raises(ComGraspError, match=message):
-        file_checks.load_mjcf(path)
+        load_mjcf(path)
 
 
 def test_a_good_mjcf_loads_and_a_fifo_is_refused(tmp_path):
     (tmp_path / "cube.obj").write_text(CUBE_OBJ)
     (tmp_path / "scene.xml").write_text(MJCF.format(file="cube.obj"))
-    assert file_checks.load_mjcf(tmp_path / "scene.xml").nmesh == 1
+    assert load_mjcf(tmp_path / "scene.xml").nmesh == 1
     with pytest.raises(ComGraspError, match="is a FIFO"):
-        file_checks.load_mjcf(_fifo(tmp_path / "fifo.xml"))
+        load_mjcf(_fifo(tmp_path / "fifo.xml"))
 
 
 # --- CSV logs -----------------------------------------------------------------------------
