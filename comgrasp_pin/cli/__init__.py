@@ -14,6 +14,12 @@ Layer: the top. It may import every other part of the package; nothing in the pa
 imports it. Inside, the command modules import ``args`` (and ``sweep`` imports
 ``experiments``); none imports this ``__init__``. The heavy imports (MuJoCo, the solvers)
 happen inside the commands, so ``comgrasp --help`` stays quick.
+
+The robot side stands alone: building the parser imports neither MuJoCo, nor OpenCV, nor
+matplotlib (``args.OBJECTS`` reads the rods' names from ``sim/objects.json``), and the
+real-arm commands (``estimate``, ``plan-poses``, ``plan-motion``, ``identify-arm``,
+``calibrate-gains``) never do; ``estimate --dynamic --plot`` alone loads matplotlib.
+``tests/test_import_layers.py`` runs each in a fresh process and checks.
 """
 
 from __future__ import annotations

@@ -8,14 +8,15 @@ themselves live in ``validate``.
 from __future__ import annotations
 
 import argparse
+import json
 import os
 from collections.abc import Callable
 from pathlib import Path
 
 from comgrasp_pin import validate
+from comgrasp_pin._paths import sim_path
 from comgrasp_pin.config import SENSOR_PRESETS
 from comgrasp_pin.errors import InvalidInputError
-from comgrasp_pin.simulation.objects import OBJECTS as _OBJECTS
 
 
 def _argument_type(parse: Callable[[str], object], label: str) -> Callable[[str], object]:
@@ -107,8 +108,10 @@ out_dir = _argument_type(_parse_out_dir, "folder")
 ancestor writable)."""
 
 
-OBJECTS = tuple(_OBJECTS)
-"""The rods a command may name (``--object``, ``--objects``)."""
+OBJECTS: tuple[str, ...] = tuple(json.loads(sim_path("objects.json").read_text())["objects"])
+"""The rods a command may name (``--object``, ``--objects``): the names in ``sim/objects.json``,
+in its order, as ``simulation.objects.OBJECTS`` has them; read here so that building the
+parser imports no MuJoCo (the robot-side commands never load the simulator)."""
 
 
 def sentence(text: str) -> str:

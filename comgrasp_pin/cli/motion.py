@@ -17,40 +17,53 @@ from comgrasp_pin.errors import InvalidInputError
 _DEFAULTS = argparse.ArgumentDefaultsHelpFormatter
 
 
+_DESCRIPTION = (
+    "Plan an excitation motion for any arm from its URDF: a rest-to-rest finite Fourier "
+    "series about a start configuration, the wrist joints doing most of the work, within the "
+    "joint position, velocity and acceleration limits, free of self-collision (Pinocchio with "
+    "coal) and of the floor, chosen (random search, then CasADi + IPOPT) so that the stacked "
+    "payload regressor's condition number is small: all ten inertial parameters of a held "
+    "payload observable. Record the robot playing it empty and holding the payload, then "
+    "`comgrasp estimate --dynamic`. Writes the motion as JSON, and on request as a CSV, a "
+    "URScript servoj program and a ROS 2 JointTrajectory (YAML)."
+)
+
+
 def add_plan_motion(sub: argparse._SubParsersAction, add_robot_args, func) -> None:
     """Add `plan-motion` to the subparsers ``sub``; ``func`` runs it."""
-    from comgrasp_pin.robot_io.excitation import (
-        MAX_DURATION_S,
-        MIN_DURATION_S,
-        ExcitationSettings,
-    )
+    from comgrasp_pin.robot_io.excitation import ExcitationSettings
 
     d = ExcitationSettings()
     p = sub.add_parser(
         "plan-motion",
         help="an excitation motion (<= 20 s) that makes the payload's mass, CoM and inertia "
         "observable",
-        description="Plan an excitation motion for any arm from its URDF: a rest-to-rest "
-        "finite Fourier series about a start configuration, the wrist joints doing most of the "
-        "work, within the joint position, velocity and acceleration limits, free of "
-        "self-collision (Pinocchio with coal) and of the floor, chosen (random search, then "
-        "CasADi + IPOPT) so that the stacked payload regressor's condition number is small: "
-        "all ten inertial parameters of a held payload observable. Record the robot playing it "
-        "empty and holding the payload, then `comgrasp estimate --dynamic`. Writes the motion "
-        "as JSON, and on request as a CSV, a URScript servoj program and a ROS 2 "
-        "JointTrajectory (YAML).",
+        description=_DESCRIPTION,
         formatter_class=_DEFAULTS,
     )
     add_robot_args(p)
+    _add_motion_args(p, d)
+    _add_search_args(p, d)
+    _add_output_args(p)
+    p.set_defaults(func=func)
+
+
+def _add_motion_args(p: argparse.ArgumentParser, d) -> None:
+    """The motion's length, start and limits (``d``: the default ``ExcitationSettings``)."""
+    from comgrasp_pin.robot_io.excitation import MAX_DURATION_S, MIN_DURATION_S
+
     p.add_argument(
         "--duration",
         type=float,
         default=MAX_DURATION_S,
         help=f"length of the motion (s), {MIN_DURATION_S:g} to {MAX_DURATION_S:g}",
     )
-    p.add_argument("--start", default=None,
-                   help="Q1,...,Qn: start and end configuration (rad); default: the SRDF's "
-                   "home/default state, a UR arm's home, else the URDF's neutral")  # fmt: skip
+    p.add_argument(
+        "--start",
+        default=None,
+        help="Q1,...,Qn: start and end configuration (rad); default: the SRDF's "
+        "home/default state, a UR arm's home, else the URDF's neutral",
+    )
     p.add_argument(
         "--velocity-scale",
         type=float,
@@ -87,6 +100,10 @@ def add_plan_motion(sub: argparse._SubParsersAction, add_robot_args, func) -> No
         help="SRDF whose disabled collisions are removed (default: the one beside "
         "an example-robot-data URDF, else adjacent links)",
     )
+
+
+def _add_search_args(p: argparse.ArgumentParser, d) -> None:
+    """The random search and its IPOPT refinement (``d``: the default settings)."""
     p.add_argument("--candidates", type=int, default=d.n_random, help="random motions searched")
     p.add_argument(
         "--starts", type=int, default=d.n_starts, help="best random motions refined by IPOPT"
@@ -95,6 +112,10 @@ def add_plan_motion(sub: argparse._SubParsersAction, add_robot_args, func) -> No
         "--iterations", type=int, default=d.max_iter, help="IPOPT iterations per refinement"
     )
     p.add_argument("--seed", type=int, default=0, help="random seed of the search")
+
+
+def _add_output_args(p: argparse.ArgumentParser) -> None:
+    """The files written: the JSON, and on request a CSV, URScript and a ROS 2 trajectory."""
     p.add_argument("--out", default="motion.json", help="the motion JSON")
     p.add_argument("--csv", default=None, help="also write time, J.position/velocity/acceleration")
     p.add_argument(
@@ -117,7 +138,6 @@ def add_plan_motion(sub: argparse._SubParsersAction, add_robot_args, func) -> No
     p.add_argument(
         "--ros2-period", type=float, default=0.02, help="time between the trajectory's points (s)"
     )
-    p.set_defaults(func=func)
 
 
 def run_plan_motion(args: argparse.Namespace, robot, start: np.ndarray | None) -> int:

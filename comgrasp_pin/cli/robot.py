@@ -158,7 +158,14 @@ def _add_robot_args(
 
 
 def add_subcommands(sub: argparse._SubParsersAction) -> None:
-    """Add `estimate` and `plan-poses` to the `comgrasp` subparsers ``sub``."""
+    """Add `estimate`, `plan-poses` and `plan-motion` to the `comgrasp` subparsers ``sub``."""
+    _add_estimate(sub)
+    _add_plan_poses(sub)
+    add_plan_motion(sub, _add_robot_args, _cmd_plan_motion)
+
+
+def _add_estimate(sub: argparse._SubParsersAction) -> None:
+    """`estimate`: the log, its windows, the noise, the result and the payload files."""
     from comgrasp_pin.robot_io.logs import DEFAULT_TOPIC
     from comgrasp_pin.robot_io.payload import INERTIA_HELP
     from comgrasp_pin.robot_io.windows import MAX_SPEED
@@ -211,6 +218,9 @@ def add_subcommands(sub: argparse._SubParsersAction) -> None:
     add_dynamic_args(est)
     est.set_defaults(func=_cmd_estimate)
 
+
+def _add_plan_poses(sub: argparse._SubParsersAction) -> None:
+    """`plan-poses`: K static measurement poses."""
     plan = sub.add_parser(
         "plan-poses",
         help="K static poses (limits, no self-collision) that best determine mass and 3-D CoM",
@@ -237,4 +247,3 @@ def add_subcommands(sub: argparse._SubParsersAction) -> None:
     plan.add_argument("--out", default="poses.json", help="the poses JSON")
     plan.add_argument("--urscript", default=None, help="also write a URScript movej program")
     plan.set_defaults(func=_cmd_plan)
-    add_plan_motion(sub, _add_robot_args, _cmd_plan_motion)
