@@ -11,10 +11,8 @@ from comgrasp_pin.errors import (
 from comgrasp_pin.estimation import (
     AxisPrior,
     ComEstimate,
-    ComEstimateBatch,
     com_along_axis,
     estimate_com,
-    estimate_com_batch,
     plan_wrist_poses,
 )
 from comgrasp_pin.robot import RobotModel
@@ -33,7 +31,6 @@ from comgrasp_pin.robot_io import (
 __all__ = [
     "AxisPrior",
     "ComEstimate",
-    "ComEstimateBatch",
     "ComGraspError",
     "EmptyGripperError",
     "InvalidInputError",
@@ -46,7 +43,6 @@ __all__ = [
     "UnobservableError",
     "com_along_axis",
     "estimate_com",
-    "estimate_com_batch",
     "estimate_from_log",
     "load_robot",
     "payload_in_flange",

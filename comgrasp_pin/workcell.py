@@ -70,6 +70,9 @@ DROP_BOX_INNER_HALF = tuple(
 _DROP_OUTER = _union([e for n, e in _BOX_GEOMS.items() if n != "drop_stand"])
 
 _pedestal = _box_extent(_WORLD.find("geom[@name='pedestal']"), np.zeros(3))
+GRAVITY_WORLD = _floats(_SCENE.find("option").get("gravity"))
+"""(3,) the cell's gravity in the world frame (m/s^2): the URDF's model takes it (the arm's
+``RobotModel.ur5()``), and ``planning.holding`` the jaws' load from it."""
 FLOOR_Z = float(_floats(_WORLD.find("geom[@name='floor']").get("pos"))[2])
 """Height of the floor (m)."""
 OBSTACLES = (

@@ -270,3 +270,10 @@ def test_tool_to_ee_is_the_flange_to_eelink_distance(world_model, data):
     R = data.site_xmat[site].reshape(3, 3)
     flange = R.T @ (data.xpos[world_model.body("tool0").id] - data.site_xpos[site])
     np.testing.assert_allclose(flange, [0.0, 0.0, -workcell.GRIPPER.tool_to_ee], atol=1e-9)
+
+
+def test_gravity_is_the_compiled_worlds_and_the_arm_models(world_model):
+    from comgrasp_pin.robot import RobotModel
+
+    np.testing.assert_array_equal(workcell.GRAVITY_WORLD, world_model.opt.gravity)
+    np.testing.assert_array_equal(RobotModel.ur5().model.gravity.linear, world_model.opt.gravity)

@@ -7,14 +7,11 @@ theta = (m, m c_ee) (kg, kg m) is what the linear least squares delivers; the re
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
-from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
 
 from comgrasp_pin.errors import EmptyGripperError, InvalidInputError, UnobservableError
-from comgrasp_pin.estimation.regressor import G0
 
 MIN_MASS_KG = 1e-3
 """Without torque_std, a payload below this mass (kg) is taken as an empty gripper."""
@@ -29,11 +26,11 @@ class ComEstimate:
     Attributes:
         com_ee: (3,) CoM in the ee frame (m); its component along ``unobservable_ee`` is 0.
         mass: payload mass (kg).
-        weight: payload weight m * G0 (N).
+        weight: payload weight m |g| (N), g the robot model's gravity.
         unobservable_ee: (3,) unit gravity direction in the ee frame along which the CoM is
             not observed (one pose), or None when the full 3-D CoM is estimated.
-        cov: (4, 4) covariance of (mass, com_ee) (kg, m): from torque_std, or from the noise
-            the residuals show where readings outnumber the unknowns (``noise_std``), else
+        cov: (4, 4) covariance of (mass, com_ee) (kg, m): from torque_std (or dtau_cov), or
+            from the noise the residuals show where readings outnumber the unknowns, else
             None; zero variance along ``unobservable_ee`` (that component is fixed at 0).
             With a prior (IPOPT), the posterior's (Laplace at the optimum).
         residual_rms: RMS of the torque residuals (N m).
@@ -46,8 +43,9 @@ class ComEstimate:
         iterations: IPOPT iterations (0 for lstsq).
         n_poses: number of static poses k.
         T_world_ee: (k, 4, 4) ee poses at the measurement configurations.
-        noise_std: std of a torque difference estimated from the residuals (N m) when no
-            torque_std was given, else None.
+        torque_std: std of one torque reading (N m) as the residuals show it (the residuals'
+            std over sqrt(2), a difference being of two readings), where no torque_std or
+            dtau_cov was given and readings outnumber the unknowns; else None.
     """
 
     com_ee: np.ndarray
@@ -64,7 +62,7 @@ class ComEstimate:
     iterations: int
     n_poses: int
     T_world_ee: np.ndarray
-    noise_std: float | None = None
+    torque_std: float | None = None
 
     @property
     def std(self) -> np.ndarray | None:
@@ -101,18 +99,6 @@ def delta_method(theta: np.ndarray, cov_theta: np.ndarray) -> np.ndarray:
         G[1:, 0] = -com / m
         G[1:, 1:] = np.eye(3) / m
         return G @ cov_theta @ G.T
-
-
-@contextmanager
-def singular_is_unobservable() -> Iterator[None]:
-    """Turn NumPy's LinAlgError (a singular matrix) into UnobservableError; a decorator too."""
-    try:
-        yield
-    except np.linalg.LinAlgError as exc:
-        raise UnobservableError(
-            f"the regression is numerically singular ({exc}): the poses do not determine the "
-            "estimate (a larger rcond refuses such pose sets up front)"
-        ) from None
 
 
 def check_finite_result(**values: float | np.ndarray | None) -> None:
@@ -152,122 +138,3 @@ def refuse_empty_gripper(mass: float, mass_var: float | None, cond: float) -> No
         f"{threshold:.3g} kg = {what}): is the gripper empty, or are tau_before and "
         "tau_after swapped?"
     )
-
-
-def assemble_estimate(
-    mass: float,
-    com_ee: np.ndarray,
-    cov: np.ndarray | None,
-    u: np.ndarray | None,
-    residuals: np.ndarray,
-    sv: np.ndarray,
-    cond: float,
-    method: str,
-    status: str,
-    iters: int,
-    T: np.ndarray,
-    noise_std: float | None = None,
-) -> ComEstimate:
-    """The frozen estimate, or an error when its mass is not measurably positive.
-
-    Args:
-        mass: kg.
-        com_ee: (3,) m.
-        cov: (4, 4) covariance of (mass, com_ee), or None.
-        u: (3,) unobservable direction (ee) or None.
-        residuals: (k, n) N m.
-        sv: singular values of the torque regression.
-        cond: its condition number.
-        method: the solver's name.
-        status: its status.
-        iters: its iterations.
-        T: (k, 4, 4) T_world_ee at the poses.
-        noise_std: std of a torque difference estimated from the residuals (N m), when
-            torque_std was not given; None otherwise.
-
-    Raises:
-        UnobservableError: the mass is within MASS_SIGMAS standard deviations of zero and the
-            regression is near singular (condition number above NEAR_SINGULAR).
-        EmptyGripperError: the mass is not measurably above zero (MASS_SIGMAS standard
-            deviations, or MIN_MASS_KG without a covariance).
-    """
-    m = float(mass)
-    refuse_empty_gripper(m, None if cov is None else float(cov[0, 0]), float(cond))
-    residuals = np.array(residuals, dtype=float)
-    return new_estimate(
-        np.array(com_ee, dtype=float),
-        m,
-        None if cov is None else np.array(cov, dtype=float),
-        None if u is None else np.array(u, dtype=float),
-        residuals,
-        math.sqrt(float(residuals.ravel() @ residuals.ravel()) / residuals.size),
-        np.array(sv, dtype=float),
-        float(cond),
-        method,
-        status,
-        iters,
-        np.array(T, dtype=float),
-        noise_std,
-    )
-
-
-def new_estimate(
-    com_ee: np.ndarray,
-    mass: float,
-    cov: np.ndarray | None,
-    u: np.ndarray | None,
-    residuals: np.ndarray,
-    rms: float,
-    sv: np.ndarray,
-    cond: float,
-    method: str,
-    status: str,
-    iters: int,
-    T: np.ndarray,
-    noise_std: float | None,
-) -> ComEstimate:
-    """The ``ComEstimate`` of arrays this package owns (made read-only here, not copied).
-
-    ``rms`` is that of ``residuals`` (k, n). Refuses non-finite results (InvalidInputError).
-    """
-    # Python float sums never warn: NaN or inf anywhere (or an overflowing sum) shows here,
-    # and check_finite_result then names what is not finite
-    screen = mass + rms + sum(com_ee.tolist())
-    if cov is not None:
-        screen += sum(cov.ravel().tolist())
-    if not math.isfinite(screen):
-        check_finite_result(mass=mass, com_ee=com_ee, cov=cov, residual_rms=rms)
-    for a in (com_ee, u, cov, residuals, sv, T):
-        if a is not None:
-            a.setflags(write=False)
-    return construct(com_ee, mass, cov, u, residuals, rms, sv, cond, method, status, iters, T,
-                     noise_std)  # fmt: skip
-
-
-def construct(com_ee, mass, cov, u, residuals, rms, sv, cond, method, status, iters, T,
-              noise_std) -> ComEstimate:  # fmt: skip
-    """The ``ComEstimate`` of checked, read-only fields (``new_estimate``'s last step).
-
-    The dataclass's own ``__init__`` sets each of its 15 fields through
-    ``object.__setattr__`` (it is frozen), 2 us of a 10 us estimate; the instance
-    dictionary is filled in one step instead, with the same fields.
-    """
-    est = object.__new__(ComEstimate)
-    object.__setattr__(est, "__dict__", {
-        "com_ee": com_ee,
-        "mass": mass,
-        "weight": mass * G0,
-        "unobservable_ee": u,
-        "cov": cov,
-        "residual_rms": rms,
-        "residuals": residuals,
-        "condition_number": cond,
-        "singular_values": sv,
-        "method": method,
-        "solver_status": status,
-        "iterations": iters,
-        "n_poses": residuals.shape[0],
-        "T_world_ee": T,
-        "noise_std": noise_std,
-    })  # fmt: skip
-    return est

@@ -31,7 +31,6 @@ import casadi as ca
 import numpy as np
 
 from comgrasp_pin.errors import SolverError, UnobservableError
-from comgrasp_pin.estimation import small_linalg
 
 LOSSES = ("l2", "huber")
 
@@ -196,11 +195,11 @@ FLAT_RCOND = 1e-6
 
 def laplace_covariance(H: np.ndarray) -> np.ndarray:
     """The covariance from the posterior's Hessian; UnobservableError where it is singular."""
-    eig = small_linalg.eigvalsh(0.5 * (H + H.T))
+    eig = np.linalg.eigvalsh(0.5 * (H + H.T))
     if not eig[0] > FLAT_RCOND * FLAT_RCOND * eig[-1]:
         raise UnobservableError(
             f"the posterior is flat in some direction (Hessian eigenvalues "
             f"{np.array2string(eig, precision=3)}): the data and the prior do not determine "
             "the estimate"
         )
-    return small_linalg.inv(H)
+    return np.linalg.inv(H)

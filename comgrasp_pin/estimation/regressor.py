@@ -5,7 +5,8 @@ torques by
 
     dtau = tau_after - tau_before = Y(q) @ theta,     theta = (m, m*c_ee)  (kg, kg m)
 
-with, for the (6, n) world-aligned ee Jacobian J = (J_lin; J_ang) and g = (0, 0, -G0):
+with, for the (6, n) world-aligned ee Jacobian J = (J_lin; J_ang) and the robot model's
+gravity g (world frame, ``robot.model.gravity``: any direction and magnitude):
 
     Y(q) = [ -J_lin^T g ,  J_ang^T [g]x R_world_ee ]                       (n, 4)
 
@@ -23,36 +24,12 @@ import pinocchio as pin
 
 from comgrasp_pin.robot import RobotModel
 
-G0 = 9.81
-"""Magnitude of gravity (m/s^2); gravity in the world frame is (0, 0, -G0)."""
-GRAVITY_WORLD = np.array([0.0, 0.0, -G0])
-DOWN_WORLD = np.array([0.0, 0.0, -1.0])
-
 _WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 
-def regressor_from_jacobian(J_world: np.ndarray, R_world_ee: np.ndarray) -> np.ndarray:
-    """(n, 4) regression matrix Y for theta = (m, m*c_ee).
-
-    Args:
-        J_world: (6, n) ee Jacobian, rows (linear, angular), world-aligned at the ee origin.
-        R_world_ee: (3, 3) orientation of the ee frame in the world.
-
-    Returns:
-        Y with dtau = Y @ theta; column 0 in N m/kg, columns 1..3 in N/kg.
-    """
-    # -J_lin^T g = G0 J_lin_z;  J_ang^T [g]x R = G0 (J_ang_x R[1] - J_ang_y R[0])
-    Y = np.empty((J_world.shape[1], 4))
-    Y[:, 0] = G0 * J_world[2]
-    Y[:, 1:] = G0 * (J_world[3, :, None] * R_world_ee[1] - J_world[4, :, None] * R_world_ee[0])
-    return Y
-
-
-def pose_regressor(robot: RobotModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Y(q) (n, 4) and T_world_ee (4, 4) at one configuration ``q`` (n,)."""
-    J = pin.computeFrameJacobian(robot.model, robot.data, q, robot.ee_frame_id, _WORLD_ALIGNED)
-    T_world_ee = robot.data.oMf[robot.ee_frame_id].homogeneous
-    return regressor_from_jacobian(J, T_world_ee[:3, :3]), T_world_ee
+def gravity_world(robot: RobotModel) -> np.ndarray:
+    """(3,) the robot model's gravity in its world frame (m/s^2): the one home of gravity."""
+    return robot.model.gravity.linear.copy()
 
 
 def stacked_regressor(robot: RobotModel, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -61,35 +38,29 @@ def stacked_regressor(robot: RobotModel, Q: np.ndarray) -> tuple[np.ndarray, np.
     ``Q`` is (k, n); the unknowns are shared because theta is written in the ee frame.
     """
     k, n = Q.shape
-    J = np.empty((k, 6, n))
+    model, data, fid = robot.model, robot.data, robot.ee_frame_id
+    g = model.gravity.linear
+    g_skew = pin.skew(g)
+    Y = np.empty((k, n, 4))
     T = np.empty((k, 4, 4))
     for i in range(k):
-        J[i] = pin.computeFrameJacobian(
-            robot.model, robot.data, Q[i], robot.ee_frame_id, _WORLD_ALIGNED
-        )
-        T[i] = robot.data.oMf[robot.ee_frame_id].homogeneous
-    Y = np.empty((k, n, 4))
-    Y[:, :, 0] = G0 * J[:, 2]
-    Y[:, :, 1:] = G0 * (J[:, 3, :, None] * T[:, None, 1, :3] - J[:, 4, :, None] * T[:, None, 0, :3])
+        J = pin.computeFrameJacobian(model, data, Q[i], fid, _WORLD_ALIGNED)
+        T[i] = data.oMf[fid].homogeneous
+        Y[i, :, 0] = -(g @ J[:3])
+        Y[i, :, 1:] = J[3:].T @ (g_skew @ T[i, :3, :3])
     return Y.reshape(k * n, 4), T
 
 
-def gravity_in_ee(R_world_ee: np.ndarray) -> np.ndarray:
-    """(3,) unit gravity direction (down) in the ee frame: R_world_ee^T (0, 0, -1)."""
-    return -R_world_ee[2].copy()
+def pose_regressor(robot: RobotModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Y(q) (n, 4) and T_world_ee (4, 4) at one configuration ``q`` (n,)."""
+    Y, T = stacked_regressor(robot, np.asarray(q, dtype=float)[None])
+    return Y, T[0]
 
 
-def one_pose_basis(R_world_ee: np.ndarray) -> np.ndarray:
-    """(4, 3) B with theta = B w for one pose, for w = (m, m c_wy, -m c_wx).
-
-    w is the mass and the CoM's horizontal offset in the world (the part one pose observes);
-    B writes it in the ee frame through the rows of ``R_world_ee`` (3, 3).
-    """
-    B = np.zeros((4, 3))
-    B[0, 0] = 1.0
-    B[1:, 1] = R_world_ee[1]
-    B[1:, 2] = -R_world_ee[0]
-    return B
+def gravity_in_ee(robot: RobotModel, R_world_ee: np.ndarray) -> np.ndarray:
+    """(3,) unit direction of gravity (down) in the ee frame of orientation ``R_world_ee``."""
+    g = robot.model.gravity.linear
+    return R_world_ee.T @ (g / np.linalg.norm(g))
 
 
 def perpendicular_basis(u: np.ndarray) -> np.ndarray:

@@ -9,8 +9,9 @@ lift's acceleration adds load).
 
 from __future__ import annotations
 
-from comgrasp_pin.estimation.regressor import G0
-from comgrasp_pin.workcell import GRIPPER
+import numpy as np
+
+from comgrasp_pin.workcell import GRAVITY_WORLD, GRIPPER
 
 
 def holding_moment(grip_force: float, pad_friction: tuple[float, ...]) -> float:
@@ -22,6 +23,6 @@ def holding_moment(grip_force: float, pad_friction: tuple[float, ...]) -> float:
 
 
 def holding_lever(mass: float, grip_force: float, pad_friction: tuple[float, ...]) -> float:
-    """Grasp-to-CoM distance (m) at which the weight of a rod of ``mass`` (kg), held level,
-    reaches ``holding_moment``."""
-    return holding_moment(grip_force, pad_friction) / (mass * G0)
+    """Grasp-to-CoM distance (m) at which the weight of a rod of ``mass`` (kg), held level
+    in the cell's gravity (``workcell.GRAVITY_WORLD``), reaches ``holding_moment``."""
+    return holding_moment(grip_force, pad_friction) / (mass * float(np.linalg.norm(GRAVITY_WORLD)))

@@ -29,11 +29,9 @@ from comgrasp_pin.errors import InvalidInputError, LogError
 from comgrasp_pin.estimation import ComEstimate, estimate_com
 from comgrasp_pin.estimation.drift import difference_covariance
 from comgrasp_pin.estimation.estimate import delta_method
-from comgrasp_pin.estimation.regressor import G0
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.dynamic_uncertainty import relative_gain_cov
 from comgrasp_pin.robot_io.logs import JointLog
-from comgrasp_pin.robot_io.mount import gravity_magnitude
 from comgrasp_pin.robot_io.windows import MAX_SPEED, StaticReading, read_window
 
 NOISE_FLOOR = 1e-6
@@ -152,8 +150,6 @@ def estimate_from_log(
             raise InvalidInputError(f"torque_std must be finite and > 0 (N m), got {torque_std}")
         sigma = np.full(robot.nq, float(torque_std))
         noise_from = "given"
-    # the regression is written for |g| = G0: scale torques measured under another |g|
-    scale = G0 / gravity_magnitude(robot)
     cov = _drift_covariance(rb, ra, sigma, noise_from, drift_std)
 
     def solve(factor: np.ndarray | None, how: str) -> ComEstimate:
@@ -165,9 +161,8 @@ def estimate_from_log(
         if factor is not None:
             b = np.array([factor * r.tau for r in rb]) + (tau_b - np.array([r.tau for r in rb]))
             a = factor * tau_a
-        return estimate_com(robot, Q, scale * b, scale * a, how,
-                            torque_std=None if cov is not None else scale * sigma,
-                            dtau_cov=None if cov is None else scale**2 * cov)  # fmt: skip
+        return estimate_com(robot, Q, b, a, how, torque_std=None if cov is not None else sigma,
+                            dtau_cov=cov)  # fmt: skip
 
     est = solve(None, method)
     result = LogEstimate(est, Q, tau_b, tau_a, sigma, noise_from, rb, ra, float(drift_std))

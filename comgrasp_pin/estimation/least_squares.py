@@ -1,0 +1,148 @@
+"""What the torques observe of theta = (m, m c_ee), and its whitened least squares.
+
+One SVD of the stacked regression Y (k n, 4) decides observability (threshold ``rcond``
+relative to the largest singular value):
+
+- rank 4: the full 3-D CoM is estimated;
+- rank 3 with a lost direction that is a pure CoM direction u (one pose, or poses that never
+  turn the wrist relative to gravity): the CoM along u is not observed; the least squares
+  gives the solution with no component along u (the pseudo-inverse's), and zero variance
+  there;
+- anything else leaves the mass unobservable: ``UnobservableError``.
+
+The fit is generalised least squares: with W the inverse square root of the torque
+differences' covariance (a diagonal of 1 / std, or L^-1 for a full covariance L L^T),
+A = W Y and A's truncated SVD give theta and its covariance (A^T A)^+ in one step, the
+Cramer-Rao bound for Gaussian noise. Where no noise is given, it is estimated from the
+residuals (readings must outnumber the observed unknowns), else there is no covariance.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from comgrasp_pin.errors import UnobservableError
+
+MASS_NULL_TOL = 1e-3
+"""A lost direction whose mass component exceeds this (unit null vector) makes m unobservable."""
+NOISE_FLOOR = 1e-6
+"""No torque difference is taken as known better than this (N m): the noise estimated from
+the residuals of noise-free data is floored here, so its weights stay finite."""
+
+
+@dataclass(frozen=True)
+class Observed:
+    """The SVD of Y (rows, 4) and what it observes.
+
+    Attributes:
+        rank: 4, or 3 where the CoM along ``u`` is lost.
+        u: (3,) unit CoM direction (ee) the torques cannot see, oriented along gravity at the
+            first pose, or None.
+        singular_values: (4,) of Y, descending; the lost one is 0.
+        condition_number: largest over smallest singular value of the observed directions.
+        U, s, Vt: Y's thin SVD (U (rows, rank), s (rank,), Vt (rank, 4)).
+    """
+
+    rank: int
+    u: np.ndarray | None
+    singular_values: np.ndarray
+    condition_number: float
+    U: np.ndarray
+    s: np.ndarray
+    Vt: np.ndarray
+
+
+def observe(Y: np.ndarray, rcond: float, down_ee: np.ndarray) -> Observed:
+    """Y's observability by its SVD; ``down_ee`` (3,) orients a lost CoM direction.
+
+    Raises:
+        UnobservableError: the mass (or more than one CoM direction) is not observed.
+    """
+    U, s, Vt = np.linalg.svd(Y, full_matrices=len(Y) < 4)
+    s = np.concatenate([s, np.zeros(4 - len(s))])  # fewer than 4 readings: 0s
+    rank = int(np.sum(s > rcond * s[0])) if s[0] > 0 else 0
+    u = None
+    if rank == 3 and abs(Vt[3, 0]) <= MASS_NULL_TOL:
+        u = Vt[3, 1:] / np.linalg.norm(Vt[3, 1:])
+        u = u if u @ down_ee >= 0 else -u
+    elif rank != 4:
+        raise UnobservableError(
+            f"the poses leave the mass unobservable: singular values of the torque regression "
+            f"{np.array2string(s, precision=3)} (rank {rank} of 4 at rcond={rcond:g}); use "
+            "poses where the joints bear the payload's weight, and turn the wrist against "
+            "gravity between poses"
+        )
+    sv = s.copy()
+    sv[rank:] = 0.0
+    return Observed(rank, u, sv, float(s[0] / s[rank - 1]), U[:, :rank], s[:rank], Vt[:rank])
+
+
+@dataclass(frozen=True)
+class Fit:
+    """The least squares of b on Y, whitened.
+
+    Attributes:
+        theta: (4,) the solution (kg, kg m), no component along the lost direction.
+        cov: (4, 4) its covariance, or None where the noise is unknown and cannot be
+            estimated (no more readings than observed unknowns).
+        A, b_w: the whitened regression (rows, 4) and differences (rows,) (unit noise where
+            ``cov`` is known; A = Y, b_w = b otherwise).
+        Vt: (rank, 4) the observed directions of theta (A's right singular vectors).
+        torque_std: std of one reading estimated from the residuals (N m), or None.
+    """
+
+    theta: np.ndarray
+    cov: np.ndarray | None
+    A: np.ndarray
+    b_w: np.ndarray
+    Vt: np.ndarray
+    torque_std: float | None
+
+
+def fit(
+    Y: np.ndarray,
+    b: np.ndarray,
+    seen: Observed,
+    row_std: np.ndarray | float | None,
+    chol: np.ndarray | None,
+) -> Fit:
+    """Generalised least squares of ``b`` (rows,) on ``Y`` (rows, 4) at ``seen.rank``.
+
+    Args:
+        Y: (rows, 4) the regression of theta.
+        b: (rows,) the torque differences (N m).
+        seen: Y's observability (``observe``).
+        row_std: std of each torque difference (N m): a float (all the same), (rows,), or
+            None (unknown: estimated from the residuals).
+        chol: the lower Cholesky factor of the differences' covariance, in place of
+            ``row_std``, or None.
+    """
+    r = seen.rank
+    if chol is not None:
+        A, b_w = np.linalg.solve(chol, Y), np.linalg.solve(chol, b)
+    elif isinstance(row_std, np.ndarray):
+        A, b_w = Y / row_std[:, None], b / row_std
+    else:
+        scale = 1.0 if row_std is None else 1.0 / row_std
+        theta, inv_s = _solve(seen.U, seen.s, seen.Vt, b)
+        torque_std = None
+        if row_std is None:
+            if len(b) <= r:
+                return Fit(theta, None, Y, b, seen.Vt, None)
+            rss = float(np.sum((b - Y @ theta) ** 2))
+            std = max(math.sqrt(rss / (len(b) - r)), NOISE_FLOOR)
+            scale, torque_std = 1.0 / std, std / math.sqrt(2.0)
+        cov = (seen.Vt.T * (inv_s / scale) ** 2) @ seen.Vt
+        return Fit(theta, cov, Y * scale, b * scale, seen.Vt, torque_std)
+    U, s, Vt = np.linalg.svd(A, full_matrices=False)
+    theta, inv_s = _solve(U[:, :r], s[:r], Vt[:r], b_w)
+    return Fit(theta, (Vt[:r].T * inv_s**2) @ Vt[:r], A, b_w, Vt[:r], None)
+
+
+def _solve(U: np.ndarray, s: np.ndarray, Vt: np.ndarray, b: np.ndarray):
+    """(theta = V S^-1 U^T b, S^-1) of a truncated SVD."""
+    inv_s = 1.0 / s
+    return Vt.T @ ((U.T @ b) * inv_s), inv_s
