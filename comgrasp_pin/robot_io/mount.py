@@ -1,9 +1,10 @@
 """A robot read from its URDF and mounted under any gravity: floor, wall, ceiling or a tilt.
 
-The estimator writes gravity as (0, 0, -G) in its world frame (DESIGN.md section 3). For a base
-mounted otherwise, ``gravity_base`` is gravity in the URDF's base (root) frame; the model's
-world frame is then turned by the smallest rotation R_world_base that takes gravity to -z,
-and the model's gravity (``model.gravity``, Pinocchio) gets its magnitude. Joint torques,
+Every model of the package takes gravity from ``model.gravity`` (Pinocchio), in any direction
+and of any magnitude. The planners measure heights along world z (``planning.floor_heights``),
+so for a base mounted otherwise than on a floor, ``gravity_base`` being gravity in the URDF's
+base (root) frame, the model's world frame is turned by the smallest rotation R_world_base
+that takes gravity to -z, and the model's gravity is (0, 0, -|g|) in it. Joint torques,
 ee-frame quantities and the CoM in the ee or flange frame do not depend on that choice of
 world frame; only ``T_world_ee`` is in the turned frame.
 """
@@ -52,18 +53,3 @@ def rotation_to_down(gravity_base: np.ndarray) -> np.ndarray:
     quat = pin.Quaternion.FromTwoVectors(np.asarray(gravity_base, float), np.array([0, 0, -1.0]))
     return quat.toRotationMatrix()
 
-
-def gravity_magnitude(robot: RobotModel) -> float:
-    """|g| of the robot's model (m/s^2)."""
-    return float(np.linalg.norm(robot.model.gravity.linear))
-
-
-def _turn_root(model: pin.Model, M_world_base: pin.SE3) -> None:
-    """Place the root of ``model`` at ``M_world_base``: every joint and frame on the universe."""
-    for j in range(1, model.njoints):
-        if model.parents[j] == 0:
-            model.jointPlacements[j] = M_world_base * model.jointPlacements[j]
-    for i, frame in enumerate(model.frames):
-        if frame.parentJoint == 0 and i > 0:
-            frame.placement = M_world_base * frame.placement
-            model.frames[i] = frame
