@@ -1,4 +1,5 @@
-"""The package's imports point one way: no circle, and each part imports only the layers below.
+"""The package's imports point one way: no circle, and each part imports only the layers below;
+and the robot side stands alone: its commands load no simulator, camera or plotting library.
 
 Every ``.py`` under ``comgrasp_pin/`` is read with ``ast`` (nothing is imported). Every import
 of a ``comgrasp_pin`` module counts: at module level, inside a function, under
@@ -7,12 +8,23 @@ An import hidden in a function still ties the two modules together, so it can cl
 like any other. ``from comgrasp_pin.a import b`` is an edge to ``a.b`` when ``b`` is a module,
 else to ``a``; importing ``a.b`` is not counted as importing the package ``a``'s
 ``__init__`` (which re-exports its modules, as every package's may).
+
+The robot side is checked by running it: each real-arm command (``estimate`` static and
+``--dynamic``, ``plan-poses``, ``plan-motion``, ``identify-arm``, ``calibrate-gains``, and
+``--help``) runs in a fresh Python on small logs made here, and afterwards none of MuJoCo,
+OpenCV (cv2) and matplotlib is in its ``sys.modules`` (``--plot`` alone may load matplotlib).
 """
 
 from __future__ import annotations
 
 import ast
+import json
+import subprocess
+import sys
 from pathlib import Path
+
+import numpy as np
+import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "comgrasp_pin"
 
@@ -153,3 +165,141 @@ def test_each_part_imports_only_the_layers_below():
 
 def test_every_part_has_a_layer():
     assert {_part(m) for m in MODULES} == set().union(*LAYERS)
+
+
+# --- the robot side stands alone: its commands run without the simulation's libraries -------
+
+SIMULATION_LIBRARIES = ("mujoco", "cv2", "matplotlib")
+_RUN = """
+import json, sys
+from comgrasp_pin.cli import main
+try:
+    code = main(json.loads(sys.argv[1]))
+except SystemExit as exc:  # --help
+    code = exc.code
+loaded = [m for m in json.loads(sys.argv[2]) if m in sys.modules]
+print(json.dumps({"code": code, "loaded": loaded}), file=sys.stderr)
+"""
+
+
+def _run_alone(argv: list[str]) -> list[str]:
+    """Which of SIMULATION_LIBRARIES ``comgrasp argv`` has loaded when it ends, run in a
+    fresh Python (it must succeed)."""
+    res = subprocess.run(
+        [sys.executable, "-c", _RUN, json.dumps(argv), json.dumps(SIMULATION_LIBRARIES)],
+        capture_output=True, text=True, timeout=300, cwd=PACKAGE.parent,
+    )  # fmt: skip
+    assert res.returncode == 0, res.stderr
+    last = json.loads(res.stderr.strip().splitlines()[-1])
+    assert last["code"] == 0, res.stderr
+    return last["loaded"]
+
+
+def _motion_csv(robot, q0: np.ndarray, mass: float, path: Path) -> str:
+    """A 10 s motion about ``q0`` at 200 Hz, its efforts Pinocchio's RNEA with a payload of
+    ``mass`` (kg) at the ee frame, plus friction and noise, as a CSV."""
+    import pinocchio as pin
+
+    from comgrasp_pin.robot_io import JointLog, write_csv
+
+    t = np.arange(0.0, 10.0, 1 / 200)
+    waves = np.sin(np.outer(2 * np.pi * t / 5, [1, 2, 3, 1, 2, 3]) + np.arange(6))
+    q = q0 + 0.5 * np.sin(np.pi * t / 10)[:, None] ** 2 * waves
+    qd = np.gradient(q, t, axis=0)
+    qdd = np.gradient(qd, t, axis=0)
+    model = pin.Model(robot.model)
+    frame = model.frames[robot.ee_frame_id]
+    body = pin.Inertia(mass, np.array([0.02, -0.01, 0.08]), np.diag([4e-3, 5e-3, 1e-3]))
+    model.appendBodyToJoint(frame.parentJoint, body, frame.placement)
+    data = model.createData()
+    tau = np.array([pin.rnea(model, data, *row) for row in zip(q, qd, qdd, strict=True)])
+    noise = np.random.default_rng(int(10 * mass)).standard_normal(tau.shape)
+    tau += 0.2 * np.tanh(qd / 0.01) + 0.02 * noise
+    return str(write_csv(JointLog(t, tuple(robot.joint_names), q, tau), path))
+
+
+@pytest.fixture(scope="module")
+def robot_logs(tmp_path_factory):
+    """The project's UR5 (URDF, ee frame), and logs made with Pinocchio (no MuJoCo): a
+    static session at three poses empty then loaded (CSV and bag, its windows), and one
+    motion played empty and loaded (CSVs)."""
+    from _logs import rnea_torques, session
+
+    from comgrasp_pin._paths import urdf_path
+    from comgrasp_pin.robot_io import load_robot, write_bag, write_csv
+
+    folder = tmp_path_factory.mktemp("robot_logs")
+    urdf = str(urdf_path("ur5_gripper.urdf"))
+    robot = load_robot(urdf, "eelink")
+    Q = np.array([[0.0, -1.6, 1.6, -1.57, -1.57, 0.0], [0.4, -1.2, 1.2, -0.4, 0.8, 1.0],
+                  [-0.5, -1.9, 1.5, -2.5, -0.6, -1.2]])  # fmt: skip
+    torques = rnea_torques(robot, 0.6, np.array([0.03, 0.0, 0.04]))
+    log, before, after, grasp = session(Q, torques, robot.joint_names, seed=3)
+    return {
+        "folder": folder, "robot": ["--urdf", urdf, "--ee-frame", "eelink"],
+        "csv": str(write_csv(log, folder / "static.csv")),
+        "bag": str(write_bag(log, folder / "static_bag")),
+        "windows": ["--before", ",".join(f"{a}:{b}" for a, b in before),
+                    "--after", ",".join(f"{a}:{b}" for a, b in after)],
+        "grasp_time": str(grasp),
+        "empty": _motion_csv(robot, Q[0], 0.0, folder / "empty.csv"),
+        "loaded": _motion_csv(robot, Q[0], 0.8, folder / "loaded.csv"),
+    }  # fmt: skip
+
+
+ROBOT_COMMANDS = {
+    "estimate --help": lambda L: ["estimate", "--help"],
+    "estimate, CSV, payload files": lambda L: [
+        "estimate", *L["robot"], "--csv", L["csv"], *L["windows"],
+        "--out", str(L["folder"] / "R1.json"), "--export-ur", str(L["folder"] / "p.script"),
+        "--export-franka", str(L["folder"] / "p.json"),
+        "--export-ros2", str(L["folder"] / "p.yaml"),
+    ],
+    "estimate, bag, --auto": lambda L: [
+        "estimate", *L["robot"], "--bag", L["bag"], "--auto", "--grasp-time", L["grasp_time"],
+        "--out", str(L["folder"] / "R2.json"),
+    ],
+    "estimate --dynamic": lambda L: [
+        "estimate", "--dynamic", *L["robot"], "--csv", L["loaded"], "--empty-csv", L["empty"],
+        "--out", str(L["folder"] / "R3.json"), "--export-franka", str(L["folder"] / "d.json"),
+    ],
+    "identify-arm": lambda L: [
+        "identify-arm", *L["robot"], "--csv", L["empty"], "--out", str(L["folder"] / "ARM.json"),
+    ],
+    "calibrate-gains": lambda L: [
+        "calibrate-gains", *L["robot"], "--csv", L["loaded"], "--empty-csv", L["empty"],
+        "--known-mass", "0.8", "--out", str(L["folder"] / "GAINS.json"),
+    ],
+    "plan-poses": lambda L: [
+        "plan-poses", *L["robot"], "--k", "2", "--candidates", "200",
+        "--out", str(L["folder"] / "poses.json"), "--urscript", str(L["folder"] / "p.urscript"),
+    ],
+    "plan-motion": lambda L: [
+        "plan-motion", *L["robot"], "--duration", "4", "--candidates", "20", "--starts", "1",
+        "--iterations", "2", "--out", str(L["folder"] / "motion.json"),
+        "--urscript", str(L["folder"] / "m.script"), "--ros2", str(L["folder"] / "m.yaml"),
+    ],
+}  # fmt: skip
+
+
+@pytest.mark.parametrize("name", ROBOT_COMMANDS)
+def test_robot_commands_load_no_simulator_camera_or_plot_library(robot_logs, name):
+    loaded = _run_alone(ROBOT_COMMANDS[name](robot_logs))
+    assert loaded == [], f"comgrasp {name} loaded {loaded}"
+
+
+def test_the_dynamic_estimates_plot_alone_loads_matplotlib(robot_logs):
+    """--plot draws with matplotlib, and the check above would see it."""
+    L = robot_logs
+    loaded = _run_alone(["estimate", "--dynamic", *L["robot"], "--csv", L["loaded"],
+                            "--empty-csv", L["empty"], "--out", str(L["folder"] / "R4.json"),
+                            "--plot", str(L["folder"] / "fit.png")])  # fmt: skip
+    assert loaded == ["matplotlib"]
+
+
+def test_the_parsers_rods_are_the_simulations():
+    """``cli.args.OBJECTS`` reads sim/objects.json itself (no MuJoCo): the same names, order."""
+    from comgrasp_pin.cli.args import OBJECTS
+    from comgrasp_pin.simulation.objects import OBJECTS as SIMULATED
+
+    assert OBJECTS == tuple(SIMULATED)
