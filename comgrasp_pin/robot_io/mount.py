@@ -53,3 +53,13 @@ def rotation_to_down(gravity_base: np.ndarray) -> np.ndarray:
     quat = pin.Quaternion.FromTwoVectors(np.asarray(gravity_base, float), np.array([0, 0, -1.0]))
     return quat.toRotationMatrix()
 
+
+def _turn_root(model: pin.Model, M_world_base: pin.SE3) -> None:
+    """Place the root of ``model`` at ``M_world_base``: every joint and frame on the universe."""
+    for j in range(1, model.njoints):
+        if model.parents[j] == 0:
+            model.jointPlacements[j] = M_world_base * model.jointPlacements[j]
+    for i, frame in enumerate(model.frames):
+        if frame.parentJoint == 0 and i > 0:
+            frame.placement = M_world_base * frame.placement
+            model.frames[i] = frame
