@@ -1,28 +1,52 @@
-"""The package's errors: one base class, a ``ValueError``, so callers may catch either."""
+"""The package's errors: one base, ``ComGraspError``, and a built-in base that says the kind.
+
+Every exception the package raises is a ``ComGraspError``, so a caller may catch them all
+with one clause (and the command line prints any of them as one line, exit status 2). Each
+one is also the built-in exception of its kind, so a caller that knows nothing of this
+package catches it where it belongs:
+
+- bad input and estimates that cannot be made: ``ValueError`` (``InvalidInputError``,
+  ``UnobservableError``, ``EmptyGripperError``, ``SolverError``, the ``PerceptionError``,
+  ``LogError`` and ``IKError`` families, ``CollisionError``);
+- the physical outcomes of a grasp, which are neither bad input nor a broken harness: a
+  ``ComGraspError`` only (``RodDroppedError``, ``RodSlippedError``);
+- run and harness failures: ``UnstablePhysicsError``, ``WorkerDiedError``,
+  ``BackendError`` and ``InternalTrialError`` are ``RuntimeError``; ``TrialTimeoutError``
+  a ``TimeoutError``; ``OutputError`` and ``ResumeError`` (the results folder's files refuse
+  the run, as ``FileExistsError`` would) an ``OSError``; ``MissingAssetError`` a
+  ``FileNotFoundError``; ``MissingExtraError`` an ``ImportError``.
+
+Inheritance says what a failure is, not what to do about it: which outcomes of a trial
+grasp are grasped again is ``planning.retry.ON_FAILED_GRASP``, a table.
+"""
 
 from __future__ import annotations
 
 
-class ComGraspError(ValueError):
-    """Base class of every error raised by comgrasp_pin for bad input or a failed estimate."""
+class ComGraspError(Exception):
+    """Base class of every error raised by comgrasp_pin (see the module docstring for the
+    built-in base each kind adds)."""
 
 
-class InvalidInputError(ComGraspError):
+# --- bad input, and estimates the data cannot give: ValueError ---------------------------
+
+
+class InvalidInputError(ComGraspError, ValueError):
     """An argument has the wrong shape, type or value (NaN, inf, unknown option)."""
 
 
-class UnobservableError(ComGraspError):
+class UnobservableError(ComGraspError, ValueError):
     """The data cannot determine the requested quantity (e.g. the mass, or x_CoM^O for a rod
     axis parallel to gravity)."""
 
 
-class EmptyGripperError(ComGraspError):
+class EmptyGripperError(ComGraspError, ValueError):
     """The estimated payload mass is not measurably above zero: nothing is held."""
 
 
-class SolverError(ComGraspError):
-    """A numerical solver failed. ``return_status`` is the solver's own status string
-    (IPOPT's ``return_status``), ``iterations`` its iteration count."""
+class SolverError(ComGraspError, ValueError):
+    """A numerical solver failed on the data it was given. ``return_status`` is the solver's
+    own status string (IPOPT's ``return_status``), ``iterations`` its iteration count."""
 
     def __init__(self, message: str, return_status: str, iterations: int | None = None):
         super().__init__(f"{message} (solver status: {return_status})")
@@ -30,7 +54,7 @@ class SolverError(ComGraspError):
         self.iterations = iterations
 
 
-class PerceptionError(ComGraspError):
+class PerceptionError(ComGraspError, ValueError):
     """The cameras' images do not give what was asked (base of the perception errors)."""
 
 
@@ -67,17 +91,54 @@ class InvalidDepthError(PerceptionError):
     """The depth image is missing, of the wrong shape, or has no valid values where needed."""
 
 
+class HeldRodUnmeasuredError(PerceptionError):
+    """The side camera could not measure the held rod (every frame refused as untrusted:
+    noise and holes where the handle's surface is fitted), so it was laid back where it was
+    grasped. A camera's failure, not the grasp's: the rod did not necessarily slip.
+    ``heavy_side_world`` tells where its CoM lies, if the watch saw it turn
+    (``planning.retry.ON_FAILED_GRASP`` grasps it again)."""
+
+    template = "the side camera cannot measure the held rod, so it was laid back: {}"
+
+    def __init__(self, message: str, heavy_side_world=None):
+        super().__init__(self.template.format(message))
+        self.heavy_side_world = heavy_side_world
+
+
 class CameraFileError(InvalidInputError):
     """A camera's image, camera-info or pose file cannot be read as asked: unreadable, of
     the wrong kind or bit depth, missing a field, or sizes that disagree."""
 
 
-class IKError(ComGraspError):
+class IKError(ComGraspError, ValueError):
     """No joint configuration reaches the target within tolerance and joint limits."""
 
 
-class RodDroppedError(EmptyGripperError):
-    """The rod fell out of the jaws during a trial grasp.
+class CollisionError(ComGraspError, ValueError):
+    """The robot's collision model cannot be built, or no collision-free pose is found."""
+
+
+class LogError(ComGraspError, ValueError):
+    """A robot log (ROS 2 bag or CSV) cannot give what is asked: the file is unreadable, a
+    topic, joint or effort is missing, or a time window is outside the log."""
+
+
+class MotionLogError(LogError):
+    """A motion's log cannot identify a payload's inertia: too short, no motion, a joint at
+    its limit, too jerky for the filter, or sampled with gaps."""
+
+
+class NotStaticError(LogError):
+    """A time window of a log is not static: the arm moved faster than the threshold."""
+
+
+# --- what the world did to a grasp: its own kind ------------------------------------------
+
+
+class RodDroppedError(ComGraspError):
+    """The rod fell out of the jaws during a trial grasp (a physical outcome, not an empty
+    gripper's estimate: that one is ``EmptyGripperError``, which the trial grasp turns into
+    this when the rod was held before).
 
     ``heavy_side_world``: (3,) unit horizontal direction (world) of the end that went down
     first, from the side camera's tilt samples or the estimate, or None if nothing told.
@@ -97,66 +158,60 @@ class RodSlippedError(RodDroppedError):
     template = "the rod slipped as it was lifted: {}"
 
 
-class HeldRodUnmeasuredError(RodSlippedError):
-    """The side camera could not measure the held rod (every frame refused as untrusted:
-    noise and holes where the handle's surface is fitted), so it was laid back where it was
-    grasped. It did not necessarily slip; like a rod that slipped it is grasped again, and
-    ``heavy_side_world`` tells where its CoM lies, if the watch saw it turn."""
-
-    template = "the side camera cannot measure the held rod, so it was laid back: {}"
+# --- run and harness failures: RuntimeError, TimeoutError, OSError, ImportError -----------
 
 
-class MissingAssetError(ComGraspError):
-    """A file the package ships or depends on (urdf/, sim/, example-robot-data) is missing:
-    the installation is broken."""
-
-
-class OutputError(ComGraspError):
-    """A result file (video, figure, CSV) cannot be written where it was asked for."""
-
-
-class LogError(ComGraspError):
-    """A robot log (ROS 2 bag or CSV) cannot give what is asked: the file is unreadable, a
-    topic, joint or effort is missing, or a time window is outside the log."""
-
-
-class MotionLogError(LogError):
-    """A motion's log cannot identify a payload's inertia: too short, no motion, a joint at
-    its limit, too jerky for the filter, or sampled with gaps."""
-
-
-class NotStaticError(LogError):
-    """A time window of a log is not static: the arm moved faster than the threshold."""
-
-
-class CollisionError(ComGraspError):
-    """The robot's collision model cannot be built, or no collision-free pose is found."""
-
-
-class ResumeError(OutputError):
-    """A run's results folder cannot be continued: other settings, another header, damaged
-    rows. The message names what differs and what to do."""
-
-
-class UnstablePhysicsError(ComGraspError):
+class UnstablePhysicsError(ComGraspError, RuntimeError):
     """The simulation went unstable (NaN or inf state, MuJoCo's bad-acceleration warning):
     the trial's physics, not the robot's method, failed."""
 
 
-class WorkerDiedError(ComGraspError):
+class WorkerDiedError(ComGraspError, RuntimeError):
     """A worker process running a trial died (killed, crashed, out of memory)."""
 
 
-class TrialTimeoutError(ComGraspError):
+class TrialTimeoutError(ComGraspError, TimeoutError):
     """A trial ran past its time limit (``--trial-timeout``): its worker was stopped and the
     run went on; ``--resume --retry-failed`` runs it again."""
 
 
-class BackendError(ComGraspError):
+class BackendError(ComGraspError, RuntimeError):
     """The requested backend cannot run trials here (``--backend ray`` without Ray installed,
     or a Ray cluster that cannot be reached)."""
 
 
-class MissingExtraError(ComGraspError):
+class InternalTrialError(ComGraspError, RuntimeError):
+    """Trials of a run raised an exception that is not a ``ComGraspError`` (a bug: a
+    ``TypeError``, a ``KeyError``, ...), not the world's failure. Raised once every trial of
+    the run has ended: their rows are in the CSV, marked ``internal error`` and left out of
+    every rate and mean; ``--resume`` runs them again.
+
+    ``trials``: the keys of those trials; ``traceback_path``: the file holding their
+    tracebacks; ``rows``: every row of the run."""
+
+    def __init__(self, message: str, trials=(), traceback_path=None, rows=()):
+        super().__init__(message)
+        self.trials = list(trials)
+        self.traceback_path = traceback_path
+        self.rows = list(rows)
+
+
+class MissingExtraError(ComGraspError, ImportError):
     """An optional dependency the command needs is not installed (``--rerun`` without
     rerun-sdk); the message says how to install it."""
+
+
+class MissingAssetError(ComGraspError, FileNotFoundError):
+    """A file the package ships or depends on (urdf/, sim/, example-robot-data) is missing:
+    the installation is broken."""
+
+
+class OutputError(ComGraspError, OSError):
+    """A result file (video, figure, CSV) cannot be written where it was asked for."""
+
+
+class ResumeError(OutputError):
+    """A run's results folder cannot be continued: other settings, another header, damaged
+    rows, results there without ``--resume`` or ``--overwrite``, another run writing it. The
+    files on disk refuse the run (an ``OSError``, as ``FileExistsError`` would be), not an
+    argument: the message names what differs and what to do."""

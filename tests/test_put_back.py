@@ -19,17 +19,21 @@ def test_the_lower_end_clears_the_table_by_the_margin():
 def test_a_rod_the_side_camera_cannot_measure_is_said_to_be_laid_back_not_slipped():
     """A real realistic trial grasp of the 1 cm stick (obj1, accuracy trial 1 of seed 0: it
     hangs 74 deg, out of the image, behind a finger): every side view is untrusted, the rod
-    is laid back, and the error says so; it is a RodSlippedError still, which the retry
-    policy grasps again. (The flat bar's grasp this used, obj3 trial 2, is measured since
-    the side view measures a flat bar from its face.)"""
-    from comgrasp_pin.errors import HeldRodUnmeasuredError, RodSlippedError
+    is laid back, and the error says so; it is a camera's failure (a PerceptionError, not
+    a RodSlippedError), which the retry table grasps again. (The flat bar's grasp this
+    used, obj3 trial 2, is measured since the side view measures a flat bar from its
+    face.)"""
+    from comgrasp_pin.errors import HeldRodUnmeasuredError, PerceptionError, RodSlippedError
     from comgrasp_pin.experiments.trials import accuracy_trial, trial_seed
+    from comgrasp_pin.planning import retry
 
     task = {"object": "obj1", "trial": 1, "method": "trial", "seed": trial_seed(0, "obj1", 1),
             "sensors": "realistic"}  # fmt: skip
     with pytest.raises(HeldRodUnmeasuredError) as caught:
         accuracy_trial(task)
-    assert isinstance(caught.value, RodSlippedError)
+    assert isinstance(caught.value, PerceptionError)
+    assert not isinstance(caught.value, RodSlippedError)
+    assert retry.on_failed_grasp(caught.value).grasp_again
     message = str(caught.value)
     assert message.startswith("the side camera cannot measure the held rod, so it was laid back")
     assert "slipped" not in message and "no cylinder fits" in message

@@ -5,6 +5,11 @@ the CoM lies on that side. The next grasp steps ``retry_shift`` of the rod's len
 way until the rod turns the other way, then bisects between the two last grasp points.
 Positions ``s`` are counted along one world direction (the first heavy side seen), so a
 rod seen turned by half a turn (its yaw is only known modulo pi) does not confuse them.
+
+Which failures of a trial grasp are grasped again is a table, ``ON_FAILED_GRASP``, looked
+up by the error's exact class (``on_failed_grasp``): a new kind of error is not retried
+because it happens to derive from one that is, and a camera's failure is retried because
+the table says so, not because it poses as a slip.
 """
 
 from __future__ import annotations
@@ -12,6 +17,43 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
+
+from comgrasp_pin.errors import HeldRodUnmeasuredError, RodDroppedError, RodSlippedError
+
+
+@dataclass(frozen=True)
+class OnFailedGrasp:
+    """What a careful trial grasp's failure leads to.
+
+    Attributes:
+        grasp_again: grasp the rod again (towards the end that went down) while attempts
+            remain; False: the episode fails with the error.
+        laid_back: the trial grasp put the rod down itself (nothing to announce: the
+            gripper only opens); False: the rod fell or is still in the jaws.
+    """
+
+    grasp_again: bool
+    laid_back: bool
+
+
+ON_FAILED_GRASP: dict[type[Exception], OnFailedGrasp] = {
+    # fell out of the jaws (measured empty, lost from the side view, or at the rolled pose)
+    RodDroppedError: OnFailedGrasp(grasp_again=True, laid_back=False),
+    # turned as the careful lift began: put back where it was
+    RodSlippedError: OnFailedGrasp(grasp_again=True, laid_back=True),
+    # the side camera refused every frame of the held rod: laid back where it was grasped
+    HeldRodUnmeasuredError: OnFailedGrasp(grasp_again=True, laid_back=True),
+}
+"""The failures of a trial grasp that are grasped again, by exact class; any other error
+(perception of the table, IK, unstable physics, a bug) ends the attempt."""
+GRASPED_AGAIN = tuple(ON_FAILED_GRASP)
+"""The classes of ``ON_FAILED_GRASP``, for an ``except`` clause (``on_failed_grasp`` then
+decides by the exact class)."""
+
+
+def on_failed_grasp(exc: BaseException) -> OnFailedGrasp | None:
+    """``ON_FAILED_GRASP``'s entry for ``exc``'s exact class, or None: not grasped again."""
+    return ON_FAILED_GRASP.get(type(exc))
 
 
 @dataclass(frozen=True)

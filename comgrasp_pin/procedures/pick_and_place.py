@@ -12,7 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from comgrasp_pin.config import EpisodeConfig
-from comgrasp_pin.errors import ObjectCutByBorderError, RodDroppedError, RodSlippedError
+from comgrasp_pin.errors import ObjectCutByBorderError, RodDroppedError
 from comgrasp_pin.motion.ik import solve_ik
 from comgrasp_pin.perception import RodDetection
 from comgrasp_pin.perception.grasp_points import (
@@ -148,10 +148,11 @@ def trial_with_retry(cell: Cell, config: EpisodeConfig) -> TrialMeasurement:
                                                        trial.side_view.grasp_offset)  # fmt: skip
                 raise RodDroppedError("it fell out at the rolled pose", heavy)
             return trial
-        except RodDroppedError as exc:
-            if attempt == attempts - 1:
+        except retry.GRASPED_AGAIN as exc:
+            action = retry.on_failed_grasp(exc)  # by the table, not by inheritance
+            if action is None or not action.grasp_again or attempt == attempts - 1:
                 raise
-            if not isinstance(exc, RodSlippedError):  # a slipped rod was put back already
+            if not action.laid_back:
                 cell.announce(f"{phases.PUT_BACK}: {exc}")
             cell.open_gripper(config.motion.open_time)
             cell.move_to(Q_PARK)
