@@ -6,12 +6,17 @@ import pytest
 from _payload import panda, payload_torques, ur10
 
 from comgrasp_pin.estimation.regressor import (
-    gravity_in_ee,
-    perpendicular_basis,
     pose_regressor,
     stacked_regressor,
 )
 from comgrasp_pin.robot import RobotModel
+
+
+def gravity_in_ee(robot: RobotModel, R_world_ee: np.ndarray) -> np.ndarray:
+    """(3,) the model's unit gravity direction in the ee frame."""
+    g = robot.model.gravity.linear
+    return R_world_ee.T @ g / np.linalg.norm(g)
+
 
 ROBOTS = {"ur5": RobotModel.ur5, "panda": panda, "ur10": ur10}
 
@@ -128,11 +133,3 @@ def test_prismatic_joint_column_is_the_weight():
     robot = RobotModel(model, "ee")
     Y, _ = pose_regressor(robot, np.zeros(1))
     np.testing.assert_allclose(Y, [[0.8 * 9.81, 0, 0, 0]], atol=1e-14)
-
-
-@pytest.mark.parametrize("u", [[0, 0, 1.0], [1.0, 0, 0], [0.3, -0.4, 0.866]])
-def test_perpendicular_basis(u):
-    u = np.array(u) / np.linalg.norm(u)
-    E = perpendicular_basis(u)
-    np.testing.assert_allclose(E.T @ E, np.eye(2), atol=1e-14)
-    np.testing.assert_allclose(E.T @ u, 0.0, atol=1e-14)

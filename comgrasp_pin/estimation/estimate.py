@@ -90,15 +90,17 @@ NEAR_SINGULAR = 100.0
 
 
 def delta_method(theta: np.ndarray, cov_theta: np.ndarray) -> np.ndarray:
-    """(4, 4) covariance of (m, c) = (theta_0, theta_1:4 / theta_0) from that of theta."""
-    m = theta[0]
+    """(4, 4) covariance of (m, c) = (theta_0, theta_1:4 / theta_0) from that of theta.
+
+    G = d(m, c)/d theta = [[1, 0], [-c / m, I / m]]; m = 0 gives NaN (refused by the caller).
+    """
+    m = float(theta[0])
+    inv_m = 1.0 / m if m != 0.0 else math.nan
     G = np.zeros((4, 4))
     G[0, 0] = 1.0
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):  # m ~ 0: refused later
-        com = theta[1:] / m
-        G[1:, 0] = -com / m
-        G[1:, 1:] = np.eye(3) / m
-        return G @ cov_theta @ G.T
+    G[1:, 0] = theta[1:] * (-inv_m * inv_m)
+    G[1, 1] = G[2, 2] = G[3, 3] = inv_m
+    return G @ cov_theta @ G.T
 
 
 def check_finite_result(**values: float | np.ndarray | None) -> None:

@@ -21,7 +21,7 @@ one (k*n, 4) problem. One path solves it:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -36,7 +36,7 @@ from comgrasp_pin.estimation.estimate import (
 from comgrasp_pin.estimation.inputs import check_arrays, check_dtau_cov, check_options
 from comgrasp_pin.estimation.least_squares import Fit, Observed, fit, observe
 from comgrasp_pin.estimation.prior import AxisPrior
-from comgrasp_pin.estimation.regressor import gravity_in_ee, stacked_regressor
+from comgrasp_pin.estimation.regressor import stacked_regressor
 from comgrasp_pin.estimation.rod_axis import MIN_AXIS_GRAVITY_ANGLE
 from comgrasp_pin.robot import RobotModel
 
@@ -104,8 +104,10 @@ def estimate_com(
     if payload_motion_ee is not None:
         maps = motion_maps(payload_motion_ee, k)
         Y = np.concatenate([Y[i * n : (i + 1) * n] @ maps[i] for i in range(k)])
-    seen = observe(Y, rcond, gravity_in_ee(robot, T[0, :3, :3]))
-    data = _Data(Y, b, T, float(np.linalg.norm(robot.model.gravity.linear)))
+    g = robot.model.gravity.linear
+    g_norm = math.sqrt(float(g @ g))
+    seen = observe(Y, rcond, lambda: (g @ T[0, :3, :3]) / g_norm)  # gravity in the ee frame
+    data = _Data(Y, b, T, g_norm)
     row_std = None if sigma is None else math.sqrt(2.0) * sigma  # of a difference
     if isinstance(row_std, np.ndarray):
         row_std = np.tile(row_std, k)
@@ -127,8 +129,7 @@ def estimate_com(
     return _with_prior(ls, seen, data, loss, huber_delta, com_prior)
 
 
-@dataclass(frozen=True)
-class _Data:
+class _Data(NamedTuple):
     """The problem: Y (k n, 4), the differences b (k n,) (N m), T_world_ee (k, 4, 4), |g|."""
 
     Y: np.ndarray
@@ -181,8 +182,7 @@ def _with_prior(ls: Fit, seen: Observed, data: _Data, loss, delta, prior: AxisPr
     res = ipopt.solve(*_for_ipopt(ls, data.Y), x0, loss, delta, prior)
     m = float(res.x[0])
     theta = np.concatenate(([m], m * res.x[1:]))
-    seen_full = Observed(seen.rank, None, seen.singular_values, seen.condition_number,
-                         seen.U, seen.s, seen.Vt)  # fmt: skip
+    seen_full = seen._replace(u=None)
     return _finish(theta, ipopt.laplace_covariance(res.hessian), seen_full, data, ls.torque_std,
                    res.return_status, res.iterations)  # fmt: skip
 
@@ -199,33 +199,22 @@ def _for_ipopt(ls: Fit, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarr
 
 
 def _finish(theta, cov, seen: Observed, data: _Data, torque_std, status, iterations) -> ComEstimate:
-    """The frozen estimate of theta = (m, m c_ee) with (m, c_ee)'s covariance, or a refusal."""
+    """The frozen estimate of theta = (m, m c_ee) with ``cov`` of (m, c_ee), or a refusal."""
     m = float(theta[0])
     refuse_empty_gripper(m, None if cov is None else float(cov[0, 0]), seen.condition_number)
     com = theta[1:] / m
     T = data.T_world_ee
     k = len(T)
     residuals = (data.b - data.Y @ theta).reshape(k, -1)
-    rms = math.sqrt(float(np.mean(residuals**2)))
-    check_finite_result(mass=m, com_ee=com, cov=cov, residual_rms=rms)
-    arrays = [com, seen.u, cov, residuals, seen.singular_values.copy(), T]
-    for a in arrays:
+    rms = math.sqrt(float(residuals.ravel() @ residuals.ravel()) / residuals.size)
+    # Python float sums never warn: NaN or inf anywhere shows here, then named
+    screen = m + rms + sum(com.tolist()) + (0.0 if cov is None else sum(cov.ravel().tolist()))
+    if not math.isfinite(screen):
+        check_finite_result(mass=m, com_ee=com, cov=cov, residual_rms=rms)
+    sv = seen.singular_values.copy()
+    for a in (com, seen.u, cov, residuals, sv, T):
         if a is not None:
             a.setflags(write=False)
-    return ComEstimate(
-        com_ee=arrays[0],
-        mass=m,
-        weight=m * data.g_norm,
-        unobservable_ee=seen.u,
-        cov=cov,
-        residual_rms=rms,
-        residuals=residuals,
-        condition_number=seen.condition_number,
-        singular_values=arrays[4],
-        method="lstsq" if status == "closed_form" else "ipopt",
-        solver_status=status,
-        iterations=iterations,
-        n_poses=k,
-        T_world_ee=T,
-        torque_std=torque_std,
-    )
+    return ComEstimate(com, m, m * data.g_norm, seen.u, cov, rms, residuals,
+                       seen.condition_number, sv, "lstsq" if status == "closed_form" else "ipopt",
+                       status, iterations, k, T, torque_std)  # fmt: skip

@@ -20,7 +20,8 @@ residuals (readings must outnumber the observed unknowns), else there is no cova
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from collections.abc import Callable
+from typing import NamedTuple
 
 import numpy as np
 
@@ -33,8 +34,7 @@ NOISE_FLOOR = 1e-6
 the residuals of noise-free data is floored here, so its weights stay finite."""
 
 
-@dataclass(frozen=True)
-class Observed:
+class Observed(NamedTuple):
     """The SVD of Y (rows, 4) and what it observes.
 
     Attributes:
@@ -55,33 +55,32 @@ class Observed:
     Vt: np.ndarray
 
 
-def observe(Y: np.ndarray, rcond: float, down_ee: np.ndarray) -> Observed:
-    """Y's observability by its SVD; ``down_ee`` (3,) orients a lost CoM direction.
+def observe(Y: np.ndarray, rcond: float, down_ee: Callable[[], np.ndarray]) -> Observed:
+    """Y's observability by its SVD; ``down_ee()`` (3,) orients a lost CoM direction.
 
     Raises:
         UnobservableError: the mass (or more than one CoM direction) is not observed.
     """
     U, s, Vt = np.linalg.svd(Y, full_matrices=len(Y) < 4)
-    s = np.concatenate([s, np.zeros(4 - len(s))])  # fewer than 4 readings: 0s
-    rank = int(np.sum(s > rcond * s[0])) if s[0] > 0 else 0
+    sv = (s.tolist() + [0.0, 0.0, 0.0])[:4]  # fewer than 4 readings: 0s
+    rank = sum(x > rcond * sv[0] for x in sv) if sv[0] > 0 else 0
     u = None
     if rank == 3 and abs(Vt[3, 0]) <= MASS_NULL_TOL:
-        u = Vt[3, 1:] / np.linalg.norm(Vt[3, 1:])
-        u = u if u @ down_ee >= 0 else -u
+        u = Vt[3, 1:] * (1.0 / math.hypot(*Vt[3, 1:].tolist()))
+        u = u if u @ down_ee() >= 0 else -u
     elif rank != 4:
         raise UnobservableError(
             f"the poses leave the mass unobservable: singular values of the torque regression "
-            f"{np.array2string(s, precision=3)} (rank {rank} of 4 at rcond={rcond:g}); use "
-            "poses where the joints bear the payload's weight, and turn the wrist against "
-            "gravity between poses"
+            f"{np.array2string(np.array(sv), precision=3)} (rank {rank} of 4 at "
+            f"rcond={rcond:g}); use poses where the joints bear the payload's weight, and turn "
+            "the wrist against gravity between poses"
         )
-    sv = s.copy()
-    sv[rank:] = 0.0
-    return Observed(rank, u, sv, float(s[0] / s[rank - 1]), U[:, :rank], s[:rank], Vt[:rank])
+    cond = sv[0] / sv[rank - 1]
+    sv[rank:] = [0.0] * (4 - rank)
+    return Observed(rank, u, np.array(sv), cond, U[:, :rank], s[:rank], Vt[:rank])
 
 
-@dataclass(frozen=True)
-class Fit:
+class Fit(NamedTuple):
     """The least squares of b on Y, whitened.
 
     Attributes:

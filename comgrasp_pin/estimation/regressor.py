@@ -27,11 +27,6 @@ from comgrasp_pin.robot import RobotModel
 _WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 
-def gravity_world(robot: RobotModel) -> np.ndarray:
-    """(3,) the robot model's gravity in its world frame (m/s^2): the one home of gravity."""
-    return robot.model.gravity.linear.copy()
-
-
 def stacked_regressor(robot: RobotModel, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Regression over k poses: Y (k*n, 4), pose-major rows, and T_world_ee (k, 4, 4).
 
@@ -55,17 +50,3 @@ def pose_regressor(robot: RobotModel, q: np.ndarray) -> tuple[np.ndarray, np.nda
     """Y(q) (n, 4) and T_world_ee (4, 4) at one configuration ``q`` (n,)."""
     Y, T = stacked_regressor(robot, np.asarray(q, dtype=float)[None])
     return Y, T[0]
-
-
-def gravity_in_ee(robot: RobotModel, R_world_ee: np.ndarray) -> np.ndarray:
-    """(3,) unit direction of gravity (down) in the ee frame of orientation ``R_world_ee``."""
-    g = robot.model.gravity.linear
-    return R_world_ee.T @ (g / np.linalg.norm(g))
-
-
-def perpendicular_basis(u: np.ndarray) -> np.ndarray:
-    """(3, 2) orthonormal basis of the plane perpendicular to the unit vector ``u`` (3,)."""
-    helper = np.eye(3)[int(np.argmin(np.abs(u)))]
-    e1 = np.cross(u, helper)
-    e1 /= np.linalg.norm(e1)
-    return np.stack([e1, np.cross(u, e1)], axis=1)
