@@ -113,6 +113,58 @@ def test_payload_from_a_motion_within_its_stated_uncertainty(robot, empty_run):
         np.testing.assert_allclose(est.friction[:, 1], 0.3, atol=0.1)
 
 
+MC_DRAWS = 40
+RMS_Z_BAND = (0.7, 1.45)
+"""The pooled rms z of the ten parameters over MC_DRAWS noise draws. A correct covariance gives
+about 0.95 here (the jackknife's factor is floored at 1, so slightly conservative); its
+sampling spread over 40 draws is about 0.06. A variance 3 times too large or too small gives
+0.53 or 1.58, and fails, as does a std 10 times off (0.09 or 9)."""
+GROUP_BAND = (0.6, 1.6)
+"""Each group alone (the mass; the CoM; the inertia about the CoM): fewer values, wider band."""
+
+
+def dynamic_z(robot, draws: int = MC_DRAWS, seed: int = 100, duration: float = 8.0):
+    """(draws, 20) z of the ten parameters (params_cov), of (mass, CoM) (cov) and of the six
+    entries of the inertia about the CoM (inertia_cov), each draw with its own noise on the
+    loaded and the empty run, against the appended body's truth. A short (8 s) motion: each
+    draw costs about 0.1 s."""
+    motion = fourier_motion(robot, duration=duration)
+    truth = PAYLOAD.toDynamicParameters()
+    upper = [0, 1, 2, 4, 5, 8]  # the inertia's six entries in the flattened (3, 3)
+    z = []
+    for i in range(draws):
+        log = rnea_log(robot, PAYLOAD, motion, seed=seed + 2 * i)
+        empty = rnea_log(robot, None, motion, seed=seed + 2 * i + 1, offset=0.25)
+        est = estimate_payload_dynamic(robot, log, empty)
+        z_params = (est.params - truth) / np.sqrt(np.diag(est.params_cov))
+        z_com = np.r_[est.mass - PAYLOAD.mass, est.com_ee - PAYLOAD.lever]
+        z_com /= np.sqrt(np.diag(est.cov))
+        z_inertia = (est.inertia_com_ee - PAYLOAD.inertia).ravel()
+        z_inertia = (z_inertia / np.sqrt(np.diag(est.inertia_cov)))[upper]
+        z.append(np.r_[z_params, z_com, z_inertia])
+    return np.array(z)
+
+
+def rms_z_groups(z: np.ndarray) -> dict:
+    """rms z of the ten parameters pooled, and of each derived group."""
+    groups = {"params": z[:, :10], "mass": z[:, 10], "com": z[:, 11:14], "inertia_com": z[:, 14:]}
+    return {name: float(np.sqrt(np.mean(v**2))) for name, v in groups.items()}
+
+
+def check_rms_z(rms: dict) -> None:
+    lo, hi = RMS_Z_BAND
+    assert lo < rms["params"] < hi, rms
+    lo, hi = GROUP_BAND
+    assert all(lo < v < hi for v in rms.values()), rms
+
+
+def test_the_motion_error_bars_are_neither_too_wide_nor_too_narrow(robot):
+    """Two-sided Monte Carlo (issue 33, item 7): the rms of z over repeated noise draws lies
+    in a band, so a covariance three times too wide or too narrow in variance fails (the
+    |z| < 4.5 above passes a covariance 100 times too wide)."""
+    check_rms_z(rms_z_groups(dynamic_z(robot)))
+
+
 def test_logged_velocities_are_used(robot):
     motion = fourier_motion(robot, seed=3)
     log = rnea_log(robot, PAYLOAD, motion, seed=4)
