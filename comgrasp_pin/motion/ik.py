@@ -53,12 +53,6 @@ def grasp_frame(grasp: GraspPose, dz: float = 0.0, boom_away: bool = True) -> np
     return top_down_frame(grasp.x, grasp.y, grasp_height(grasp.z) + dz, yaw)
 
 
-def pose_error(robot: RobotModel, q: np.ndarray, T_world_goal: np.ndarray) -> np.ndarray:
-    """(6,) log(T_ee^-1 T_goal) in the ee frame (linear m, angular rad)."""
-    T_ee = pin.SE3(robot.ee_pose(q))
-    return pin.log6(T_ee.actInv(pin.SE3(T_world_goal))).vector
-
-
 def solve_ik(
     robot: RobotModel,
     T_world_goal: np.ndarray,

@@ -21,7 +21,6 @@ from comgrasp_pin.camera import PinholeCamera, transform_points
 from comgrasp_pin.errors import InvalidInputError, OutputError
 from comgrasp_pin.geometry import invert_transform
 from comgrasp_pin.perception.draw import com_legend, draw_com, draw_legend, put_text
-from comgrasp_pin.procedures.phases import phase_of
 from comgrasp_pin.simulation.cameras import CameraRig
 from comgrasp_pin.simulation.objects import ObjectState
 from comgrasp_pin.simulation.sim import Simulation
@@ -200,10 +199,6 @@ class EpisodeRecorder:
         if not cv2.imwrite(str(path), strip, [cv2.IMWRITE_PNG_COMPRESSION, 9]):
             raise OutputError(f"OpenCV cannot write {path}")
         return path
-
-    def phase_kinds(self) -> list[str]:
-        """The phase (``procedures.phases``) of each announcement, in order."""
-        return [phase_of(caption) for _, caption in self.phases]
 
     def close(self) -> None:
         self._main.close()
