@@ -89,17 +89,25 @@ NEAR_SINGULAR = 100.0
 5-30) is reported as unobservable (a near-singular pose set), not as an empty gripper."""
 
 
-def delta_method(theta: np.ndarray, cov_theta: np.ndarray) -> np.ndarray:
-    """(4, 4) covariance of (m, c) = (theta_0, theta_1:4 / theta_0) from that of theta.
+def mc_jacobian(theta: np.ndarray) -> np.ndarray:
+    """(4, 4) G = d(m, c)/d theta = [[1, 0], [-c / m, I / m]] at theta = (m, m c).
 
-    G = d(m, c)/d theta = [[1, 0], [-c / m, I / m]]; m = 0 gives NaN (refused by the caller).
+    A mass within 1e-12 kg of zero, always refused by ``refuse_empty_gripper`` (its
+    threshold is at least 3 standard deviations of readings no better than 1e-9 N m), gets
+    1 / m = 0: the mass's own variance stays right and nothing overflows.
     """
     m = float(theta[0])
-    inv_m = 1.0 / m if m != 0.0 else math.nan
+    inv_m = 1.0 / m if abs(m) > 1e-12 else 0.0
     G = np.zeros((4, 4))
     G[0, 0] = 1.0
     G[1:, 0] = theta[1:] * (-inv_m * inv_m)
     G[1, 1] = G[2, 2] = G[3, 3] = inv_m
+    return G
+
+
+def delta_method(theta: np.ndarray, cov_theta: np.ndarray) -> np.ndarray:
+    """(4, 4) covariance of (m, c) = (theta_0, theta_1:4 / theta_0) from that of theta."""
+    G = mc_jacobian(theta)
     return G @ cov_theta @ G.T
 
 

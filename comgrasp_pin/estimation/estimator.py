@@ -31,6 +31,7 @@ from comgrasp_pin.estimation.estimate import (
     ComEstimate,
     check_finite_result,
     delta_method,
+    mc_jacobian,
     refuse_empty_gripper,
 )
 from comgrasp_pin.estimation.inputs import check_arrays, check_dtau_cov, check_options
@@ -113,9 +114,12 @@ def estimate_com(
         row_std = np.tile(row_std, k)
     ls = fit(Y, b, seen, row_std, chol)
     if method == "lstsq":
-        cov = None if ls.cov is None else delta_method(ls.theta, ls.cov)
+        cov = None
+        if ls.cov_root is not None:  # the delta method on cov(theta)'s root
+            root = mc_jacobian(ls.theta) @ ls.cov_root
+            cov = root @ root.T
         return _finish(ls.theta, cov, seen, data, ls.torque_std, "closed_form", 0)
-    if ls.cov is None:
+    if ls.cov_root is None:
         raise InvalidInputError(
             "method='ipopt' needs torque_std (or dtau_cov) when the readings do not "
             "outnumber the unknowns: the noise cannot be estimated from the residuals"

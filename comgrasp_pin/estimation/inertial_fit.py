@@ -18,8 +18,13 @@ The data enter through the normal equations of a weighted linear least squares i
 beta = (pi, x), x extra linear unknowns (offsets, friction): f = 1/2 |W (A beta - b)|^2. x is
 profiled out exactly (the Schur complement), leaving a quadratic in pi; IPOPT minimises it
 over theta, plus a Gaussian prior on (m, c) where a static estimate gives one. The
-covariance of pi is the Laplace approximation: the inverse Hessian in theta at the optimum,
-mapped by d pi / d theta.
+covariance of pi is the Laplace approximation in pi: the inverse of the objective's Hessian
+in pi at the optimum. At an optimum inside the parametrisation it equals the inverse Hessian
+in theta mapped by d pi / d theta; at a spread's bound (a payload thin along an axis) the
+Hessian in theta is flat along that spread, which pi barely follows, and the theta route
+would give the thin axis's second moment zero variance: the data's information says what it
+is. A direction the data do not determine is refused (``UnobservableError``), never given
+zero variance.
 """
 
 from __future__ import annotations
@@ -34,6 +39,10 @@ from comgrasp_pin.estimation.ipopt import IPOPT_OPTIONS
 
 N_PARAMS = 10
 EIG_FLOOR = 1e-9
+FLAT_RCOND = 1e-12
+"""A direction of a column-scaled information matrix whose eigenvalue is below this fraction of
+the largest is flat: the data do not determine it."""
+NAMES = ("m", "m c_x", "m c_y", "m c_z", "I_xx", "I_xy", "I_yy", "I_xz", "I_yz", "I_zz")
 """Smallest eigenvalue (kg m^2) a start's pseudo-inertia is lifted to."""
 LOG_SPREAD_MIN = -12.0
 """Lower bound of d1, d2, d3: a spread of the mass of e^-12 (6e-6) times a metre along an
@@ -48,7 +57,7 @@ class InertialFit:
 
     Attributes:
         pi: (10,) m (kg), m c (kg m), I at the frame origin (kg m^2), Pinocchio's order.
-        cov: (10, 10) covariance of pi (Laplace approximation).
+        cov: (10, 10) covariance of pi (Laplace approximation in pi).
         x: (e,) the extra linear unknowns at the optimum (given pi).
         x_std: (e,) their standard deviations.
         theta: (10,) the log-Cholesky parameters.
@@ -133,7 +142,7 @@ def fit_inertial(
     G, g = Aw.T @ Aw, Aw.T @ bw
     scale = np.sqrt(np.maximum(np.diag(G), 1e-300))
     s = np.linalg.svd(G / np.outer(scale, scale), compute_uv=False)
-    if s[-1] < 1e-12 * s[0]:
+    if s[-1] < FLAT_RCOND * s[0]:
         raise UnobservableError(
             f"the motion does not determine the payload's ten parameters and the "
             f"{A_x.shape[1]} offset/friction unknowns (scaled condition number "
@@ -144,19 +153,50 @@ def fit_inertial(
     G_eff = G[:n, :n] - G[:n, n:] @ Gxx_inv @ G[n:, :n]
     g_eff = g[:n] - G[:n, n:] @ Gxx_inv @ g[n:]
     pi_ls = np.linalg.solve(G_eff, g_eff)
-    theta, status, iters, H = _solve(G_eff, g_eff, theta_of_pi(pi_ls), prior)
+    theta, status, iters = _solve(G_eff, g_eff, theta_of_pi(pi_ls), prior)
     pi = pi_of_theta(theta)
-    D = _jacobian(theta)
-    # a spread at its bound leaves H (nearly) flat there: the pseudo-inverse gives that
-    # direction, which no torque sees, no variance instead of an overflow
-    cov = D @ np.linalg.pinv(H, rcond=1e-12, hermitian=True) @ D.T
+    cov = covariance(_hessian_pi(G_eff, pi, prior))
     x = Gxx_inv @ (g[n:] - G[n:, :n] @ pi)
     x_std = np.sqrt(np.clip(np.diag(Gxx_inv), 0, None)) if A_x.shape[1] else np.zeros(0)
     return InertialFit(pi, 0.5 * (cov + cov.T), x, x_std, theta, pi_ls, status, iters)
 
 
+def covariance(H: np.ndarray) -> np.ndarray:
+    """(10, 10) the inverse of pi's Hessian H, refusing a flat direction.
+
+    Raises:
+        UnobservableError: a direction of H (columns scaled to unit diagonal) has an
+            eigenvalue below ``FLAT_RCOND`` times the largest; the message names the
+            parameters it mixes.
+    """
+    scale = np.sqrt(np.maximum(np.diag(H), 1e-300))
+    e, V = np.linalg.eigh(H / np.outer(scale, scale))
+    flat = e < FLAT_RCOND * e[-1]
+    if np.any(flat):
+        v = V[:, np.argmin(e)]
+        names = [NAMES[i] for i in np.flatnonzero(np.abs(v) > 0.2 * np.abs(v).max())]
+        raise UnobservableError(
+            f"the data do not determine the payload's {' + '.join(names)} ({flat.sum()} flat "
+            f"direction(s) of the information, scaled eigenvalue ratio {e[0] / e[-1]:.1e}): "
+            "move every wrist joint, faster"
+        )
+    inv = (V / e) @ V.T / np.outer(scale, scale)
+    return 0.5 * (inv + inv.T)
+
+
+def _hessian_pi(G: np.ndarray, pi: np.ndarray, prior) -> np.ndarray:
+    """(10, 10) the Hessian in pi of 1/2 pi^T G pi - g^T pi (+ the prior on (m, c = h / m))."""
+    if prior is None:
+        return G
+    mean, cov = prior
+    p = ca.SX.sym("pi", N_PARAMS)
+    dev = ca.vertcat(p[0], p[1:4] / p[0]) - ca.DM(np.asarray(mean, float))
+    f = 0.5 * ca.mtimes([dev.T, ca.DM(np.linalg.inv(cov)), dev])
+    return G + np.asarray(ca.Function("H", [p], [ca.hessian(f, p)[0]])(pi))
+
+
 def _solve(G, g, theta0, prior):
-    """IPOPT on f(theta) = 1/2 pi^T G pi - g^T pi (+ prior); (theta, status, iters, H)."""
+    """IPOPT on f(theta) = 1/2 pi^T G pi - g^T pi (+ prior); (theta, status, iters)."""
     th = ca.SX.sym("theta", N_PARAMS)
     pi = pi_of_theta(th)
     f = 0.5 * ca.mtimes([pi.T, ca.DM(G), pi]) - ca.dot(ca.DM(g), pi)
@@ -185,11 +225,4 @@ def _solve(G, g, theta0, prior):
         raise SolverError("IPOPT did not fit the payload's inertial parameters", status,
                           stats.get("iter_count"))  # fmt: skip
     theta = np.asarray(sol["x"]).ravel()
-    H = np.asarray(ca.Function("H", [th], [ca.hessian(f, th)[0]])(theta))
-    return theta, status, int(stats.get("iter_count", 0)), H
-
-
-def _jacobian(theta: np.ndarray) -> np.ndarray:
-    """(10, 10) d pi / d theta at theta."""
-    th = ca.SX.sym("theta", N_PARAMS)
-    return np.asarray(ca.Function("D", [th], [ca.jacobian(pi_of_theta(th), th)])(theta))
+    return theta, status, int(stats.get("iter_count", 0))

@@ -85,16 +85,17 @@ class Fit(NamedTuple):
 
     Attributes:
         theta: (4,) the solution (kg, kg m), no component along the lost direction.
-        cov: (4, 4) its covariance, or None where the noise is unknown and cannot be
-            estimated (no more readings than observed unknowns).
+        cov_root: (4, rank) R with cov(theta) = R R^T (V S^-1 of the whitened regression),
+            or None where the noise is unknown and cannot be estimated (no more readings
+            than observed unknowns).
         A, b_w: the whitened regression (rows, 4) and differences (rows,) (unit noise where
-            ``cov`` is known; A = Y, b_w = b otherwise).
+            ``cov_root`` is known; A = Y, b_w = b otherwise).
         Vt: (rank, 4) the observed directions of theta (A's right singular vectors).
         torque_std: std of one reading estimated from the residuals (N m), or None.
     """
 
     theta: np.ndarray
-    cov: np.ndarray | None
+    cov_root: np.ndarray | None
     A: np.ndarray
     b_w: np.ndarray
     Vt: np.ndarray
@@ -119,29 +120,21 @@ def fit(
         chol: the lower Cholesky factor of the differences' covariance, in place of
             ``row_std``, or None.
     """
-    r = seen.rank
     if chol is not None:
         A, b_w = np.linalg.solve(chol, Y), np.linalg.solve(chol, b)
     elif isinstance(row_std, np.ndarray):
         A, b_w = Y / row_std[:, None], b / row_std
-    else:
-        scale = 1.0 if row_std is None else 1.0 / row_std
-        theta, inv_s = _solve(seen.U, seen.s, seen.Vt, b)
+    else:  # one std for all: Y's own SVD, scaled
+        root = seen.Vt.T * (1.0 / seen.s)  # V S^-1
+        theta = root @ (seen.U.T @ b)
         torque_std = None
         if row_std is None:
-            if len(b) <= r:
+            if len(b) <= seen.rank:
                 return Fit(theta, None, Y, b, seen.Vt, None)
-            rss = float(np.sum((b - Y @ theta) ** 2))
-            std = max(math.sqrt(rss / (len(b) - r)), NOISE_FLOOR)
-            scale, torque_std = 1.0 / std, std / math.sqrt(2.0)
-        cov = (seen.Vt.T * (inv_s / scale) ** 2) @ seen.Vt
-        return Fit(theta, cov, Y * scale, b * scale, seen.Vt, torque_std)
+            r = b - Y @ theta
+            row_std = max(math.sqrt(float(r @ r) / (len(b) - seen.rank)), NOISE_FLOOR)
+            torque_std = row_std / math.sqrt(2.0)  # a difference is of two readings
+        return Fit(theta, root * row_std, Y / row_std, b / row_std, seen.Vt, torque_std)
     U, s, Vt = np.linalg.svd(A, full_matrices=False)
-    theta, inv_s = _solve(U[:, :r], s[:r], Vt[:r], b_w)
-    return Fit(theta, (Vt[:r].T * inv_s**2) @ Vt[:r], A, b_w, Vt[:r], None)
-
-
-def _solve(U: np.ndarray, s: np.ndarray, Vt: np.ndarray, b: np.ndarray):
-    """(theta = V S^-1 U^T b, S^-1) of a truncated SVD."""
-    inv_s = 1.0 / s
-    return Vt.T @ ((U.T @ b) * inv_s), inv_s
+    root = Vt[: seen.rank].T * (1.0 / s[: seen.rank])
+    return Fit(root @ (U[:, : seen.rank].T @ b_w), root, A, b_w, Vt[: seen.rank], None)
