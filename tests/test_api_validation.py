@@ -59,11 +59,11 @@ def test_estimates_need_a_robot_model(one_pose):
 )  # fmt: skip
 def test_plan_wrist_poses_checks_its_numbers(ur5, kwargs, message):
     with pytest.raises(InvalidInputError, match=message):
-        cg.plan_wrist_poses(ur5, Q, **{"k": 3, **kwargs})
+        cg.plan_wrist_poses(ur5, start=Q, **{"k": 3, **kwargs})
 
 
 def test_plan_wrist_poses_gives_finite_joints_within_limits(ur5):
-    poses = cg.plan_wrist_poses(ur5, Q, 4, margin=0.05)
+    poses = cg.plan_wrist_poses(ur5, 4, Q, margin=0.05).q
     assert np.all(np.isfinite(poses))
     assert np.all(poses >= ur5.q_lower - 1e-12) and np.all(poses <= ur5.q_upper + 1e-12)
 

@@ -159,7 +159,7 @@ def fisher_information(robot, Q, mass, com_ee, sigma, basis=None):
 
 def test_cov_is_the_cramer_rao_bound_several_poses(ur5):
     rng = np.random.default_rng(16)
-    Q = cg.plan_wrist_poses(ur5, ur5.random_configuration(rng), 4)
+    Q = cg.plan_wrist_poses(ur5, 4, ur5.random_configuration(rng)).q
     tau_before, tau_after = payload_torques(ur5, Q, MASS, COM_EE)
     for sigma in (0.05, np.array([0.02, 0.05, 0.05, 0.03, 0.08, 0.1])):
         crb = np.linalg.inv(fisher_information(ur5, Q, MASS, COM_EE, sigma))
@@ -184,7 +184,7 @@ def test_cov_matches_empirical_spread(ur5, poses):
     """sigma = 0.05 N m on every reading, 500 draws: RMS error per component within 15 %."""
     rng = np.random.default_rng(18)
     q = ur5.random_configuration(rng)
-    Q = cg.plan_wrist_poses(ur5, q, poses) if poses > 1 else q
+    Q = cg.plan_wrist_poses(ur5, poses, q).q if poses > 1 else q
     mass, com_ee = 2.0, COM_EE
     tau_before, tau_after = payload_torques(ur5, Q, mass, com_ee)
     sigma = 0.05

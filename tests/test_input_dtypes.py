@@ -163,6 +163,6 @@ def test_public_values_that_take_arrays_refuse_what_is_not_real(which, dtype):
 @pytest.mark.parametrize("dtype", REFUSED)
 def test_planning_refuses_what_is_not_real(ur5, dtype):
     with pytest.raises(InvalidInputError, match="q"):
-        cg.plan_wrist_poses(ur5, _as(Q, dtype), 3)
+        cg.plan_wrist_poses(ur5, 3, _as(Q, dtype))
     with pytest.raises(InvalidInputError, match="not a numeric array"):  # (it says q)
         cg.plan_measurement_poses(ur5, 3, start=_as(Q, dtype), n_candidates=50)

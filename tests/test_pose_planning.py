@@ -26,19 +26,19 @@ def logdet_information(robot, Q) -> float:
 def test_shape_wrist_only_and_limits(make_robot):
     robot = make_robot()
     q = robot.random_configuration(np.random.default_rng(40))
-    Q = cg.plan_wrist_poses(robot, q, 4)
+    Q = cg.plan_wrist_poses(robot, 4, q).q
     assert Q.shape == (4, robot.nq)
     np.testing.assert_array_equal(Q[0], q)
     np.testing.assert_array_equal(Q[:, :-3], np.tile(q[:-3], (4, 1)))
     assert np.all(Q >= robot.q_lower) and np.all(Q <= robot.q_upper)
     assert np.all(np.abs(Q - q) <= 0.6 + 1e-12)
     assert len(np.unique(Q, axis=0)) == 4
-    np.testing.assert_array_equal(cg.plan_wrist_poses(robot, q, 1), q[None])
+    np.testing.assert_array_equal(cg.plan_wrist_poses(robot, 1, q).q, q[None])
 
 
 def test_full_3d_com_observable_and_tighter(ur5):
     q = ur5.random_configuration(np.random.default_rng(41))
-    Q = cg.plan_wrist_poses(ur5, q, 4)
+    Q = cg.plan_wrist_poses(ur5, 4, q).q
     tau_before, tau_after = payload_torques(ur5, Q, MASS, COM_EE)
     full = cg.estimate_com(ur5, Q, tau_before, tau_after, torque_std=SIGMA)
     assert full.unobservable_ee is None
@@ -57,7 +57,7 @@ def test_full_3d_com_observable_and_tighter(ur5):
 def test_planned_beats_random_wrist_poses(ur5):
     rng = np.random.default_rng(42)
     q = ur5.random_configuration(rng)
-    planned = logdet_information(ur5, cg.plan_wrist_poses(ur5, q, 3))
+    planned = logdet_information(ur5, cg.plan_wrist_poses(ur5, 3, q).q)
     random_scores = []
     for _ in range(20):
         Q = np.tile(q, (3, 1))
@@ -72,10 +72,29 @@ def test_bad_input(ur5):
     q = np.zeros(6)
     for k in (0, -1, 1.5, True, "2"):
         with pytest.raises(cg.InvalidInputError, match="k must be an integer"):
-            cg.plan_wrist_poses(ur5, q, k)
+            cg.plan_wrist_poses(ur5, k, q)
     with pytest.raises(ComGraspError, match="shape"):
-        cg.plan_wrist_poses(ur5, np.zeros(5), 3)
+        cg.plan_wrist_poses(ur5, 3, np.zeros(5))
     with pytest.raises(ComGraspError, match="NaN"):
-        cg.plan_wrist_poses(ur5, np.full(6, np.nan), 3)
+        cg.plan_wrist_poses(ur5, 3, np.full(6, np.nan))
     with pytest.raises(cg.InvalidInputError, match="max_offset"):
-        cg.plan_wrist_poses(ur5, q, 3, max_offset=0.0)
+        cg.plan_wrist_poses(ur5, 3, q, max_offset=0.0)
+
+
+def test_the_two_planners_take_the_same_arguments_and_give_the_same_plan(ur5):
+    """robot, k, start, torque_std, mass: the same names in the same order, one PosePlan."""
+    import inspect
+
+    from comgrasp_pin.robot_io import plan_measurement_poses
+
+    shared = ["robot", "k", "start", "torque_std", "mass"]
+    for planner in (cg.plan_wrist_poses, plan_measurement_poses):
+        assert list(inspect.signature(planner).parameters)[:5] == shared
+    q = np.array([0.0, -1.2, 1.4, -1.8, -1.5, 0.3])
+    wrist = cg.plan_wrist_poses(ur5, 3, q, torque_std=0.01, mass=0.5)
+    anywhere = plan_measurement_poses(ur5, 3, q, torque_std=0.01, mass=0.5, n_candidates=200)
+    for plan in (wrist, anywhere):
+        assert isinstance(plan, cg.PosePlan) and plan.q.shape == (3, 6)
+        np.testing.assert_array_equal(plan.q[0], q)
+        assert (plan.torque_std, plan.mass, plan.ee_frame) == (0.01, 0.5, ur5.ee_frame)
+        assert np.all(np.isfinite(plan.predicted_std))

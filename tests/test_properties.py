@@ -156,7 +156,12 @@ def test_axis_prior_is_valid_or_a_comgrasp_error(point, direction, std, com):
        margin=st.floats(0, 0.5) | any_float)  # fmt: skip
 def test_plan_wrist_poses_is_finite_within_limits_or_a_comgrasp_error(q, k, max_offset, n_grid,
                                                                        margin):  # fmt: skip
-    poses = _estimate_or_error(lambda: cg.plan_wrist_poses(ROBOT, q, k, max_offset, n_grid, margin))
+    plan = _estimate_or_error(
+        lambda: cg.plan_wrist_poses(
+            ROBOT, k, q, max_offset=max_offset, n_grid=n_grid, margin=margin
+        )
+    )
+    poses = None if plan is None else plan.q
     if poses is not None:
         assert poses.shape == (k, N) and _finite(poses)
         assert np.array_equal(poses[0], q) and np.array_equal(poses[:, :3], np.tile(q[:3], (k, 1)))

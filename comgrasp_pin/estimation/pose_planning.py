@@ -6,11 +6,16 @@ The poses are chosen for D-optimality: maximise log det(Y^T Y) of the stacked re
 (``regressor``) for theta = (m, m c_ee). The criterion is independent of the payload and of
 the units of theta, and maximising it minimises the volume of the confidence ellipsoid of
 (m, c_ee) as well, since that covariance is G cov_theta G^T with a fixed Jacobian G.
+
+``plan_wrist_poses`` and ``robot_io.plan_measurement_poses`` (any pose, free of
+self-collision) take the same arguments in the same order (robot, k, start, torque_std,
+mass) and return the same ``PosePlan``.
 """
 
 from __future__ import annotations
 
 import itertools
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -25,29 +30,65 @@ MAX_GRID = 21
 """Largest ``n_grid``: the candidates are n_grid ** 3 wrist poses (9261 at most)."""
 
 
+@dataclass(frozen=True)
+class PosePlan:
+    """Planned static poses.
+
+    Attributes:
+        q: (k, n) configurations (rad / m), joint order ``joint_names``.
+        joint_names: the arm's joints.
+        ee_frame: the frame the CoM will be estimated in.
+        predicted_std: (4,) predicted std of (mass, com_ee) (kg, m): the Cramer-Rao bound
+            for a payload of ``mass`` at the ee origin, infinite where a direction is lost.
+        torque_std: std of one averaged reading the prediction assumes (N m).
+        mass: payload mass the prediction assumes (kg).
+        n_candidates: candidate poses searched (within the limits; collision-free where
+            the planner checks collisions).
+    """
+
+    q: np.ndarray
+    joint_names: tuple[str, ...]
+    ee_frame: str
+    predicted_std: np.ndarray
+    torque_std: float
+    mass: float
+    n_candidates: int
+
+
+def check_prediction(torque_std: float, mass: float) -> None:
+    """InvalidInputError unless ``torque_std`` (N m) and ``mass`` (kg) are finite and > 0."""
+    validate.number(torque_std, "torque_std (N m)", low=0.0, low_open=True)
+    validate.number(mass, "mass (kg)", low=0.0, low_open=True)
+
+
 def plan_wrist_poses(
     robot: RobotModel,
-    q: np.ndarray,
     k: int,
+    start: np.ndarray,
+    torque_std: float = 0.005,
+    mass: float = 1.0,
     max_offset: float = 0.6,
     n_grid: int = 5,
     margin: float = 0.05,
-) -> np.ndarray:
-    """Plan ``k`` static configurations for estimation: ``q`` and k - 1 wrist variations of it.
+) -> PosePlan:
+    """Plan ``k`` static configurations for estimation: ``start`` and k - 1 wrist variations.
 
     Greedy D-optimal design over a grid of wrist offsets: each step adds the candidate that
-    most increases log det(sum_i Y_i^T Y_i).
+    most increases log det(sum_i Y_i^T Y_i). No collision check (the wrist turns in place;
+    ``robot_io.plan_measurement_poses`` checks self-collision over the whole workspace).
 
     Args:
         robot: the arm (n >= 3 joints).
-        q: (n,) measurement configuration (rad / m), returned as row 0.
         k: number of poses wanted (an integer >= 1).
-        max_offset: largest change of a wrist joint from q (rad, > 0, at most 2 pi).
+        start: (n,) measurement configuration (rad / m), returned as pose 0.
+        torque_std: std of one averaged reading for the prediction (N m).
+        mass: payload mass for the prediction (kg).
+        max_offset: largest change of a wrist joint from ``start`` (rad, > 0, at most 2 pi).
         n_grid: grid points per wrist joint in [-max_offset, max_offset] (2 ... MAX_GRID).
         margin: distance kept from the joint limits (rad, >= 0, at most 2 pi).
 
     Returns:
-        (k, n) configurations; only the last three joints differ from ``q``.
+        The plan; only the last three joints of its poses differ from ``start``.
 
     Raises:
         InvalidInputError: an argument of the wrong type, shape or range, or too few
@@ -55,8 +96,9 @@ def plan_wrist_poses(
     """
     if not isinstance(robot, RobotModel):
         raise InvalidInputError(f"robot must be a RobotModel, got {type(robot).__name__}")
-    q = robot.check_q(q)
     k = validate.integer(k, "k", low=1)
+    q = robot.check_q(start)
+    check_prediction(torque_std, mass)
     if robot.nq < N_WRIST:
         raise InvalidInputError(f"the robot has {robot.nq} joints; a wrist needs {N_WRIST}")
     # a turn at most: a larger offset is the same poses, and a huge one overflows the grid
@@ -64,17 +106,20 @@ def plan_wrist_poses(
                                  low_open=True)  # fmt: skip
     n_grid = validate.integer(n_grid, "n_grid", low=2, high=MAX_GRID)
     margin = validate.number(margin, "margin (rad)", low=0.0, high=2 * np.pi)
-    if k == 1:
-        return q[None].copy()
     candidates = _wrist_candidates(robot, q, max_offset, n_grid, margin)
     if len(candidates) < k - 1:
         raise InvalidInputError(
-            f"only {len(candidates)} distinct wrist poses fit within the joint limits near q; "
-            f"{k - 1} are needed (increase max_offset or n_grid)"
+            f"only {len(candidates)} distinct wrist poses fit within the joint limits near the "
+            f"start; {k - 1} are needed (increase max_offset or n_grid)"
         )
-    Y0 = pose_regressor(robot, q)[0]
-    chosen = greedy_d_optimal(Y0.T @ Y0, information(robot, candidates), k - 1)
-    return np.vstack([q, candidates[chosen]])
+    Q = q[None].copy()
+    if k > 1:
+        Y0 = pose_regressor(robot, q)[0]
+        chosen = greedy_d_optimal(Y0.T @ Y0, information(robot, candidates), k - 1)
+        Q = np.vstack([q, candidates[chosen]])
+    std = predicted_std(robot, Q, torque_std, mass)
+    names = tuple(robot.joint_names)
+    return PosePlan(Q, names, robot.ee_frame, std, float(torque_std), float(mass), len(candidates))
 
 
 def information(robot: RobotModel, Q: np.ndarray) -> np.ndarray:

@@ -11,12 +11,13 @@ prediction is the Cramer-Rao bound for a payload of a given mass at the ee origi
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
+from comgrasp_pin import validate
 from comgrasp_pin.errors import CollisionError, InvalidInputError
 from comgrasp_pin.estimation.pose_planning import (
+    PosePlan,
+    check_prediction,
     exchange_d_optimal,
     greedy_d_optimal,
     information,
@@ -26,29 +27,6 @@ from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.collision import SelfCollision
 
 UR_JOINTS = 6
-
-
-@dataclass(frozen=True)
-class PosePlan:
-    """Planned static poses.
-
-    Attributes:
-        q: (k, n) configurations (rad / m), joint order ``joint_names``.
-        joint_names: the arm's joints.
-        ee_frame: the frame the CoM will be estimated in.
-        predicted_std: (4,) predicted std of (mass, com_ee) (kg, m).
-        torque_std: std of one averaged reading the prediction assumes (N m).
-        mass: payload mass the prediction assumes (kg).
-        n_candidates: collision-free candidates searched.
-    """
-
-    q: np.ndarray
-    joint_names: tuple[str, ...]
-    ee_frame: str
-    predicted_std: np.ndarray
-    torque_std: float
-    mass: float
-    n_candidates: int
 
 
 def candidate_poses(
@@ -97,6 +75,9 @@ def plan_measurement_poses(
 ) -> PosePlan:
     """``k`` static poses that best determine the mass and the full 3-D CoM.
 
+    The arguments and the result are those of ``estimation.plan_wrist_poses``, which turns
+    only the wrist of one pose; here the poses range over the workspace.
+
     Args:
         robot: the arm (any serial arm with a collision model in its URDF).
         k: number of poses (>= 2 for a full 3-D CoM).
@@ -112,10 +93,8 @@ def plan_measurement_poses(
         InvalidInputError: bad k, start, torque_std or mass; CollisionError: the start
             collides or too few candidates are free.
     """
-    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or k < 1:
-        raise InvalidInputError(f"k must be an integer >= 1, got {k!r}")
-    if not (torque_std > 0 and mass > 0 and np.isfinite(torque_std + mass)):
-        raise InvalidInputError(f"need torque_std > 0 and mass > 0, got {torque_std}, {mass}")
+    k = validate.integer(k, "k", low=1)
+    check_prediction(torque_std, mass)
     checker = SelfCollision(robot, srdf)
     if start is not None:
         start = robot.check_q(start)
