@@ -62,3 +62,11 @@ __all__ = [
     "robot_io",
 ]
 __version__ = "0.2.0"  # the one source: pyproject.toml reads it (tool.setuptools.dynamic)
+
+
+def __dir__() -> list[str]:
+    """What ``dir(comgrasp_pin)`` lists: the public names (``__all__``) and the version.
+
+    Not the submodules that importing them loads (``errors``, ``validate``, ``geometry``).
+    """
+    return sorted([*__all__, "__version__"])
