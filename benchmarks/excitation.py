@@ -20,6 +20,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from excitation_baseline import random_condition_numbers  # benchmarks/, beside this script
 
 from comgrasp_pin._paths import example_robot_urdf, urdf_path
 from comgrasp_pin.robot import RobotModel
@@ -27,7 +28,6 @@ from comgrasp_pin.robot_io.excitation import (
     ExcitationSettings,
     plan_excitation,
 )
-from comgrasp_pin.robot_io.excitation_baseline import random_condition_numbers
 
 ARMS = {
     "ur5": (urdf_path("ur5_gripper.urdf"), "eelink"),

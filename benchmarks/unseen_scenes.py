@@ -3,7 +3,7 @@
     python benchmarks/unseen_scenes.py [--family NAME] [--seed 0]
         [--out benchmarks/results/unseen_scenes.json]
 
-Renders every scene of ``comgrasp_pin.simulation.unseen_families`` (another table colour or
+Renders every scene of ``unseen.families`` (benchmarks/unseen/) (another table colour or
 texture, the camera higher, lower or tilted, other light, other rods, clutter, a second rod
 touching, crossing or beside the first) with MuJoCo, runs ``detect_rod_top_down`` on the
 clean render and on the realistic preset's noisy depth, and judges each answer against the
@@ -25,8 +25,9 @@ import time  # noqa: E402
 from collections import Counter  # noqa: E402
 from pathlib import Path  # noqa: E402
 
+from unseen import families as uf  # noqa: E402  (benchmarks/unseen/, beside this script)
+
 from comgrasp_pin.perception import rod_shape  # noqa: E402
-from comgrasp_pin.simulation import unseen_families as uf  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 

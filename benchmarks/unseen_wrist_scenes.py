@@ -3,7 +3,7 @@
     python benchmarks/unseen_wrist_scenes.py [--family NAME]
         [--out benchmarks/results/unseen_wrist_scenes.json]
 
-Renders every scene of ``comgrasp_pin.simulation.unseen_wrist_families`` (rods of other
+Renders every scene of ``unseen.wrist_families`` (benchmarks/unseen/) (rods of other
 sections, thicknesses and colours in the jaws, other tilts, a turn out of the jaws' plane,
 other light and tables, the gripper low over the table, a box, a cable or a second rod
 behind, below or beside the rod) with MuJoCo at the project's measurement pose, runs
@@ -25,8 +25,9 @@ import time  # noqa: E402
 from collections import Counter  # noqa: E402
 from pathlib import Path  # noqa: E402
 
+from unseen import wrist_families as wf  # noqa: E402  (benchmarks/unseen/, beside this script)
+
 from comgrasp_pin.robot import RobotModel  # noqa: E402
-from comgrasp_pin.simulation import unseen_wrist_families as wf  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 OUTCOMES = ("right", "refused", "wrong")

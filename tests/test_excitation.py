@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import csv
 import json
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -25,7 +27,9 @@ from comgrasp_pin.robot_io.excitation import (
     ExcitationSettings,
     plan_excitation,
 )
-from comgrasp_pin.robot_io.excitation_baseline import random_condition_numbers
+
+sys.path.append(str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from excitation_baseline import random_condition_numbers  # noqa: E402  (benchmarks/)
 
 DURATION_S = 8.0
 FAST = ExcitationSettings(n_random=300, n_starts=1, max_iter=40)  # a quick search for tests

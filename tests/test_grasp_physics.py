@@ -6,10 +6,10 @@ import time
 
 import numpy as np
 import pytest
+from _clearance import link_points, scene_clearance
 
 from comgrasp_pin.config import MotionConfig, WorldConfig
 from comgrasp_pin.geometry import GraspPose
-from comgrasp_pin.motion.clearance import link_points, scene_clearance
 from comgrasp_pin.simulation import Simulation, build_spec
 from comgrasp_pin.simulation.objects import add_object, get_object, object_state, tilt_angle
 from comgrasp_pin.simulation.skills import carry_to_drop_box, pick

@@ -2,10 +2,10 @@
 
 import numpy as np
 import pytest
+from _clearance import link_points, scene_clearance
 
 from comgrasp_pin.errors import IKError
 from comgrasp_pin.geometry import GraspPose
-from comgrasp_pin.motion.clearance import link_points, scene_clearance
 from comgrasp_pin.motion.ik import (
     grasp_frame,
     grasp_height,

@@ -1,16 +1,20 @@
 """The top view on scenes the project never built: within the bounds of a rod there, or refused.
 
 Real renders (MuJoCo, headless EGL) of scenes built apart from the workcell
-(``simulation.unseen_scenes``): other tables, cameras, light, rods and clutter; each judged
+(``benchmarks/unseen/scenes.py``): other tables, cameras, light, rods and clutter; each judged
 against the scene as built, clean and with the realistic preset's depth noise. A subset of
-``simulation.unseen_families`` (the whole set: benchmarks/unseen_scenes.py). Not here: the
+``unseen.families`` (the whole set: benchmarks/unseen_scenes.py). Not here: the
 family ``end_on`` (a second object touching the rod's end on its axis), which from above is
 one rod with a head, as the project's own rods are (reported by the benchmark).
 """
 
+import sys
+from pathlib import Path
+
 import pytest
 
-from comgrasp_pin.simulation import unseen_families as uf
+sys.path.append(str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from unseen import families as uf  # noqa: E402  (benchmarks/unseen/)
 
 SUBSET = {
     "table_colour": None,  # None: every scene of the family

@@ -2,17 +2,21 @@
 
 Real renders (MuJoCo, headless EGL) of the robot holding rods of other sections,
 thicknesses and colours, at other tilts, under other light, over other tables, with a box,
-a cable or a second rod in view (``simulation.unseen_wrist``); each view judged against the
-rod as built (``simulation.unseen_wrist_families.judge``), clean and with the realistic
+a cable or a second rod in view (``benchmarks/unseen/wrist.py``); each view judged against the
+rod as built (``unseen.wrist_families.judge``), clean and with the realistic
 preset's depth and calibration errors. Every scene of the families (about 10 s here;
 benchmarks/unseen_wrist_scenes.py writes the same outcomes to a file).
 """
 
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
-from comgrasp_pin.simulation import unseen_wrist_families as wf
-from comgrasp_pin.simulation.unseen_wrist import HeldRod
+sys.path.append(str(Path(__file__).resolve().parents[1] / "benchmarks"))
+from unseen import wrist_families as wf  # noqa: E402  (benchmarks/unseen/)
+from unseen.wrist import HeldRod  # noqa: E402
 
 # Scenes the side view is meant to measure: at least this share of their views right.
 MIN_RIGHT = {"clean": 1.0, "realistic": 0.9}

@@ -1,5 +1,4 @@
-"""The arm's motion: top-down IK, quintic trajectories, Fourier excitation paths, clearance
-against the workcell.
+"""The arm's motion: top-down IK, quintic trajectories, Fourier excitation paths.
 
 Layer: imports only ``robot``, ``geometry``, ``workcell`` and ``errors``; no simulator.
 """

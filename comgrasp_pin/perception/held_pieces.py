@@ -3,7 +3,7 @@
 The side view takes every blob of points in the slab between the jaws (``held_region``) as
 the rod: the near finger cuts a held rod in two, and heads and weights stand off its axis.
 Clutter in the slab is then taken for the rod too (measured on scenes the project did not
-build: ``simulation.unseen_wrist``): a box below the rod pulled its axis by 27 mm and 2.4
+build: ``benchmarks/unseen/wrist.py``): a box below the rod pulled its axis by 27 mm and 2.4
 deg, and a box in line beyond its end, 4 cm away, was taken for its end (the grasp position
 12 cm off). Two checks, each silent (the same mask, to the bit) on one rod:
 

@@ -1,4 +1,4 @@
-"""The families of unseen scenes (``unseen_scenes``) and how a top view of one is judged.
+"""The families of unseen scenes (``unseen.scenes``) and how a top view of one is judged.
 
 A top view's outcome is *right* when it gives a rod within the bounds of one rod of the
 scene (centre, yaw and length, against the scene as built), *refused* when it raises a
@@ -21,7 +21,8 @@ from comgrasp_pin.config import sensor_preset
 from comgrasp_pin.errors import PerceptionError
 from comgrasp_pin.perception import detect_rod_top_down
 from comgrasp_pin.simulation.depth_noise import DepthNoise
-from comgrasp_pin.simulation.unseen_scenes import Clutter, Look, Rod, UnseenScene, render_top
+
+from .scenes import Clutter, Look, Rod, UnseenScene, render_top
 
 CENTRE_BOUND = 3e-3  # m: the top view's contract (tests/test_perception.py)
 # Under the realistic preset's depth the project's own scenes are held to 4.5 mm (flying

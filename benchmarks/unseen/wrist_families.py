@@ -1,4 +1,4 @@
-"""The families of unseen held-rod scenes (``unseen_wrist``) and how a side view is judged.
+"""The families of unseen held-rod scenes (``unseen.wrist``) and how a side view is judged.
 
 A side view is *right* when it is within the side view's contract of the held rod (tilt
 within 1 deg, the axis and the grasp position along the rod within 3 mm: tests/
@@ -21,9 +21,10 @@ from comgrasp_pin.perception import observe_held_rod
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.simulation.depth_noise import DepthNoise
 from comgrasp_pin.simulation.eyes import arm_capsules, handle_radius, side_camera_pose
-from comgrasp_pin.simulation.unseen_wrist import HeldRod, Thing, WristLook, WristScene, render_side
 from comgrasp_pin.simulation.world import SIDE_CAMERA
 from comgrasp_pin.workcell import TABLE_Z
+
+from .wrist import HeldRod, Thing, WristLook, WristScene, render_side
 
 TILT_BOUND_DEG = 1.0  # the side view's contract
 POSITION_BOUND = 3e-3  # m: the axis and the grasp position along the rod
