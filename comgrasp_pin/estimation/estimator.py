@@ -92,26 +92,23 @@ def estimate_com(
         UnobservableError: the data cannot determine the mass.
         EmptyGripperError: the mass is not measurably above zero: nothing is held.
         SolverError: IPOPT failed (``return_status`` carries its status).
-
-    All four are ``ComGraspError``, a ``ValueError``.
     """
     check_options(method, rcond, loss, huber_delta, com_prior, torque_std)
     q_arr, dtau, sigma = check_arrays(robot, q, tau_before, tau_after, torque_std)
     n = q_arr.shape[-1]
     Q, b = q_arr.reshape(-1, n), dtau.ravel()
-    k = len(Q)
     chol = check_dtau_cov(dtau_cov, b.size, torque_std)
     Y, T = stacked_regressor(robot, Q)
     if payload_motion_ee is not None:
-        maps = motion_maps(payload_motion_ee, k)
-        Y = np.concatenate([Y[i * n : (i + 1) * n] @ maps[i] for i in range(k)])
+        maps = motion_maps(payload_motion_ee, len(Q))
+        Y = np.concatenate([Y[i * n : (i + 1) * n] @ maps[i] for i in range(len(Q))])
     g = robot.model.gravity.linear
     g_norm = math.sqrt(float(g @ g))
     seen = observe(Y, rcond, lambda: (g @ T[0, :3, :3]) / g_norm)  # gravity in the ee frame
     data = _Data(Y, b, T, g_norm)
     row_std = None if sigma is None else math.sqrt(2.0) * sigma  # of a difference
     if isinstance(row_std, np.ndarray):
-        row_std = np.tile(row_std, k)
+        row_std = np.tile(row_std, len(Q))
     ls = fit(Y, b, seen, row_std, chol)
     if method == "lstsq":
         cov = None
@@ -124,12 +121,8 @@ def estimate_com(
             "method='ipopt' needs torque_std (or dtau_cov) when the readings do not "
             "outnumber the unknowns: the noise cannot be estimated from the residuals"
         )
-    if com_prior is None:  # over the observed directions x = Vt theta
-        A, b_w, w = _for_ipopt(ls, Y)
-        res = ipopt.solve(A @ ls.Vt.T, b_w, w, ls.Vt @ ls.theta, loss, huber_delta)
-        theta = ls.Vt.T @ res.x
-        cov = delta_method(theta, ls.Vt.T @ ipopt.laplace_covariance(res.hessian) @ ls.Vt)
-        return _finish(theta, cov, seen, data, ls.torque_std, res.return_status, res.iterations)
+    if com_prior is None:
+        return _ipopt_free(ls, seen, data, loss, huber_delta)
     return _with_prior(ls, seen, data, loss, huber_delta, com_prior)
 
 
@@ -158,6 +151,15 @@ def motion_maps(motion: np.ndarray, k: int) -> np.ndarray:
     A[:, 1:, 0] = M[:, :3, 3]
     A[:, 1:, 1:] = M[:, :3, :3]
     return A
+
+
+def _ipopt_free(ls: Fit, seen: Observed, data: _Data, loss: str, delta: float) -> ComEstimate:
+    """IPOPT without a prior, over the observed directions x = Vt theta."""
+    A, b_w, w = _for_ipopt(ls, data.Y)
+    res = ipopt.solve(A @ ls.Vt.T, b_w, w, ls.Vt @ ls.theta, loss, delta)
+    theta = ls.Vt.T @ res.x
+    cov = delta_method(theta, ls.Vt.T @ ipopt.laplace_covariance(res.hessian) @ ls.Vt)
+    return _finish(theta, cov, seen, data, ls.torque_std, res.return_status, res.iterations)
 
 
 def _with_prior(ls: Fit, seen: Observed, data: _Data, loss, delta, prior: AxisPrior) -> ComEstimate:
