@@ -15,7 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from comgrasp_pin.cli import main
-from comgrasp_pin.errors import MotionLogError
+from comgrasp_pin.errors import MotionLogError, UnobservableError
 from comgrasp_pin.estimation.inertial_fit import fit_inertial, pi_of_theta, theta_of_pi
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io import JointLog, write_csv
@@ -251,3 +251,48 @@ def test_a_line_of_mass_converges_at_the_spread_bound():
     assert fit.theta[1:4].min() >= LOG_SPREAD_MIN - 1e-9
     np.testing.assert_allclose(fit.pi, rod.toDynamicParameters(), atol=2e-4)
     assert np.all(np.isfinite(fit.cov))
+    # the second moment along the rod's axis, (I_yy + I_zz - I_xx) / 2, sits at its bound
+    # (zero): the Hessian in theta is flat along its log-spread, yet the data determine it;
+    # its variance is the data's (the weighted least squares'), not the zero a pseudo-inverse
+    # of the flat Hessian gave
+    u = np.zeros(10)
+    u[[4, 6, 9]] = [-0.5, 0.5, 0.5]
+    Aw = A * 1e4
+    assert u @ fit.cov @ u == pytest.approx(u @ np.linalg.inv(Aw.T @ Aw) @ u, rel=1e-6)
+
+
+def _one_joint_motion(robot, joint: int):
+    """The Fourier motion with every joint but ``joint`` held still, positions exact."""
+    t, q, qd, qdd = fourier_motion(robot, duration=8.0)
+    still = np.arange(robot.nq) != joint
+    q[:, still] = q[0, still]
+    qd[:, still] = qdd[:, still] = 0.0
+    return t, q, qd, qdd
+
+
+@pytest.mark.parametrize("joint", [0, 5])
+@pytest.mark.parametrize("empty_run", [True, False])
+def test_a_parameter_no_motion_moves_is_refused_not_given_zero_variance(robot, joint, empty_run):
+    """One joint moving cannot tell every parameter (the base joint: the inertia about a
+    vertical axis only; the last wrist joint: the mass from the offsets). The estimate is
+    refused, naming what it cannot determine; a pseudo-inverse gave those directions zero
+    variance and the last wrist joint's motion a confident 0.78 +- 0.003 kg "identified"
+    payload of 0.8 kg."""
+    motion = _one_joint_motion(robot, joint)
+    log = replace(rnea_log(robot, PAYLOAD, motion, seed=1), position=motion[1])
+    empty = replace(rnea_log(robot, None, motion, seed=2), position=motion[1])
+    with pytest.raises(UnobservableError, match="does not determine (m|I_)"):
+        estimate_payload_dynamic(robot, log, empty if empty_run else None)
+
+
+def test_a_flat_information_direction_is_refused_by_name():
+    """The inertial fit's covariance inverts pi's Hessian; a flat direction (two parameters
+    the rows see only together) is refused with their names, not given zero variance."""
+    from comgrasp_pin.estimation.inertial_fit import covariance
+
+    A = np.random.default_rng(0).standard_normal((60, 10))
+    A[:, 5] = 2 * A[:, 4]  # I_xy seen only with I_xx
+    with pytest.raises(UnobservableError, match=r"I_xx \+ I_xy"):
+        covariance(A.T @ A)
+    A[:, 5] += 1e-3 * np.random.default_rng(1).standard_normal(60)  # barely seen: huge
+    assert np.sqrt(covariance(A.T @ A)[5, 5]) > 100 * np.sqrt(covariance(A.T @ A)[0, 0])

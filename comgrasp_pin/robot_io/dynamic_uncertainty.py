@@ -20,7 +20,9 @@ Three sources of error enter pi's covariance, each measured or given, never a fa
    d pi / d beta = -P Phi.
 
 All three are linearised through the unconstrained weighted least squares (``sensitivity``),
-the consistent fit's own map where no constraint binds.
+the consistent fit's own map where no constraint binds. A direction of the payload's
+parameters that the motion does not determine is refused (``UnobservableError``): a
+pseudo-inverse would give it zero variance.
 """
 
 from __future__ import annotations
@@ -29,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from comgrasp_pin.errors import InvalidInputError
+from comgrasp_pin.errors import InvalidInputError, UnobservableError
 
 BLOCK_S = 2.5
 """Length (s) of the jackknife's blocks: ten times the filter's correlation time at its
@@ -43,6 +45,11 @@ UR5 and Panda, three payloads) 12 blocks of 1.7 s held the mass in 92-96 % of th
 stay far longer than the 4 Hz filter's correlation (0.25 s). At most 20."""
 FOLDS = 5
 """Contiguous folds of the held-out validation: each fifth predicted from the other four."""
+FLAT_RCOND = 1e-6
+"""A singular value of the column-scaled weighted system below this fraction of the largest is
+a direction the data do not determine (its normal matrix's eigenvalue below 1e-12 of the
+largest, ``inertial_fit.FLAT_RCOND``)."""
+PAYLOAD_NAMES = ("m", "m c_x", "m c_y", "m c_z", "I_xx", "I_xy", "I_yy", "I_xz", "I_yz", "I_zz")
 
 
 @dataclass(frozen=True)
@@ -131,19 +138,57 @@ def jackknife_cov(A, b, w, k: int, n: int, blocks: list[np.ndarray], p: int = 10
     return R.T @ R
 
 
+def _pinv_rows(Aw: np.ndarray, p: int) -> tuple[np.ndarray, np.ndarray]:
+    """(p, r) the first p rows of Aw's pseudo-inverse and (p, p) those of (Aw^T Aw)^-1.
+
+    Columns are scaled to unit norm first; a flat direction (``FLAT_RCOND``) is dropped only
+    where it leaves the first p unknowns alone (a still joint's friction column, say).
+
+    Raises:
+        UnobservableError: a flat direction moves the first p unknowns; the message names
+            them (the payload's parameters when p is 10).
+    """
+    scale = np.linalg.norm(Aw, axis=0)
+    scale = np.where(scale > 0, scale, 1.0)
+    U, s, Vt = np.linalg.svd(Aw / scale, full_matrices=False)
+    flat = s < FLAT_RCOND * s[0]
+    V = Vt.T / scale[:, None]  # back to the unknowns' own units
+    if np.any(flat):
+        V_flat = Vt[flat, :p]  # the flat directions' part in the first p (scaled)
+        worst = V_flat[np.argmax(np.linalg.norm(V_flat, axis=1))]
+        if np.linalg.norm(worst) > 1e-3:
+            names = PAYLOAD_NAMES if p == len(PAYLOAD_NAMES) else [f"unknown {i}" for i in range(p)]
+            mixed = [names[i] for i in np.flatnonzero(np.abs(worst) > 0.2 * np.abs(worst).max())]
+            raise UnobservableError(
+                f"the motion does not determine {' + '.join(mixed)} ({int(flat.sum())} flat "
+                f"direction(s), scaled singular value ratio {s[-1] / s[0]:.1e}): a pseudo-"
+                "inverse would give it zero variance; move every joint, the wrist's too"
+            )
+    keep = ~flat
+    Vk, sk = V[:p, keep], s[keep]
+    return (Vk / sk) @ U[:, keep].T, (Vk / sk**2) @ Vk.T
+
+
 def white_cov(A, b, w, p: int = 10) -> np.ndarray:
-    """(p, p) the LS fit's covariance with white, independent rows (residual-scaled)."""
+    """(p, p) the LS fit's covariance with white, independent rows (residual-scaled).
+
+    Raises:
+        UnobservableError: the rows do not determine the first p unknowns (``_pinv_rows``).
+    """
     Aw = A * w[:, None]
     beta, *_ = np.linalg.lstsq(Aw, b * w, rcond=None)
     r = Aw @ beta - b * w
     s2 = float(r @ r) / max(len(b) - A.shape[1], 1)
-    return s2 * np.linalg.pinv(Aw.T @ Aw)[:p, :p]
+    return s2 * _pinv_rows(Aw, p)[1]
 
 
 def sensitivity(A: np.ndarray, w: np.ndarray, p: int = 10) -> np.ndarray:
-    """(p, r) d pi / d b of the weighted least squares (its first p unknowns)."""
-    Aw = A * w[:, None]
-    return np.linalg.pinv(Aw)[:p] * w[None, :]
+    """(p, r) d pi / d b of the weighted least squares (its first p unknowns).
+
+    Raises:
+        UnobservableError: the rows do not determine the first p unknowns (``_pinv_rows``).
+    """
+    return _pinv_rows(A * w[:, None], p)[0] * w[None, :]
 
 
 def relative_gain_cov(gain_cov, gains, n: int) -> np.ndarray | None:
