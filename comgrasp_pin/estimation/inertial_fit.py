@@ -39,11 +39,12 @@ from comgrasp_pin.estimation.ipopt import IPOPT_OPTIONS
 
 N_PARAMS = 10
 EIG_FLOOR = 1e-9
+"""Smallest eigenvalue (kg m^2) a start's pseudo-inertia is lifted to."""
 FLAT_RCOND = 1e-12
 """A direction of a column-scaled information matrix whose eigenvalue is below this fraction of
 the largest is flat: the data do not determine it."""
 NAMES = ("m", "m c_x", "m c_y", "m c_z", "I_xx", "I_xy", "I_yy", "I_xz", "I_yz", "I_zz")
-"""Smallest eigenvalue (kg m^2) a start's pseudo-inertia is lifted to."""
+"""The ten parameters' names, Pinocchio's order."""
 LOG_SPREAD_MIN = -12.0
 """Lower bound of d1, d2, d3: a spread of the mass of e^-12 (6e-6) times a metre along an
 axis, whose second moment (about 1e-11 kg m^2) no torque sees. A payload thin along an axis
