@@ -91,20 +91,12 @@ def test_inversion_by_hand_on_a_curve_with_a_plateau_and_a_step():
 SIDES = (1.0, -1.0)
 
 
-@pytest.mark.parametrize("sensors", ["ideal", "realistic"])
-def test_every_object_is_calibrated_with_a_monotone_curve_per_side_within_the_lever_range(
-    sensors,
-):
-    data = load_calibration()
-    objects = design.calibrated_objects(data, sensors)
-    # the ideal preset (the paper's procedure): every object; the realistic one's procedure
-    # the paper's rods but obj1 (a stick that holds level or swings past 60 deg either way)
-    assert set(objects) == (
-        set(OBJECTS) if sensors == "ideal" else {f"obj{k}" for k in range(2, 7)}
-    )
+def test_every_object_is_calibrated_with_a_monotone_curve_per_side_within_the_lever_range():
+    objects = load_calibration()["objects"]
+    assert set(objects) == set(OBJECTS)
     for name in objects:
         for side in SIDES:
-            levers, tilts = tilt_curve(name, side, sensors=sensors)
+            levers, tilts = tilt_curve(name, side)
             assert np.all(np.diff(levers) > 0) and np.all(np.diff(tilts) >= 0)
             assert ACCURACY_LEVER_RANGE[0] <= levers[0]
             assert levers[-1] <= ACCURACY_LEVER_RANGE[1]
@@ -246,14 +238,12 @@ def _fake_tilt(threshold: float):
 
 def test_calibrate_refines_each_step_and_merges_into_the_file(tmp_path, monkeypatch):
     out = tmp_path / "cal.json"
-    old = {"made": {"run": "old"}, "objects": {"obj5": {"kept": True}},
-           "presets": {"realistic": {"objects": {"obj6": {"kept": True}}}}}  # fmt: skip
+    old = {"made": {"run": "old"}, "objects": {"obj5": {"kept": True}}}
     out.write_text(json.dumps(old))
     monkeypatch.setattr(tilt_calibration, "tilt_trial", _fake_tilt(0.7537))
     data = tilt_calibration.calibrate(["obj4"], out, seeds=[0], workers=1, dense=4, refine=4)
     assert json.loads(out.read_text()) == data
-    assert data["objects"]["obj5"] == {"kept": True}  # other objects, presets and runs kept
-    assert data["presets"]["realistic"]["objects"] == {"obj6": {"kept": True}}
+    assert data["objects"]["obj5"] == {"kept": True}  # other objects and runs kept
     assert [r.get("run") for r in data["runs"]] == ["old", None]
     for key in ("+x", "-x"):
         curve = data["objects"]["obj4"][key]
@@ -266,31 +256,3 @@ def test_calibrate_refines_each_step_and_merges_into_the_file(tmp_path, monkeypa
         # the design's curve is pooled over LEVER_SCATTER: the step is smeared that far
         tilts = np.array(curve["tilt_deg"])
         assert np.all(tilts[r < 0.7537 - tilt_curves.POOL_WIDTH] < 30)
-    # a preset's curves go under presets/<name>; the ideal ones stay
-    ideal = data["objects"]["obj4"]
-    data = tilt_calibration.calibrate(["obj4"], out, levers=[0.5, 0.9], seeds=[0], workers=1,
-                                      dense=2, sensors="realistic", refine=0)  # fmt: skip
-    assert data["objects"]["obj4"] == ideal
-    assert set(data["presets"]["realistic"]["objects"]) == {"obj4", "obj6"}
-    assert data["presets"]["realistic"]["made"]["sensors"] == "realistic"
-    assert len(data["runs"]) == 3
-
-
-def test_a_presets_curves_are_used_for_that_preset_only(tmp_path):
-    steady = {"lever_ratio": [0.5, 0.6, 0.7, 0.9], "tilt_deg": [0.0, 10.0, 30.0, 60.0]}
-    early = {"lever_ratio": [0.4, 0.5, 0.6, 0.9], "tilt_deg": [0.0, 10.0, 30.0, 60.0]}
-    path = tmp_path / "calibration.json"
-    path.write_text(json.dumps({"objects": {"obj4": {"+x": steady, "-x": steady}},
-                                "presets": {"realistic": {"objects": {
-                                    "obj4": {"+x": early, "-x": early}}}}}))  # fmt: skip
-    load_calibration.cache_clear()
-    try:
-        assert lever_for_tilt("obj4", 20.0, 1.0, str(path)) == pytest.approx(0.65)
-        assert lever_for_tilt("obj4", 20.0, 1.0, str(path), "realistic") == pytest.approx(0.55)
-        # a preset not calibrated uses the top level's (the ideal preset's) curves
-        assert lever_for_tilt("obj4", 20.0, 1.0, str(path), "ideal+drift") == pytest.approx(0.65)
-        assert design.side_and_lever("obj4", 20.0, 0.2, str(path), "realistic")[1] == (
-            pytest.approx(0.55)
-        )
-    finally:
-        load_calibration.cache_clear()

@@ -185,34 +185,23 @@ def side_key(side: float) -> str:
     return "+x" if side > 0 else "-x"
 
 
-def calibrated_objects(data: dict, sensors: str = "ideal") -> dict:
-    """The curves of a calibration measured with the sensor preset ``sensors`` and its
-    procedure (``trials.episode_config``): ``data["presets"][sensors]["objects"]``, else
-    ``data["objects"]`` (the ideal preset, the paper's procedure). The procedure matters:
-    the realistic one's approach moves and perceived grasp point turn rods 2-10 deg
-    further at the same lever (median over obj4-obj6's 0-30 deg targets, measured)."""
-    return data.get("presets", {}).get(sensors, data)["objects"]
-
-
 def tilt_curve(
-    obj: str, side: float = 1.0, path: str | None = None, sensors: str = "ideal"
+    obj: str, side: float = 1.0, path: str | None = None
 ) -> tuple[np.ndarray, np.ndarray]:
     """(levers, tilts_deg): the calibrated monotone curve of ``obj`` with its CoM on
-    ``side`` (+1 or -1) of the centre, under the sensor preset ``sensors``
-    (``calibrated_objects``)."""
-    objects = calibrated_objects(load_calibration(path), sensors)
+    ``side`` (+1 or -1) of the centre (measured with the ideal preset's procedure, the
+    paper's; used under every preset)."""
+    objects = load_calibration(path)["objects"]
     if obj not in objects:
         raise InvalidInputError(f"{obj!r} is not calibrated; calibrated are {sorted(objects)}")
     curve = objects[obj][side_key(side)]
     return np.array(curve["lever_ratio"]), np.array(curve["tilt_deg"])
 
 
-def lever_for_tilt(
-    obj: str, tilt_deg: float, side: float = 1.0, path: str | None = None, sensors: str = "ideal"
-) -> float:
+def lever_for_tilt(obj: str, tilt_deg: float, side: float = 1.0, path: str | None = None) -> float:
     """The lever ratio (e / holding lever) at which ``obj``, its CoM on ``side`` of the
     centre, settles at ``tilt_deg``."""
-    return invert_curve(*tilt_curve(obj, side, path, sensors), tilt_deg)
+    return invert_curve(*tilt_curve(obj, side, path), tilt_deg)
 
 
 def curve_at(levers: Sequence[float], tilts: Sequence[float], lever: float) -> float:
@@ -220,9 +209,7 @@ def curve_at(levers: Sequence[float], tilts: Sequence[float], lever: float) -> f
     return float(np.interp(lever, levers, tilts))
 
 
-def side_and_lever(
-    obj: str, tilt_deg: float, u: float, path: str | None = None, sensors: str = "ideal"
-) -> tuple:
+def side_and_lever(obj: str, tilt_deg: float, u: float, path: str | None = None) -> tuple:
     """(side, lever ratio) for a grasp of ``obj`` aimed at ``tilt_deg``: the side of the
     centre to put the true CoM on, and that side's lever for the target.
 
@@ -230,12 +217,11 @@ def side_and_lever(
     side whose curve lands nearest the target and least steeply there is taken: its score
     is the miss |curve(r) - target| plus half the curve's rise over r +- LEVER_SCATTER (how
     far a grasp's usual lever error moves the tilt). Sides that score within SIDE_TIE_DEG
-    of each other are chosen between by ``u`` (uniform in [0, 1)), half and half. The curves
-    are those of the sensor preset ``sensors`` (``calibrated_objects``).
+    of each other are chosen between by ``u`` (uniform in [0, 1)), half and half.
     """
     scores, levers = {}, {}
     for key, side in SIDES.items():
-        r, t = tilt_curve(obj, side, path, sensors)
+        r, t = tilt_curve(obj, side, path)
         lever = invert_curve(r, t, tilt_deg)
         rise = curve_at(r, t, lever + LEVER_SCATTER) - curve_at(r, t, lever - LEVER_SCATTER)
         scores[key] = abs(curve_at(r, t, lever) - tilt_deg) + 0.5 * rise

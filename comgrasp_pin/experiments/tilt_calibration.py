@@ -29,7 +29,6 @@ from comgrasp_pin.experiments.design import (
     GAP_DEG,
     MAX_DEG,
     SIDES,
-    calibrated_objects,
     grasp_for_lever,
     load_calibration,
     wrap_tilt,
@@ -69,7 +68,7 @@ def tilt_trial(task: dict) -> dict:
     from comgrasp_pin.simulation.scene import Scene, World
 
     obj, lever, seed = task["object"], float(task["lever"]), int(task["seed"])
-    config = trials.episode_config(None, "ipopt", task.get("sensors", "ideal"))
+    config = trials.episode_config(None, "ipopt")
     rng = np.random.default_rng(seed + 17)
     pos_real, offset = grasp_for_lever(obj, lever, rng, config, trials.ACCURACY_COM_RANGE,
                                        trials.ACCURACY_GRASP_OFFSET, task["side"])  # fmt: skip
@@ -133,9 +132,8 @@ def _task_key(task: dict) -> str:
     return f"{task['object']}|{float(task['lever']):.5f}|{float(task['side']):+.0f}|{task['seed']}"
 
 
-def _tasks(obj: str, levers: Sequence[float], seeds: Sequence[int], side: float,
-           sensors: str = "ideal") -> list[dict]:  # fmt: skip
-    return [{"object": obj, "lever": float(r), "side": float(side), "sensors": sensors,
+def _tasks(obj: str, levers: Sequence[float], seeds: Sequence[int], side: float) -> list[dict]:
+    return [{"object": obj, "lever": float(r), "side": float(side),
              "seed": calibration_seed(obj, r, s, side)} for r in levers for s in seeds]  # fmt: skip
 
 
@@ -173,27 +171,26 @@ def calibrate(
     seeds: Sequence[int] = CALIBRATION_SEEDS,
     workers: int = 2,
     dense: int = DENSE_LEVERS,
-    sensors: str = "ideal",
     refine: int = REFINE,
 ) -> dict:
     """Measure every object's two curves (its CoM either side of the centre) at the coarse
     ``levers``, then at ``dense`` levers across each curve's rise (``dense_levers``), then
-    ``refine`` times inside each step (``step_levers``), with the sensor preset ``sensors``
-    and its procedure (``trials.episode_config``), and write them into the calibration
-    JSON at ``out`` (``merged``: other objects and presets there are kept). Grasps are
+    ``refine`` times inside each step (``step_levers``), with the ideal preset's procedure
+    (``trials.episode_config``, the paper's), and write them into the calibration JSON at
+    ``out`` (``merged``: other objects there are kept). Grasps are
     logged beside it as they finish (``<out>.partial.jsonl``), so that a stopped run
     resumes."""
     from comgrasp_pin.experiments import trials
     from comgrasp_pin.simulation.objects import get_object
 
-    config = trials.episode_config(None, "ipopt", sensors)
+    config = trials.episode_config(None, "ipopt")
     seeds = list(seeds)
     start = time.perf_counter()
     curves_of = [(o, key) for o in objects for key in SIDES]
     results: dict[tuple, dict[float, tuple]] = {c: {} for c in curves_of}
 
     def measure(pool: _Pool, todo: list[tuple]) -> None:
-        tasks = [t for (o, key), r in todo for t in _tasks(o, [r], seeds, SIDES[key], sensors)]
+        tasks = [t for (o, key), r in todo for t in _tasks(o, [r], seeds, SIDES[key])]
         rows = pool.map(tilt_trial, tasks)
         for k, (c, r) in enumerate(todo):
             tilt, dropped = _tilts(rows[k * len(seeds) : (k + 1) * len(seeds)], [r], len(seeds))
@@ -227,12 +224,12 @@ def calibrate(
                                  [results[(o, key)][r][1] for r in rs])  # fmt: skip
     n_grasps = sum(len(v) for v in results.values()) * len(seeds)
     made = {
-        "sensors": sensors,
+        "sensors": "ideal",
         "objects": list(objects),
         "utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
         "command": (
             f"python -m comgrasp_pin.experiments.tilt_calibration --objects "
-            f"{','.join(objects)} --sensors {sensors} --out {out}"
+            f"{','.join(objects)} --out {out}"
         ),  # fmt: skip
         "how": (
             f"coarse levers {list(levers)}, then {dense} levers evenly across each "
@@ -242,7 +239,7 @@ def calibrate(
             f"grasps per lever and side; {n_grasps} grasps in all"
         ),
         "scene_seeds": "tilt_calibration.calibration_seed(object, lever, seed, side)",
-        "config": f"trials.episode_config(None, 'ipopt', {sensors!r}): the preset's procedure",
+        "config": "trials.episode_config(None, 'ipopt'): the ideal preset's procedure",
         "grip_force_N": config.motion.grip_force,
         "pad_friction": list(config.world.pad_friction),
         "com_range": list(trials.ACCURACY_COM_RANGE),
@@ -250,7 +247,7 @@ def calibrate(
         "workers": workers,
         "wall_s": round(time.perf_counter() - start, 1),
     }
-    data = merged(json.loads(out.read_text()) if out.exists() else {}, curves, made, sensors)
+    data = merged(json.loads(out.read_text()) if out.exists() else {}, curves, made)
     out.write_text(dumps(data) + "\n")
     log.unlink(missing_ok=True)
     load_calibration.cache_clear()
@@ -268,14 +265,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--seeds", type=int, default=len(CALIBRATION_SEEDS))
     parser.add_argument("--dense", type=int, default=DENSE_LEVERS)
     parser.add_argument("--workers", type=int, default=2)
-    parser.add_argument("--sensors", default="ideal", help="sensor preset (and its procedure)")
     parser.add_argument("--refine", type=int, default=REFINE, help="rounds of bisecting steps")
     args = parser.parse_args(argv)
     objects = [o.strip() for o in args.objects.split(",") if o.strip()]
     levers = [float(v) for v in args.levers.split(",")]
     data = calibrate(objects, Path(args.out), levers, range(args.seeds), args.workers,
-                     args.dense, args.sensors, args.refine)  # fmt: skip
-    for obj, entry in calibrated_objects(data, args.sensors).items():
+                     args.dense, args.refine)  # fmt: skip
+    for obj, entry in data["objects"].items():
         for key in SIDES:
             c = entry[key]
             pairs = " ".join(f"{r:g}:{t:.1f}" for r, t in zip(c["lever_ratio"], c["tilt_deg"]))

@@ -124,23 +124,19 @@ ABOUT = (
     "settled in the jaws, one trial grasp per calibration seed, each in its own "
     "scene (90 = it dropped); median_abs_tilt_deg their median; pooled_median_deg "
     f"the median over the grasps within {LEVER_SCATTER} of the lever; tilt_deg that "
-    "made monotone (pool adjacent violators), the curve the design inverts. The top "
-    "level's objects were measured with the ideal sensor preset (the paper's procedure), "
-    "presets/<name>/objects with that preset's (design.calibrated_objects); runs lists "
-    "every run that measured some of them."
+    "made monotone (pool adjacent violators), the curve the design inverts. Measured "
+    "with the ideal sensor preset's procedure (the paper's); the design uses these curves "
+    "under every preset. runs lists every run that measured some of them."
 )
 
 
-def merged(old: dict, curves: dict, made: dict, sensors: str) -> dict:
-    """The calibration ``old`` with the ``curves`` of a run ``made`` so put in: the ideal
-    preset's at the top level ("objects", "made"), another preset's under
-    "presets"/``sensors``; objects not measured again keep their curves, and every run
-    stays listed in "runs"."""
+def merged(old: dict, curves: dict, made: dict) -> dict:
+    """The calibration ``old`` with the ``curves`` of a run ``made`` put in ("objects",
+    "made"); objects not measured again keep their curves, and every run stays listed in
+    "runs"."""
     data = {"about": ABOUT, **{k: v for k, v in old.items() if k != "about"}}
-    part = data if sensors == "ideal" else data.setdefault("presets", {}).setdefault(sensors, {})
-    part["made"] = made
-    part["objects"] = {**part.get("objects", {}), **curves}
-    data.setdefault("objects", {})
+    data["made"] = made
+    data["objects"] = {**data.get("objects", {}), **curves}
     data["runs"] = [*old.get("runs", [old["made"]] if "made" in old else []), made]
     return data
 
