@@ -181,19 +181,19 @@ class BackendError(ComGraspError, RuntimeError):
 
 
 class InternalTrialError(ComGraspError, RuntimeError):
-    """Trials of a run raised an exception that is not a ``ComGraspError`` (a bug: a
-    ``TypeError``, a ``KeyError``, ...), not the world's failure. Raised once every trial of
-    the run has ended: their rows are in the CSV, marked ``internal error`` and left out of
-    every rate and mean; ``--resume`` runs them again.
+    """Trials raised an exception that is not a ``ComGraspError`` (a bug: a ``TypeError``,
+    a ``KeyError``, ...), not the world's failure. Raised when the command's runs have ended
+    (``runner.fail_on_internal_errors``): their rows are in the CSVs, marked ``internal
+    error`` and left out of every rate and mean; ``--resume`` runs them again. The command
+    line exits with status 1.
 
-    ``trials``: the keys of those trials; ``traceback_path``: the file holding their
-    tracebacks; ``rows``: every row of the run."""
+    ``trials``: the names of those trials; ``traceback_paths``: the files holding their
+    tracebacks."""
 
-    def __init__(self, message: str, trials=(), traceback_path=None, rows=()):
+    def __init__(self, message: str, trials=(), traceback_paths=()):
         super().__init__(message)
         self.trials = list(trials)
-        self.traceback_path = traceback_path
-        self.rows = list(rows)
+        self.traceback_paths = list(traceback_paths)
 
 
 class MissingExtraError(ComGraspError, ImportError):

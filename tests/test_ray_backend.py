@@ -16,6 +16,7 @@ import pytest
 ray = pytest.importorskip("ray")
 
 from comgrasp_pin.cli import main  # noqa: E402
+from comgrasp_pin.errors import UnstablePhysicsError  # noqa: E402
 from comgrasp_pin.experiments.runner import WORKER_DIED, read_rows, run_trials  # noqa: E402
 
 COLUMNS = ["object", "trial", "method", "value", "pid"]
@@ -40,7 +41,7 @@ def _killed_or_failing(task: dict) -> dict:
     if task["trial"] == 1:
         os.kill(os.getpid(), signal.SIGKILL)
     if task["trial"] == 3:
-        raise RuntimeError("trial three failed")
+        raise UnstablePhysicsError("trial three failed")
     return {"value": task["trial"] * 10, "pid": os.getpid()}
 
 
@@ -55,7 +56,7 @@ def test_a_killed_worker_and_an_exception_are_failed_trials_and_can_be_retried(t
     assert len(rows) == len(on_disk) == 5
     assert on_disk[1]["error"].startswith(f"comgrasp_pin.errors.WorkerDiedError: {WORKER_DIED}")
     assert "WorkerCrashedError" in on_disk[1]["error"]
-    assert on_disk[3]["error"] == "RuntimeError: trial three failed"
+    assert on_disk[3]["error"] == "comgrasp_pin.errors.UnstablePhysicsError: trial three failed"
     for k in (0, 2, 4):
         assert on_disk[k]["error"] == "" and int(on_disk[k]["value"]) == 10 * k
         assert int(on_disk[k]["pid"]) != os.getpid()  # ran in a Ray worker

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from comgrasp_pin.cli import main
-from comgrasp_pin.errors import ComGraspError, OutputError, ResumeError
+from comgrasp_pin.errors import ComGraspError, OutputError, ResumeError, UnstablePhysicsError
 from comgrasp_pin.experiments.run_files import read_results, settings_path
 from comgrasp_pin.experiments.runner import read_rows, run_trials
 
@@ -182,7 +182,7 @@ def test_the_cli_repairs_a_cut_csv_and_writes_the_same_rows(tmp_path, capsys):
 
 def _fails_on_two(task: dict) -> dict:
     if task["trial"] == 2:
-        raise RuntimeError("trial two failed")
+        raise UnstablePhysicsError("trial two failed")  # the world failed it: a row
     return _value(task)
 
 
@@ -236,7 +236,7 @@ def test_rows_keep_commas_quotes_and_newlines_on_one_line(tmp_path):
     _run(path, fn=awkward, n=2)
     assert len(_lines(path)) == 3
     rows = list(csv.DictReader(path.open(newline="")))
-    assert rows[0]["error"] == 'ValueError: bad, "quoted" second line'
+    assert rows[0]["error"] == 'internal error: ValueError: bad, "quoted" second line'
 
 
 def test_a_second_run_on_the_same_csv_is_refused(tmp_path):

@@ -8,14 +8,14 @@ from pathlib import Path
 
 import pytest
 
-from comgrasp_pin.errors import ResumeError
+from comgrasp_pin.errors import ResumeError, UnstablePhysicsError
 from comgrasp_pin.experiments.runner import read_rows, run_trials
 from comgrasp_pin.experiments.threads import THREAD_VARIABLES, thread_env, worker_threads
 
 
 def _square(task: dict) -> dict:
     if task["trial"] == 3:
-        raise RuntimeError("this trial fails")
+        raise UnstablePhysicsError("this trial fails")
     return {"value": task["trial"] ** 2}
 
 

@@ -72,7 +72,7 @@ def check_failed_rows_and_retry(path, ran_dir, limit_s=LIMIT_S, **run):
         time.sleep(0.1)
     assert not _alive(hung_pid)
     assert "WorkerDiedError" in on_disk[2]["error"] and "WorkerDiedError" in on_disk[3]["error"]
-    assert on_disk[4]["error"] == "MemoryError"
+    assert on_disk[4]["error"] == "internal error: MemoryError"  # not the world's failure
     for k in (0, 5):
         assert on_disk[k]["error"] == "" and int(on_disk[k]["value"]) == 10 * k
     retry = _tasks(ran_dir / "again", acts={})

@@ -3,12 +3,19 @@
 ``add_experiment_args`` gives their options (output folder, objects, trials, seed, workers,
 backend, sensors, resume, ...) to ``sweep`` as well; ``run_options`` turns them into the
 runner's ``RunOptions``.
+
+Exit status: 0; 2 for a ``ComGraspError`` (bad input, a results folder that cannot be
+continued, a full disk: ``cli.main``); 1 when every run went to its end but trials ended in
+an internal error (``exit_status``: a bug, not the world's failure; the message names them
+and the files with their tracebacks, and ``--resume`` runs them again).
 """
 
 from __future__ import annotations
 
 import argparse
 import os
+import sys
+from collections.abc import Callable
 
 from comgrasp_pin.cli import args as cli_args
 from comgrasp_pin.cli.args import OBJECTS, SEED, add_sensors_arg, sentence
@@ -43,21 +50,39 @@ def run_options(args: argparse.Namespace):
                       args.sensors, args.trial_timeout)  # fmt: skip
 
 
+def exit_status(command: str, run: Callable[[], None]) -> int:
+    """Call ``run()`` (the command's runs and files); 0, or 1 with a message naming the
+    trials that ended in an internal error (``runner.fail_on_internal_errors``)."""
+    from comgrasp_pin.errors import InternalTrialError
+    from comgrasp_pin.experiments.runner import fail_on_internal_errors
+
+    try:
+        with fail_on_internal_errors():
+            run()
+    except InternalTrialError as exc:
+        print(f"comgrasp {command}: error: {exc}", file=sys.stderr)
+        return 1
+    return 0
+
+
 def _cmd_experiment(args: argparse.Namespace) -> int:
     from comgrasp_pin.experiments import reproduce
 
     opts = run_options(args)
-    if args.command == "accuracy":
-        reproduce.run_accuracy(opts)
-        print(f"wrote {opts.out / 'accuracy.csv'}, accuracy.png, accuracy_table.md")
-    elif args.command == "regrasp":
-        reproduce.run_regrasp(opts)
-        print(f"wrote {opts.out / 'regrasp.csv'}, regrasp.png, regrasp_table.md")
-    else:
-        path = reproduce.reproduce(opts)
-        print(path.read_text())
-        print(f"report written to {path}")
-    return 0
+
+    def run() -> None:
+        if args.command == "accuracy":
+            reproduce.run_accuracy(opts)
+            print(f"wrote {opts.out / 'accuracy.csv'}, accuracy.png, accuracy_table.md")
+        elif args.command == "regrasp":
+            reproduce.run_regrasp(opts)
+            print(f"wrote {opts.out / 'regrasp.csv'}, regrasp.png, regrasp_table.md")
+        else:
+            path = reproduce.reproduce(opts)
+            print(path.read_text())
+            print(f"report written to {path}")
+
+    return exit_status(args.command, run)
 
 
 def add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
@@ -105,7 +130,8 @@ def add_experiment_args(p: argparse.ArgumentParser, default_out: str) -> None:
     p.add_argument(
         "--retry-failed",
         action="store_true",
-        help="with --resume (implied): run again the trials that ended in an error",
+        help="with --resume (implied): run again the trials that ended in an error (those "
+        "that ended in an internal error, a bug, run again on any --resume)",
     )
     p.add_argument("--trial-timeout", type=cli_args.positive_seconds, metavar="S",
                    default=DEFAULT_TRIAL_TIMEOUT_S,

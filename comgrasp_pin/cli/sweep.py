@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from comgrasp_pin.cli.args import _argument_type
-from comgrasp_pin.cli.experiments import add_experiment_args, run_options
+from comgrasp_pin.cli.experiments import add_experiment_args, exit_status, run_options
 
 
 def _param(text: str):
@@ -24,11 +24,14 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     if args.trials is None and not args.quick:
         args.trials = SWEEP_TRIALS
     opts = SweepOptions(run_options(args), args.experiment, tuple(args.param))
-    run_sweep(opts)
-    out = opts.run.out
-    print((out / "sweep_table.md").read_text())
-    print(f"wrote {out / 'sweep.csv'}, sweep_table.md and a figure per measure (sweep_*.png)")
-    return 0
+
+    def run() -> None:
+        run_sweep(opts)
+        out = opts.run.out
+        print((out / "sweep_table.md").read_text())
+        print(f"wrote {out / 'sweep.csv'}, sweep_table.md and a figure per measure (sweep_*.png)")
+
+    return exit_status("sweep", run)
 
 
 def add_subcommand(sub) -> None:

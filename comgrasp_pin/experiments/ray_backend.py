@@ -3,14 +3,17 @@
 ``run_on_ray`` runs ``workers.safe_call(fn, task)`` as a Ray task per trial, at most
 ``workers`` in flight, and hands each row to ``record`` (the runner's CSV appender) as it
 finishes, so the driver appends rows exactly as a local run does and ``--resume`` works the
-same. A trial that raises is an error row (inside the task, as locally); a task whose worker
-dies (killed, crashed, out of memory: Ray's ``WorkerCrashedError`` and its other system
-errors) is recorded as failed too, and is not retried (``max_retries=0``): a trial that
-kills its worker would kill the next one as well. A task running past ``trial_timeout_s``
-is cancelled with ``force=True`` (Ray kills its worker process) and recorded as
-``TrialTimeoutError``. Ray does not tell the driver when a task starts, so its clock starts
-when it is submitted: with at most ``workers`` tasks in flight on as many CPUs it starts at
-once, after a new Ray worker's start-up (seconds, against a limit of minutes).
+same. A trial that raises is an error row, or an internal error's row when what it raised
+is not a ``ComGraspError`` (inside the task, as locally: ``workers.safe_call``); a task
+whose worker crashed (killed, out of memory: Ray's ``WorkerCrashedError``) is recorded as
+failed (``WorkerDiedError``), and is not retried (``max_retries=0``): a trial that kills its
+worker would kill the next one as well. Any other Ray error is an internal error: not the
+world's verdict on the trial, so never counted as one, and ``--resume`` runs it again. A
+task running past ``trial_timeout_s`` is cancelled with ``force=True`` (Ray kills its worker
+process) and recorded as ``TrialTimeoutError``. Ray does not tell the driver when a task
+starts, so its clock starts when it is submitted: with at most ``workers`` tasks in flight
+on as many CPUs it starts at once, after a new Ray worker's start-up (seconds, against a
+limit of minutes).
 
 Ray is an optional extra (``pip install 'comgrasp_pin[ray]'``). A Ray already initialised
 in this process is used as it is; otherwise ``ray.init(address=...)`` joins an existing
@@ -25,7 +28,12 @@ from collections.abc import Callable, Sequence
 
 from comgrasp_pin.errors import BackendError, WorkerDiedError
 from comgrasp_pin.experiments.threads import thread_env
-from comgrasp_pin.experiments.workers import WORKER_DIED, error_row, timed_out
+from comgrasp_pin.experiments.workers import (
+    WORKER_DIED,
+    error_row,
+    internal_error_row,
+    timed_out,
+)
 
 BACKENDS = ("local", "ray")
 RAY_INIT_OPTIONS = {"include_dashboard": False, "log_to_driver": False}
@@ -148,9 +156,11 @@ def _finished(ray, refs: list, wait_s: float) -> list:
 
 
 def _row(ray, ref, task: dict) -> dict:
-    """The task's row, or its error row when Ray could not run it (a dead worker)."""
+    """The task's row; when Ray could not run it, a dead worker's error row, or an internal
+    error's row for any other Ray error."""
     try:
         return ray.get(ref)
     except ray.exceptions.RayError as exc:
-        crashed = isinstance(exc, ray.exceptions.WorkerCrashedError)
-        return error_row(task, WorkerDiedError(_died_message(exc)) if crashed else exc)
+        if isinstance(exc, ray.exceptions.WorkerCrashedError):
+            return error_row(task, WorkerDiedError(_died_message(exc)))
+        return internal_error_row(task, exc)

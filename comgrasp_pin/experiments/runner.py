@@ -2,8 +2,14 @@
 
 Every finished trial is appended to the CSV at once, whole (``run_files.RowAppender``), so an
 interrupted run loses nothing and ``resume=True`` continues where it stopped; the run's
-settings are kept beside the CSV and a resumed run must match them. A trial that raises is
-recorded with its error and does not stop the run; ``retry_failed=True`` runs those again.
+settings are kept beside the CSV and a resumed run must match them. A trial that raises a
+``ComGraspError`` (the world or the harness failed it) is recorded with its error and does
+not stop the run; ``retry_failed=True`` runs those again. A trial that raises anything else
+(a bug) is recorded as an internal error (``workers``: its row's error begins ``internal
+error:``, its traceback goes to ``NAME.tracebacks.txt`` beside the CSV); the run goes on,
+the report never counts it as a failed trial, ``resume=True`` runs it again (with or without
+``retry_failed``: it has no outcome to keep), and a command run within
+``fail_on_internal_errors`` ends with ``InternalTrialError`` (exit status 1) naming it.
 ``backend="ray"`` runs the same trials as Ray tasks (``ray_backend``), the driver appending
 rows as they finish. Locally, trials run in worker processes (``workers``: spawned, each
 with its own MuJoCo and OpenGL context), one per worker for a serial run with a time limit:
@@ -30,7 +36,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from comgrasp_pin import validate
-from comgrasp_pin.errors import InvalidInputError, ResumeError
+from comgrasp_pin.errors import InternalTrialError, InvalidInputError, ResumeError
 from comgrasp_pin.experiments import run_files
 from comgrasp_pin.experiments.ray_backend import check_backend, ensure_ray, run_on_ray
 from comgrasp_pin.experiments.run_files import RowAppender
@@ -50,11 +56,6 @@ the 99th percentile 12.5 s, the median 1.7 s: 600 s is 22 times the longest, roo
 machine several times slower or more loaded, and still ends a hung trial within minutes."""
 
 
-def task_key(row: dict) -> tuple[str, ...]:
-    """Identity of a trial: its object, trial index and method."""
-    return tuple(str(row.get(k, "")) for k in KEY_COLUMNS)
-
-
 def read_rows(csv_path: Path) -> list[dict]:
     """All rows of a results CSV (empty when the file does not exist), its own header."""
     if not csv_path.exists():
@@ -71,6 +72,7 @@ def _kept_rows(csv_path: Path, columns: list[str], resume: bool, overwrite: bool
         rows, rewrite = [], True
         if settings is not None:
             run_files.write_settings(csv_path, settings)
+        run_files.tracebacks_path(csv_path).unlink(missing_ok=True)  # an earlier run's
     elif not resume:
         raise ResumeError(
             f"{csv_path} already holds results: pass resume (--resume) to continue it or "
@@ -80,10 +82,11 @@ def _kept_rows(csv_path: Path, columns: list[str], resume: bool, overwrite: bool
         rows, repaired = run_files.read_results(csv_path, columns)
         if settings is not None:
             run_files.write_settings(csv_path, run_files.check_settings(csv_path, settings))
-        failed = [row for row in rows if row.get("error")]
-        if retry_failed:
-            rows = [row for row in rows if not row.get("error")]
-        rewrite = repaired or bool(retry_failed and failed)
+        # an internal error is no outcome: its trial runs again, retry_failed or not
+        again = run_files.is_internal_error if not retry_failed else lambda r: r.get("error")
+        kept = [row for row in rows if not again(row)]
+        rewrite = repaired or len(kept) < len(rows)
+        rows = kept
     if rewrite:
         run_files.rewrite(csv_path, columns, rows)
     return rows
@@ -117,7 +120,8 @@ def run_trials(
             has CPUs). 1 without ``trial_timeout_s``: in this process.
         resume: keep the rows already in ``csv_path`` and run only the missing tasks.
         overwrite: start a new file even if one exists.
-        retry_failed: with ``resume``, run again the tasks whose rows hold an error.
+        retry_failed: with ``resume``, run again the tasks whose rows hold an error (those
+            of an internal error run again in any case).
         settings: every setting of the run, recorded beside the CSV; with ``resume`` the
             recorded ones must match (``run_files.check_settings``).
         backend: "local" (this process or ``workers`` processes) or "ray" (Ray tasks, at
@@ -125,6 +129,11 @@ def run_trials(
         keys: the columns that identify a trial (each task once).
         trial_timeout_s: a trial running longer (s) is stopped (its worker killed) and
             recorded as ``TrialTimeoutError``; None: no limit.
+
+    Returns:
+        Every row, the CSV's order; those of trials that ended in an internal error too
+        (``run_files.is_internal_error``), which are also reported to the open
+        ``fail_on_internal_errors`` blocks.
 
     Raises:
         ResumeError: the CSV cannot be continued (see ``run_files``).
@@ -143,11 +152,20 @@ def run_trials(
         _check_picklable(fn)
     with run_files.run_lock(Path(csv_path)):
         rows = _kept_rows(Path(csv_path), columns, resume, overwrite, retry_failed, settings)
-        return _run_missing(fn, tasks, rows, Path(csv_path), columns, execute, desc, key)
+        rows = _run_missing(fn, tasks, rows, Path(csv_path), columns, execute, desc, tuple(keys))
+    for found in _WATCHING:
+        found += [(Path(csv_path), _name(row, keys), row["error"])
+                  for row in rows if run_files.is_internal_error(row)]  # fmt: skip
+    return rows
 
 
 def _key_of(keys: tuple[str, ...]) -> Callable[[dict], tuple[str, ...]]:
     return lambda row: tuple(str(row.get(k, "")) for k in keys)
+
+
+def _name(row: dict, keys: Sequence[str]) -> str:
+    """A trial's name in messages: ``object=obj1, trial=2, method=m``."""
+    return ", ".join(f"{k}={row.get(k, '')}" for k in keys)
 
 
 def _check_picklable(fn) -> None:
@@ -190,19 +208,31 @@ def _run_local(fn, todo, workers: int, record, timeout_s: float | None) -> None:
 
 
 def _run_missing(fn, tasks, rows: list[dict], csv_path: Path, columns: list[str],
-                 execute, desc: str, key) -> list[dict]:  # fmt: skip
-    """Run the tasks that have no row in ``rows`` yet, appending theirs; all rows."""
+                 execute, desc: str, keys: tuple[str, ...]) -> list[dict]:  # fmt: skip
+    """Run the tasks that have no row in ``rows`` yet, appending theirs; all rows. An
+    internal error's traceback goes to ``run_files.tracebacks_path`` before its row."""
+    key = _key_of(keys)
     done = {key(row) for row in rows}
     todo = [task for task in tasks if key(task) not in done]
     bar = tqdm(total=len(tasks), initial=len(tasks) - len(todo), desc=desc, unit="trial")
+    tracebacks = run_files.tracebacks_path(csv_path)
     with RowAppender(csv_path, columns) as out:
 
         def record(*finished: dict) -> None:
+            for row in finished:
+                text = row.pop(run_files.TRACEBACK, None)
+                if run_files.is_internal_error(row):
+                    run_files.append_traceback(csv_path, _name(row, keys), text or NO_TRACEBACK)
             out.write_rows(finished)  # one fsync for the rows that finished together
             rows.extend(finished)
             bar.update(len(finished))
             for row in finished:
-                if row.get("error"):
+                if run_files.is_internal_error(row):
+                    bar.write(
+                        f"trial {key(row)} ended in an internal error (a bug, not a "
+                        f"failed trial; traceback in {tracebacks}): {row['error']}"
+                    )
+                elif row.get("error"):
                     bar.write(f"trial {key(row)} failed: {row['error']}")
 
         try:
@@ -210,6 +240,52 @@ def _run_missing(fn, tasks, rows: list[dict], csv_path: Path, columns: list[str]
         finally:
             bar.close()
     return rows
+
+
+NO_TRACEBACK = "(no traceback: the trial's process sent none)"
+_WATCHING: list[list[tuple[Path, str, str]]] = []
+"""The open ``fail_on_internal_errors`` blocks' lists of (CSV, trial, error)."""
+SHOWN_TRIALS = 10
+"""``InternalTrialError`` names at most this many trials (and counts the others)."""
+
+
+@contextmanager
+def fail_on_internal_errors() -> Iterator[list[tuple[Path, str, str]]]:
+    """Within the block, the trials of every run (``run_trials``) that end in an internal
+    error are listed (CSV path, the trial's name, its error) in the list it yields; when the
+    block ends without an exception of its own and the list is not empty, it raises
+    ``InternalTrialError`` naming them and the files with their tracebacks. The experiment
+    commands run in one, so every run goes to its end (figures and report written, those
+    trials left out of them) and the command still fails (exit status 1).
+
+    Raises:
+        InternalTrialError: a trial ended in an internal error.
+    """
+    found: list[tuple[Path, str, str]] = []
+    _WATCHING.append(found)
+    try:
+        yield found
+    finally:
+        _WATCHING.remove(found)
+    if found:
+        raise internal_trial_error(found)
+
+
+def internal_trial_error(found: Sequence[tuple[Path, str, str]]) -> InternalTrialError:
+    """The ``InternalTrialError`` of the (CSV, trial, error) listed in ``found``."""
+    paths = list(dict.fromkeys(run_files.tracebacks_path(csv) for csv, _, _ in found))
+    named = "; ".join(f"{trial} in {csv} ({error})" for csv, trial, error in found[:SHOWN_TRIALS])
+    more = len(found) - SHOWN_TRIALS
+    return InternalTrialError(
+        f"{len(found)} trial(s) ended in an internal error: an exception that is not a "
+        "ComGraspError, a bug and not the world's failure. Their rows are marked 'internal "
+        "error' and left out of every rate and mean: "
+        f"{named}{f'; and {more} more' if more > 0 else ''}. Tracebacks: "
+        f"{', '.join(map(str, paths))}. Fix the cause, then run the same command with "
+        "--resume: those trials run again",
+        [trial for _, trial, _ in found],
+        paths,
+    )
 
 
 _KEPT: dict[int, WorkerSet] = {}

@@ -22,13 +22,13 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import asdict, dataclass
-from pathlib import Path
 
 import numpy as np
 
 from comgrasp_pin.config import paths as config_paths
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.experiments.reproduce import RunOptions, run_settings
+from comgrasp_pin.experiments.run_files import is_internal_error
 from comgrasp_pin.experiments.runner import KEY_COLUMNS, run_trials
 from comgrasp_pin.experiments.stats import coverage, mean_ci, wilson_interval, z_scores
 from comgrasp_pin.experiments.trials import (
@@ -190,7 +190,9 @@ def _rate(successes: int, n: int) -> tuple[float, float, float, int]:
 
 
 def point_measures(rows: list[dict], experiment: str) -> dict[str, tuple[float, ...]]:
-    """(value, 95 % low, 95 % high, n) of each of MEASURES over one grid point's rows."""
+    """(value, 95 % low, 95 % high, n) of each of MEASURES over one grid point's rows; a
+    trial that ended in an internal error (a bug, not an outcome) is in none of them."""
+    rows = [row for row in rows if not is_internal_error(row)]
     if experiment == "regrasp":
         rows = [row for row in rows if row.get("method") == "regrasp"]
         ok = [row for row in rows if not row.get("error")]
@@ -237,10 +239,3 @@ def markdown_table(table: list[tuple[dict, dict]], params) -> str:
         cells = [f"{point[p]:g}" for p in paths] + [_cell(measures[m]) for m in MEASURES]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
-
-
-def load_summary(out: Path, params, experiment: str) -> list[tuple[dict, dict]]:
-    """``summarise`` of the sweep.csv in ``out`` (for notebooks and reports)."""
-    from comgrasp_pin.experiments.runner import read_rows
-
-    return summarise(read_rows(out / "sweep.csv"), params, experiment)

@@ -11,6 +11,20 @@ and waits on the workers' pipes and process sentinels (``multiprocessing.connect
   process, whatever it is stuck in) and replaced, and is recorded as ``TrialTimeoutError``.
 
 So neither a crash nor a hang ends or stalls the run, and the other workers' trials go on.
+
+What a trial raises decides what its row is (``safe_call``):
+
+- a ``ComGraspError`` (the robot dropped the rod, perception refused, unstable physics; the
+  harness's ``WorkerDiedError`` and ``TrialTimeoutError`` too) is the world's or the run's
+  verdict on that trial: a row with the error's last line, counted as a failed trial;
+- anything else (``TypeError``, ``KeyError``, ``MemoryError``, ...) is an internal error, a
+  bug and not the world's failure: a row whose error begins ``internal error:``
+  (``run_files.INTERNAL_ERROR``) carrying the whole traceback, which the driver keeps in
+  ``NAME.tracebacks.txt`` beside the CSV. The run goes on (the other trials are worth
+  having), but such a row is never counted as a failed trial: the report leaves it out of
+  every rate and mean and names it, the command ends with exit status 1 naming it, and
+  ``--resume`` runs it again (``runner``). A worker that cannot unpickle a job or pickle a
+  row reports an internal error the same way.
 A trial's clock starts when its worker is ready: a new worker first starts Python and
 imports the package (0.3 s here), which is not the trial's time; a worker not ready within
 ``WORKER_START_S`` counts as hung. The workers are spawned (each has its own MuJoCo and
@@ -30,7 +44,8 @@ from collections import deque
 from collections.abc import Callable, Sequence
 from multiprocessing.connection import wait
 
-from comgrasp_pin.errors import TrialTimeoutError, WorkerDiedError
+from comgrasp_pin.errors import ComGraspError, TrialTimeoutError, WorkerDiedError
+from comgrasp_pin.experiments.run_files import INTERNAL_ERROR, TRACEBACK
 from comgrasp_pin.experiments.threads import worker_threads
 
 PARENT_CHECK_S = 1.0  # how often a worker checks that its driver is still there (s)
@@ -54,18 +69,31 @@ def timed_out(limit_s: float) -> TrialTimeoutError:
     )
 
 
+def _last_line(exc: BaseException) -> str:
+    return traceback.format_exception_only(type(exc), exc)[-1].strip()
+
+
 def error_row(task: dict, exc: BaseException) -> dict:
-    """The row of a failed trial: the task and the error's last line."""
-    last = traceback.format_exception_only(type(exc), exc)[-1].strip()
-    return {**task, "error": last}
+    """The row of a failed trial (a ``ComGraspError``): the task and the error's last line."""
+    return {**task, "error": _last_line(exc)}
+
+
+def internal_error_row(task: dict, exc: BaseException) -> dict:
+    """The row of a trial that raised something other than a ``ComGraspError``: the error's
+    last line after ``internal error:``, and its whole traceback under ``TRACEBACK``."""
+    text = "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))
+    return {**task, "error": f"{INTERNAL_ERROR}: {_last_line(exc)}", TRACEBACK: text}
 
 
 def safe_call(fn: Callable[[dict], dict], task: dict) -> dict:
-    """``fn(task)``'s row: the task, its result columns and an empty error, or the error."""
+    """``fn(task)``'s row: the task, its result columns and an empty error; the error's row
+    for a ``ComGraspError``; an internal error's row for any other exception."""
     try:
         return {**task, **fn(task), "error": ""}
-    except Exception as exc:  # a failed trial is data, not the end of the run
+    except ComGraspError as exc:  # the world (or the harness) failed the trial: data
         return error_row(task, exc)
+    except Exception as exc:  # a bug: kept, with its traceback, but never a failed trial
+        return internal_error_row(task, exc)
 
 
 def exit_with_parent(parent: int) -> None:
@@ -92,7 +120,7 @@ def _serve(conn, parent: int) -> None:
         except EOFError:
             return
         except Exception as exc:  # a job that cannot be unpickled here (its module)
-            conn.send(error_row({}, exc))
+            conn.send(internal_error_row({}, exc))
             continue
         if job is None:
             return
@@ -101,7 +129,7 @@ def _serve(conn, parent: int) -> None:
         try:
             conn.send(row)
         except Exception as exc:  # a result that cannot be pickled
-            conn.send(error_row(task, exc))
+            conn.send(internal_error_row(task, exc))
 
 
 _NOTHING = object()  # no message this pass

@@ -1,4 +1,10 @@
-"""What the report's parts share: object groups, labels, colours, small helpers."""
+"""What the report's parts share: object groups, labels, colours, small helpers.
+
+Rows of trials that ended in an internal error (``run_files.is_internal_error``: a bug, not
+the world's failure) are no outcome: ``_select``, through which every table, figure and
+verdict takes its rows, leaves them out, so they are in no count, rate or mean, and
+``internal_error_note`` names them (the run summary says it).
+"""
 
 from __future__ import annotations
 
@@ -12,6 +18,7 @@ from statistics import NormalDist
 import numpy as np
 
 from comgrasp_pin.experiments import paper
+from comgrasp_pin.experiments.run_files import INTERNAL_ERROR, is_internal_error
 
 DEFAULT_PAPER_OBJECTS = ("obj1", "obj2", "obj3", "obj4", "obj5", "obj6")
 OBJECTS = DEFAULT_PAPER_OBJECTS  # kept for callers of the old name
@@ -53,6 +60,31 @@ def _ok(rows: Sequence[dict]) -> list[dict]:
     return [r for r in rows if not r.get("error")]
 
 
+def outcomes(rows: Sequence[dict]) -> list[dict]:
+    """The rows that are outcomes of a trial: all but those of an internal error."""
+    return [r for r in rows if not is_internal_error(r)]
+
+
+def internal_error_note(rows: Sequence[dict], shown: int = 10) -> str:
+    """A sentence naming the trials of ``rows`` that ended in an internal error, and saying
+    that they are left out of every count, rate and mean; "" when there are none."""
+    bad = [r for r in rows if is_internal_error(r)]
+    if not bad:
+        return ""
+    names = [
+        f"{r.get('object', '?')} trial {r.get('trial', '?')} ({r.get('method', '?')}): "
+        + str(r["error"]).removeprefix(f"{INTERNAL_ERROR}: ")
+        for r in bad[:shown]
+    ]
+    more = f"; and {len(bad) - shown} more" if len(bad) > shown else ""
+    return (
+        f"{len(bad)} trial(s) ended in an {INTERNAL_ERROR} (an exception that is not a "
+        "ComGraspError: a bug, not a failed trial) and are left out of every count, rate and "
+        f"mean: {'; '.join(names)}{more}. Their tracebacks are in `NAME.tracebacks.txt` "
+        "beside each CSV; `--resume` runs them again."
+    )
+
+
 def _column(rows: Sequence[dict], name: str) -> np.ndarray:
     return np.array([_float(r.get(name)) for r in rows], float)
 
@@ -85,19 +117,15 @@ def object_groups(rows: Sequence[dict]) -> tuple[list[str], list[str]]:
     return [o for o in ours if o in present], sorted(present - set(ours), key=_natural)
 
 
-def _objects(rows: Sequence[dict]) -> list[str]:
-    paper_objs, extra = object_groups(rows)
-    return paper_objs + extra
-
-
 def _group(rows: Sequence[dict], objects: Sequence[str] | None) -> list[str]:
     """``objects`` as given, or the paper's objects in ``rows``."""
     return list(objects) if objects is not None else object_groups(rows)[0]
 
 
 def _select(rows: Sequence[dict], objects: Sequence[str]) -> list[dict]:
+    """The rows of ``objects`` that are outcomes (no internal error's: see the docstring)."""
     keep = set(objects)
-    return [r for r in rows if r.get("object") in keep]
+    return [r for r in rows if r.get("object") in keep and not is_internal_error(r)]
 
 
 def _spec(obj: str):

@@ -21,7 +21,9 @@ from comgrasp_pin.experiments.report.common import (
     _ok,
     _select,
     describe,
+    internal_error_note,
     object_groups,
+    outcomes,
 )
 from comgrasp_pin.experiments.report.regrasp import (
     TARGET_BELOW_10,
@@ -165,7 +167,10 @@ def regrasp_verdict(
 def run_summary(acc: Sequence[dict], reg: Sequence[dict], seed: int | None = None) -> str:
     """One paragraph: what the rows hold, counted from the rows themselves (so that rows of
     several runs or seeds are described as they are): grasps and trials per object and
-    method, the objects in each group, the run seeds and the failures."""
+    method, the objects in each group, the run seeds and the failures; the trials that
+    ended in an internal error are named and counted in none of these."""
+    note = internal_error_note([*acc, *reg])
+    acc, reg = outcomes(acc), outcomes(reg)
     rows = list(acc) + list(reg)
     seeds = sorted(
         {int(_float(r["seed"])) // 100_000 for r in rows if np.isfinite(_float(r.get("seed")))}
@@ -192,6 +197,7 @@ def run_summary(acc: Sequence[dict], reg: Sequence[dict], seed: int | None = Non
         f"{len(acc)} accuracy grasps and {len(reg)} pick-and-place trials ({per_text} per "
         f"object and method; {groups}; {seed_text}); {failed} trial(s) failed with an error "
         "(listed in the CSVs' `error` column and counted as failures)."
+        + (f" {note}" if note else "")
     )
 
 
