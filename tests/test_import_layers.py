@@ -297,6 +297,24 @@ def test_the_dynamic_estimates_plot_alone_loads_matplotlib(robot_logs):
     assert loaded == ["matplotlib"]
 
 
+def test_the_robot_sides_modules_load_no_simulator_camera_or_plot_library():
+    """The package's face and the parts below the simulation that a real arm uses: the
+    bottom layer's file checks (MuJoCo's loader lives in simulation.mjcf_files), robot_io,
+    estimation, motion, planning, the command line's parser."""
+    parts = ["", ".file_checks", ".robot_io", ".estimation", ".motion.ik", ".motion.fourier",
+             ".motion.trajectory", ".planning", ".cli"]  # fmt: skip
+    modules = [f"comgrasp_pin{part}" for part in parts]
+    code = (
+        f"import importlib, json, sys\nfor m in {modules!r}: importlib.import_module(m)\n"
+        "import comgrasp_pin.cli as cli\ncli.build_parser()\n"
+        f"print(json.dumps([m for m in {SIMULATION_LIBRARIES!r} if m in sys.modules]))"
+    )
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120, cwd=PACKAGE.parent)  # fmt: skip
+    assert res.returncode == 0, res.stderr
+    assert json.loads(res.stdout.splitlines()[-1]) == []
+
+
 def test_the_parsers_rods_are_the_simulations():
     """``cli.args.OBJECTS`` reads sim/objects.json itself (no MuJoCo): the same names, order."""
     from comgrasp_pin.cli.args import OBJECTS
