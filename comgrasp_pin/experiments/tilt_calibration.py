@@ -177,11 +177,9 @@ def calibrate(
     ``levers``, then at ``dense`` levers across each curve's rise (``dense_levers``), then
     ``refine`` times inside each step (``step_levers``), with the ideal preset's procedure
     (``trials.episode_config``, the paper's), and write them into the calibration JSON at
-    ``out`` (``merged``: other objects there are kept). Grasps are
-    logged beside it as they finish (``<out>.partial.jsonl``), so that a stopped run
-    resumes."""
+    ``out`` (``merged``: other objects there are kept). Grasps are logged beside it as they
+    finish (``<out>.partial.jsonl``), so that a stopped run resumes."""
     from comgrasp_pin.experiments import trials
-    from comgrasp_pin.simulation.objects import get_object
 
     config = trials.episode_config(None, "ipopt")
     seeds = list(seeds)
@@ -214,14 +212,7 @@ def calibrate(
                 curve = monotone([np.median(results[c][r][0]) for r in rs])
                 todo += [(c, r) for r in step_levers(rs, curve) if r not in results[c]]
             measure(pool, todo)
-    curves: dict[str, dict] = {}
-    for o, key in curves_of:
-        spec = get_object(o)
-        entry = curves.setdefault(o, {"holding_lever_m": round(holding_lever(
-            spec.mass, config.motion.grip_force, config.world.pad_friction), 6)})  # fmt: skip
-        rs = sorted(results[(o, key)])
-        entry[key] = curve_entry(rs, [results[(o, key)][r][0] for r in rs],
-                                 [results[(o, key)][r][1] for r in rs])  # fmt: skip
+    curves = _curves(results, config)
     n_grasps = sum(len(v) for v in results.values()) * len(seeds)
     made = {
         "sensors": "ideal",
@@ -252,6 +243,21 @@ def calibrate(
     log.unlink(missing_ok=True)
     load_calibration.cache_clear()
     return data
+
+
+def _curves(results: dict[tuple, dict[float, tuple]], config) -> dict[str, dict]:
+    """Per object its holding lever and each side's curve (``curve_entry``), from the grasps'
+    ``results[(object, side key)][lever] = (|tilts|, dropped)``."""
+    from comgrasp_pin.simulation.objects import get_object
+
+    curves: dict[str, dict] = {}
+    for (o, key), by_lever in results.items():
+        lever = holding_lever(get_object(o).mass, config.motion.grip_force,
+                              config.world.pad_friction)  # fmt: skip
+        entry = curves.setdefault(o, {"holding_lever_m": round(lever, 6)})
+        rs = sorted(by_lever)
+        entry[key] = curve_entry(rs, [by_lever[r][0] for r in rs], [by_lever[r][1] for r in rs])
+    return curves
 
 
 def main(argv: Sequence[str] | None = None) -> int:
