@@ -1,6 +1,7 @@
 """The error tree says what kind of failure each error is, and the retries are a table."""
 
 import inspect
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -158,3 +159,78 @@ def test_a_subclass_is_not_retried_because_its_parent_is():
 
     assert isinstance(NewKindOfDrop("x"), retry.GRASPED_AGAIN)  # caught...
     assert retry.on_failed_grasp(NewKindOfDrop("x")) is None  # ...but not grasped again
+
+
+# --- the table in the pick-and-place procedure (a fake cell, no simulator) -----------------
+
+
+MEASURED = SimpleNamespace(dropped_at_roll=False)  # a trial grasp that measured
+
+
+class _Cell:
+    """Records what the procedure tells the robot to do."""
+
+    def __init__(self):
+        self.log = []
+
+    def look_from_above(self):
+        return SimpleNamespace(length=0.4, grasp=SimpleNamespace(yaw=0.0))
+
+    def announce(self, text):
+        self.log.append(("announce", text.split(":")[0]))
+
+    def open_gripper(self, t):
+        self.log.append(("open",))
+
+    def move_to(self, q, **kw):
+        self.log.append(("park",))
+
+    def hold(self, t):
+        pass
+
+
+def _trial_with_retry(monkeypatch, failures):
+    """``trial_with_retry`` on a fake cell whose trial grasps raise ``failures`` in turn,
+    then succeed: the cell's log and the offsets the grasps were made at."""
+    from comgrasp_pin.config import EpisodeConfig
+    from comgrasp_pin.procedures import pick_and_place
+
+    outcomes, offsets = list(failures), []
+
+    def trial_grasp(cell, config, offset, careful, detection):
+        offsets.append((offset, careful))
+        if outcomes:
+            raise outcomes.pop(0)
+        return MEASURED
+
+    monkeypatch.setattr(pick_and_place, "trial_grasp", trial_grasp)
+    monkeypatch.setattr(pick_and_place, "nearest_on_handle", lambda rod, s: s)
+    monkeypatch.setattr(
+        pick_and_place, "look_again", lambda cell, length, config: cell.look_from_above()
+    )
+    cell, config = _Cell(), EpisodeConfig()
+    return pick_and_place.trial_with_retry(cell, config), cell.log, offsets, config
+
+
+def test_pick_and_place_grasps_again_as_the_table_says(monkeypatch):
+    east = np.array([1.0, 0.0, 0.0])
+    failures = [RodDroppedError("fell", east), RodSlippedError("turned", -east),
+                HeldRodUnmeasuredError("refused", None)]  # fmt: skip
+    result, log, offsets, config = _trial_with_retry(monkeypatch, failures)
+    assert result is MEASURED and len(offsets) == 4
+    # only the rod that fell is announced as put back: the others the trial laid back itself
+    assert [e for e in log if e[0] == "announce"] == [("announce", "put back")]
+    assert log.count(("open",)) == 3 and log.count(("park",)) == 3
+    step = config.regrasp.retry_shift * 0.4  # towards the heavy end, then bisected
+    assert [o for o, _ in offsets] == pytest.approx([0.0, step, step / 2, step / 2])
+    assert config.regrasp.attempts == 4 and [c for _, c in offsets] == [True, True, True, False]
+
+
+@pytest.mark.parametrize(
+    "exc",
+    [UntrustedImageError("noisy"), IKError("far"), UnstablePhysicsError("nan")],
+    ids=lambda e: type(e).__name__,
+)
+def test_pick_and_place_does_not_grasp_again_what_the_table_leaves_out(monkeypatch, exc):
+    with pytest.raises(type(exc)):
+        _trial_with_retry(monkeypatch, [exc])
