@@ -4,8 +4,17 @@ import math
 
 import numpy as np
 import pytest
+from _figures import (
+    axes_labelled,
+    bars,
+    error_bar_data,
+    error_bar_segments,
+    has_line_with,
+    saved_figures,
+    texts,
+)
 
-from comgrasp_pin.experiments import report
+from comgrasp_pin.experiments import paper, report
 from comgrasp_pin.experiments.report import (
     accuracy_figure,
     accuracy_plot,
@@ -33,9 +42,29 @@ def _regrasp_rows():
     return rows
 
 
-def test_figures_leave_the_callers_backend_alone(tmp_path):
+def _check_regrasp_figure(fig, rows) -> None:
+    """One axes of success rates: a bar per object and method at 100 s / n, counted here from
+    the rows (an error is a failure), on the bars "s/n", the paper's values as diamonds."""
+    (ax,) = axes_labelled(fig, "pick-and-place success (%)")
+    objects = sorted({r["object"] for r in rows}, key=lambda o: int(o[3:]))
+    assert [t.get_text() for t in ax.get_xticklabels()] == objects
+    expected = []
+    for obj in objects:
+        for method in ("baseline", "regrasp"):  # left, right
+            trials = [r for r in rows if r["object"] == obj and r["method"] == method]
+            s = sum(1 for r in trials if not r.get("error") and r["success"] == 1)
+            expected.append(100 * s / len(trials))
+            assert f"{s}/{len(trials)}" in [t.get_text() for t in ax.texts]
+            if obj in paper.SUCCESS_PERCENT:
+                value = paper.SUCCESS_PERCENT[obj][0 if method == "regrasp" else 1]
+                assert has_line_with(ax, [value])
+    assert [h for _, h in bars(ax)] == pytest.approx(expected)
+
+
+def test_figures_leave_the_callers_backend_alone(tmp_path, monkeypatch):
     """A notebook's inline backend stays on after a report figure is written (it used to be
     switched to Agg, and the notebook's later figures never showed)."""
+    figures = saved_figures(monkeypatch)
     import matplotlib
     import matplotlib.pyplot as plt
 
@@ -44,7 +73,9 @@ def test_figures_leave_the_callers_backend_alone(tmp_path):
     try:
         regrasp_figure(_regrasp_rows(), tmp_path / "r.png")
         assert matplotlib.get_backend() == "svg"
-        assert (tmp_path / "r.png").stat().st_size > 10_000
+        (fig,) = figures
+        assert fig.saved_to == tmp_path / "r.png" and (tmp_path / "r.png").is_file()
+        _check_regrasp_figure(fig, _regrasp_rows())  # 70 % (7/10) and 81.8 % (9/11)
     finally:
         plt.switch_backend(before)
 
@@ -55,7 +86,28 @@ def test_success_rates_count_errors_as_failures():
     assert rates[("obj1", "regrasp")] == (9, 11)
 
 
-def test_tables_and_figures(tmp_path):
+def _bin_means(rows, column, edges) -> np.ndarray:
+    """Mean of 100 * ``column`` per |theta_deg| bin, nan where a bin is empty (by hand)."""
+    theta = np.abs([r["theta_deg"] for r in rows])
+    values = 100 * np.array([r[column] for r in rows])
+    k = np.searchsorted(edges, theta, side="right") - 1
+    return np.array([values[k == i].mean() if np.any(k == i) else np.nan
+                     for i in range(len(edges) - 1)])  # fmt: skip
+
+
+def _check_accuracy_panel(fig, rows, obj) -> None:
+    """The object's panel draws ours and the paper's method in our world as bin means."""
+    from comgrasp_pin.experiments.stats import THETA_BINS_DEG
+
+    (ax,) = [ax for ax in fig.axes if ax.get_title(loc="left").startswith(obj)]
+    mine = [r for r in rows if r["object"] == obj]
+    assert f"(n = {len(mine)})" in ax.get_title(loc="left")
+    for column in ("accuracy", "accuracy_line"):
+        assert has_line_with(ax, _bin_means(mine, column, THETA_BINS_DEG)), column
+
+
+def test_tables_and_figures(tmp_path, monkeypatch):
+    figures = saved_figures(monkeypatch)
     table = regrasp_table(_regrasp_rows())
     assert "70.0 % (7/10" in table and "81.8 % (9/11" in table and "93.2 %" in table
     acc_rows = [
@@ -69,11 +121,15 @@ def test_tables_and_figures(tmp_path):
     assert "| 0–2.5 | 98.0 / 97.0 / 98.3 (2) |" in acc
     assert "| 10–12.5 | – / – / 94.4 |" in acc and "| 12.5–15 | 90.0 / 80.0 / 87.5 (1) |" in acc
     assert "| 30–45 | – |" in acc  # beyond the paper's curve: "–"
-    for fig in (
-        accuracy_figure(acc_rows, tmp_path / "a.png"),
-        regrasp_figure(_regrasp_rows(), tmp_path / "r.png"),
-    ):
-        assert fig.stat().st_size > 10_000
+    accuracy_figure(acc_rows, tmp_path / "a.png")
+    regrasp_figure(_regrasp_rows(), tmp_path / "r.png")
+    accuracy, regrasp = figures
+    assert [f.saved_to for f in figures] == [tmp_path / "a.png", tmp_path / "r.png"]
+    # obj1: ours 98 % (0-2.5 deg: 99, 97) and 90 % (12.5-15 deg); the paper's method 97, 80
+    (ax,) = axes_labelled(accuracy, "CoM accuracy (%)")
+    assert ax.get_xlabel().startswith("tilt in the jaws")
+    _check_accuracy_panel(accuracy, acc_rows, "obj1")
+    _check_regrasp_figure(regrasp, _regrasp_rows())
 
 
 def test_accuracy_table_without_the_paper_method_says_not_recorded():
@@ -154,7 +210,8 @@ def test_regrasp_verdict_counts_reasons():
     assert "- baseline: geometric-centre grasp, rod ended on the table × 1" in text
 
 
-def test_regrasp_figure_with_every_trial_a_success(tmp_path):
+def test_regrasp_figure_with_every_trial_a_success(tmp_path, monkeypatch):
+    figures = saved_figures(monkeypatch)
     # Wilson's upper bound for 6/6 rounds to just below 1: the error bar must not go negative.
     rows = [
         {"object": o, "trial": k, "method": m, "success": 1}
@@ -162,7 +219,14 @@ def test_regrasp_figure_with_every_trial_a_success(tmp_path):
         for k in range(6)
         for m in ("baseline", "regrasp")
     ]
-    assert regrasp_figure(rows, tmp_path / "r.png").stat().st_size > 10_000
+    regrasp_figure(rows, tmp_path / "r.png")
+    (fig,) = figures
+    _check_regrasp_figure(fig, rows)  # six bars at 100 %
+    (ax,) = axes_labelled(fig, "pick-and-place success (%)")
+    segments = error_bar_segments(ax)  # Wilson's interval of 6/6: below 100 %, none above
+    assert len(segments) == 6 and all(0 < seg[:, 1].min() < seg[:, 1].max() for seg in segments)
+    assert max(seg[:, 1].max() for seg in segments) == pytest.approx(100.0)
+    assert any(t.startswith("extra objects") for t in texts(fig))  # obj7 apart
 
 
 # --- calibration ----------------------------------------------------------------------------
@@ -206,24 +270,53 @@ def test_calibration_well_calibrated_meets_the_targets():
     assert "95 % in 93–97 %: met; rms z in 0.9–1.1: met" in text
 
 
-def test_calibration_not_recorded(tmp_path):
+def test_calibration_not_recorded(tmp_path, monkeypatch):
+    figures = saved_figures(monkeypatch)
     rows = [_acc_row("obj1", 1.0, 0.99)]
     assert "not recorded" in calibration_table(rows)
     assert "not recorded" in report.calibration_section(rows, tmp_path)
     assert not (tmp_path / "calibration.png").exists()
-    assert calibration_figure(rows, tmp_path / "c.png").stat().st_size > 1_000
+    calibration_figure(rows, tmp_path / "c.png")
+    (fig,) = figures
+    assert not any(ax.get_visible() and ax.axison for ax in fig.axes)  # a note, no axes
+    assert any("pos_std_m not recorded" in t and "no calibration" in t for t in texts(fig))
 
 
-def test_calibration_figure_written(tmp_path):
+def _check_calibration_row(fig, rows, objects) -> None:
+    """The row of ``objects``: histogram with N(0, 1) for their n; 95 % coverage and rms z
+    per tilt bin and over all, computed here from z = (pos_esti - pos_real) / pos_std."""
+    from comgrasp_pin.experiments.stats import CALIBRATION_BINS_DEG as edges
+
+    mine = [r for r in rows if r["object"] in objects]
+    z = np.array([(r["pos_esti_m"] - r["pos_real_m"]) / r["pos_std_m"] for r in mine])
+    theta = np.abs([r["theta_deg"] for r in mine])
+    k = np.searchsorted(edges, theta, side="right") - 1
+    groups = [z[k == i] for i in range(len(edges) - 1) if np.any(k == i)] + [z]
+    rms = [np.sqrt(np.mean(g**2)) for g in groups]
+    cover95 = [100 * np.mean(np.abs(g) <= 1.96) for g in groups]
+    (ax_r,) = [ax for ax in axes_labelled(fig, "rms z") if has_line_with(ax, rms, atol=1e-6)]
+    ax_c = [ax for ax in fig.axes if ax.get_ylabel().startswith("grasps inside")]
+    assert any(y.tolist() == pytest.approx(cover95) for ax in ax_c for _, y in error_bar_data(ax))
+    (ax_h,) = [ax for ax in axes_labelled(fig, "grasps per 0.5 of z") if ax.figure is ax_r.figure]
+    peak = len(z) / len(objects) * 0.5 / np.sqrt(2 * np.pi)  # N(0, 1) for n per object
+    assert any(np.nanmax(line.get_ydata()) == pytest.approx(peak, rel=1e-3) for line in ax_h.lines)
+
+
+def test_calibration_figure_written(tmp_path, monkeypatch):
+    figures = saved_figures(monkeypatch)
     rng = np.random.default_rng(0)
     rows = [_cal_row("obj1", t, z) for t, z in zip(rng.uniform(0, 80, 60), rng.normal(size=60))]
     rows += [
         _cal_row("obj7", t, 3 * z) for t, z in zip(rng.uniform(0, 80, 20), rng.normal(size=20))
     ]
-    path = calibration_figure(rows, tmp_path / "c.png")
-    assert path.stat().st_size > 30_000
+    calibration_figure(rows, tmp_path / "c.png")
+    (fig,) = figures
+    assert len(axes_labelled(fig, "rms z")) == 2  # the paper's objects, the extra one
+    _check_calibration_row(fig, rows, ["obj1"])
+    _check_calibration_row(fig, rows, ["obj7"])  # z three times too large: rms about 3
     assert "![calibration](calibration.png)" in report.calibration_section(rows, tmp_path)
-    assert (tmp_path / "calibration.png").stat().st_size > 30_000
+    assert figures[1].saved_to == tmp_path / "calibration.png"
+    _check_calibration_row(figures[1], rows, ["obj1"])
 
 
 # --- ours against the paper's method ----------------------------------------------------------
@@ -272,7 +365,8 @@ def test_object_groups_without_paper_objects_from_the_simulation(monkeypatch):
     assert report.object_groups(rows) == (["obj1", "obj6"], ["obj7", "obj9", "obj10"])
 
 
-def test_extra_objects_never_enter_the_paper_comparison(tmp_path):
+def test_extra_objects_never_enter_the_paper_comparison(tmp_path, monkeypatch):
+    figures = saved_figures(monkeypatch)
     paper_rows = [
         _acc_row("obj1", th, a, accuracy_line=al, pos_esti_line_m=0.01, pos_std_m=0.002)
         for th, a, al in ((1.0, 0.995, 0.99), (12.0, 0.98, 0.95), (27.0, 0.97, 0.90))
@@ -314,8 +408,13 @@ def test_extra_objects_never_enter_the_paper_comparison(tmp_path):
         )
     finally:
         common._pyplot().close(fig)
-    assert accuracy_figure(both, tmp_path / "a.png").stat().st_size > 20_000
-    assert calibration_figure(both, tmp_path / "c.png").stat().st_size > 20_000
+    accuracy_figure(both, tmp_path / "a.png")
+    calibration_figure(both, tmp_path / "c.png")
+    accuracy, calibration = figures
+    _check_accuracy_panel(accuracy, both, "obj1")  # obj1's means: obj7 not pooled in
+    _check_accuracy_panel(accuracy, both, "obj7")
+    _check_calibration_row(calibration, both, ["obj1"])
+    _check_calibration_row(calibration, both, ["obj7"])
 
 
 # --- the extra measurement pose ------------------------------------------------------------------
