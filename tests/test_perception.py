@@ -330,7 +330,7 @@ def test_depth_line_standard_error_matches_the_scatter_of_surfaces():
     """Points of one slice are one piece of surface: a handle whose surface wanders by 1 mm
     from slice to slice (point noise 0.05 mm). The stated standard error of the line's y at
     the TCP must match the spread of that y over many such handles (Monte Carlo)."""
-    from comgrasp_pin.perception.side_view import _depth_line
+    from comgrasp_pin.perception.side_depth import depth_line as _depth_line
 
     rng = np.random.default_rng(4)
     y0s, stds = [], []

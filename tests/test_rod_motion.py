@@ -135,7 +135,7 @@ def test_depth_change_std_pairs_the_slices_two_views_share():
     spread of the lines' difference, far below the two lines' errors combined."""
     from dataclasses import replace
 
-    from comgrasp_pin.perception.side_view import _depth_line
+    from comgrasp_pin.perception.side_depth import depth_line as _depth_line
     from comgrasp_pin.procedures.rod_motion import depth_change_std
 
     rng = np.random.default_rng(5)
