@@ -1,10 +1,12 @@
 """`comgrasp sweep` (issue 16): config values by dotted path, the grid, its validation, and a
 real tiny sweep whose default point gives the accuracy experiment's own row."""
 
+import itertools
 import json
 
 import numpy as np
 import pytest
+from _figures import axes_labelled, error_bar_data, error_bar_segments, saved_figures
 
 from comgrasp_pin.cli import main
 from comgrasp_pin.config import EpisodeConfig
@@ -120,13 +122,14 @@ def test_point_measures_by_hand():
 
 
 @pytest.mark.slow
-def test_a_tiny_sweep_gives_the_experiments_row_at_the_default_point(tmp_path):
+def test_a_tiny_sweep_gives_the_experiments_row_at_the_default_point(tmp_path, monkeypatch):
     acc = tmp_path / "acc"
     assert main(["accuracy", "--objects", "obj1", "--trials", "1", "--workers", "1",
                  "--out", str(acc)]) == 0  # fmt: skip
     out = tmp_path / "sweep"
     argv = ["sweep", "--param", "grip_force=15,25", "--param", "noise=0.05,0.5", "--objects",
             "obj1", "--trials", "1", "--workers", "2", "--out", str(out)]  # fmt: skip
+    figures = saved_figures(monkeypatch)
     assert main(argv) == 0
     rows = read_rows(out / "sweep.csv")
     assert len(rows) == 4 and all(r["error"] == "" for r in rows)
@@ -141,8 +144,21 @@ def test_a_tiny_sweep_gives_the_experiments_row_at_the_default_point(tmp_path):
     # ten times the torque noise moves the estimate; a firmer grip holds the rod otherwise
     assert by_point[(15.0, 0.5)]["mass_esti_kg"] != default["mass_esti_kg"]
     assert by_point[(25.0, 0.05)]["theta_true_deg"] != default["theta_true_deg"]
-    for measure in ("accuracy", "success", "coverage"):
-        assert (out / f"sweep_{measure}.png").stat().st_size > 10_000
+    # a heatmap per measure: grip force down, noise across, each cell the point's value
+    # computed here from its one trial (accuracy and coverage of the 95 % interval in %)
+    assert [f.saved_to for f in figures] == [out / f"sweep_{m}.png" for m in MEASURES]
+    for fig, measure in zip(figures, MEASURES):
+        (ax,) = axes_labelled(fig, "motion.grip_force")
+        assert ax.get_xlabel() == "sensors.torque.noise_std" and ax.get_title() == MEASURES[measure]
+        expected = np.empty((2, 2))
+        for (i, grip), (j, noise) in itertools.product(enumerate((15.0, 25.0)),
+                                                       enumerate((0.05, 0.5))):  # fmt: skip
+            r = by_point[(grip, noise)]
+            miss = abs(float(r["pos_esti_m"]) - float(r["pos_real_m"]))
+            covered = miss <= 1.96 * float(r["pos_std_m"])
+            values = {"accuracy": float(r["accuracy"]), "success": 1.0, "coverage": covered}
+            expected[i, j] = 100 * values[measure]
+        np.testing.assert_allclose(ax.images[0].get_array(), expected, rtol=1e-9)
     table = (out / "sweep_table.md").read_text()
     assert table.count("\n") == 2 + 4 and "| 25 | 0.5 |" in table
     settings = json.loads((out / "sweep.settings.json").read_text())
@@ -168,7 +184,7 @@ def test_a_tiny_sweep_gives_the_experiments_row_at_the_default_point(tmp_path):
     assert len(sweep_figures(table, one, tmp_path, MEASURES)) == 3
 
 
-def test_a_line_figure_of_points_at_0_and_100_percent(tmp_path):
+def test_a_line_figure_of_points_at_0_and_100_percent(tmp_path, monkeypatch):
     """Every trial a success, no interval covering the truth: a Wilson interval then ends
     at 0 % plus (or 100 % less) a rounding error, which must not make a negative error bar
     (matplotlib refuses those)."""
@@ -178,6 +194,15 @@ def test_a_line_figure_of_points_at_0_and_100_percent(tmp_path):
     rows = [{**_row(0.99, 0.05, 0.0, 0.01), "trial.approach_deg": v} for v in (0.0, 3.0) * 11]
     table = summarise(rows, params, "accuracy")
     assert all(m["success"][0] == 100.0 and m["coverage"][0] == 0.0 for _, m in table)
+    figures = saved_figures(monkeypatch)
     written = sweep_figures(table, params, tmp_path, MEASURES)
     assert [p.name for p in written] == [f"sweep_{m}.png" for m in MEASURES]
-    assert all(p.stat().st_size > 5000 for p in written)
+    assert [f.saved_to for f in figures] == written
+    # each trial: accuracy 99 %, a success, its interval (0.05 +- 1.96 * 0.01) missing 0
+    for fig, (measure, label), y in zip(figures, MEASURES.items(), (99.0, 100.0, 0.0)):
+        (ax,) = axes_labelled(fig, label)
+        assert ax.get_xlabel() == "trial.approach_deg"
+        ((x, drawn),) = error_bar_data(ax)
+        np.testing.assert_allclose(x, [0.0, 3.0])
+        np.testing.assert_allclose(drawn, [y, y], atol=1e-9)
+        assert all(seg[:, 1].min() >= 0 for seg in error_bar_segments(ax)), measure
