@@ -17,6 +17,7 @@ OpenCV (cv2) and matplotlib is in its ``sys.modules`` (``--plot`` alone may load
 
 from __future__ import annotations
 
+import argparse
 import ast
 import json
 import subprocess
@@ -170,6 +171,10 @@ def test_every_part_has_a_layer():
 # --- the robot side stands alone: its commands run without the simulation's libraries -------
 
 SIMULATION_LIBRARIES = ("mujoco", "cv2", "matplotlib")
+SIMULATION_PARTS = tuple(
+    f"comgrasp_pin.{part}" for part in ("simulation", "experiments", "perception", "procedures")
+)
+"""The package's simulated world and what runs in it: the real-arm commands load none."""
 _RUN = """
 import json, sys
 from comgrasp_pin.cli import main
@@ -183,10 +188,11 @@ print(json.dumps({"code": code, "loaded": loaded}), file=sys.stderr)
 
 
 def _run_alone(argv: list[str]) -> list[str]:
-    """Which of SIMULATION_LIBRARIES ``comgrasp argv`` has loaded when it ends, run in a
-    fresh Python (it must succeed)."""
+    """Which of SIMULATION_LIBRARIES and SIMULATION_PARTS ``comgrasp argv`` has loaded when
+    it ends, run in a fresh Python (it must succeed)."""
+    watched = [*SIMULATION_LIBRARIES, *SIMULATION_PARTS]
     res = subprocess.run(
-        [sys.executable, "-c", _RUN, json.dumps(argv), json.dumps(SIMULATION_LIBRARIES)],
+        [sys.executable, "-c", _RUN, json.dumps(argv), json.dumps(watched)],
         capture_output=True, text=True, timeout=300, cwd=PACKAGE.parent,
     )  # fmt: skip
     assert res.returncode == 0, res.stderr
@@ -313,6 +319,19 @@ def test_the_robot_sides_modules_load_no_simulator_camera_or_plot_library():
                          timeout=120, cwd=PACKAGE.parent)  # fmt: skip
     assert res.returncode == 0, res.stderr
     assert json.loads(res.stdout.splitlines()[-1]) == []
+
+
+def test_the_robot_only_parser_has_the_robot_commands():
+    """``main`` builds only the real-arm part of the parser for ROBOT_COMMANDS: they are the
+    commands ``robot`` and ``arm`` register, and the full parser has them too."""
+    from comgrasp_pin.cli import ROBOT_COMMANDS, build_parser
+
+    def commands(parser):
+        (sub,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+        return list(sub.choices)
+
+    assert commands(build_parser(robot_only=True)) == list(ROBOT_COMMANDS)
+    assert commands(build_parser())[-len(ROBOT_COMMANDS) :] == list(ROBOT_COMMANDS)
 
 
 def test_the_parsers_rods_are_the_simulations():

@@ -17,9 +17,10 @@ happen inside the commands, so ``comgrasp --help`` stays quick.
 
 The robot side stands alone: building the parser imports neither MuJoCo, nor OpenCV, nor
 matplotlib (``args.OBJECTS`` reads the rods' names from ``sim/objects.json``), and the
-real-arm commands (``estimate``, ``plan-poses``, ``plan-motion``, ``identify-arm``,
-``calibrate-gains``) never do; ``estimate --dynamic --plot`` alone loads matplotlib.
-``tests/test_import_layers.py`` runs each in a fresh process and checks.
+real-arm commands (``ROBOT_COMMANDS``) never do; ``estimate --dynamic --plot`` alone loads
+matplotlib. For those, ``main`` builds the real-arm part of the parser only, so the
+simulator's command modules are not even imported. ``tests/test_import_layers.py`` runs
+each in a fresh process and checks.
 """
 
 from __future__ import annotations
@@ -28,25 +29,32 @@ import argparse
 import sys
 
 from comgrasp_pin import __version__
-from comgrasp_pin.cli import arm, demo, experiments, robot, sweep, world
+from comgrasp_pin.cli import arm, robot
 from comgrasp_pin.errors import ComGraspError
 
-__all__ = ["build_parser", "main"]
+__all__ = ["ROBOT_COMMANDS", "build_parser", "main"]
+
+ROBOT_COMMANDS = ("estimate", "plan-poses", "plan-motion", "identify-arm", "calibrate-gains")
+"""The real-arm commands (``robot``, ``arm``): logs and URDFs in, no simulator."""
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The `comgrasp` parser with every subcommand."""
+def build_parser(robot_only: bool = False) -> argparse.ArgumentParser:
+    """The `comgrasp` parser with every subcommand, or with ROBOT_COMMANDS only
+    (``robot_only``: the simulator's command modules are then not imported)."""
     parser = argparse.ArgumentParser(
         prog="comgrasp",
         description="Centre-of-mass-based grasp adaptation (UR5 + parallel gripper in MuJoCo).",
     )
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
-    world.add_check(sub)
-    experiments.add_subcommands(sub)  # accuracy, regrasp, reproduce
-    demo.add_subcommands(sub)  # demo, views
-    world.add_scene(sub)
-    sweep.add_subcommand(sub)
+    if not robot_only:
+        from comgrasp_pin.cli import demo, experiments, sweep, world
+
+        world.add_check(sub)
+        experiments.add_subcommands(sub)  # accuracy, regrasp, reproduce
+        demo.add_subcommands(sub)  # demo, views
+        world.add_scene(sub)
+        sweep.add_subcommand(sub)
     robot.add_subcommands(sub)  # estimate, plan-poses, plan-motion: the real-arm path
     arm.add_arm_subcommands(sub)  # identify-arm, calibrate-gains: an arm's own model, once
     return parser
@@ -54,7 +62,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     """Run `comgrasp` with ``argv`` (default: the process's); the exit status."""
-    args = build_parser().parse_args(argv)
+    argv = sys.argv[1:] if argv is None else list(argv)
+    command = next((a for a in argv if not a.startswith("-")), None)  # no top option takes a value
+    args = build_parser(robot_only=command in ROBOT_COMMANDS).parse_args(argv)
     try:
         return args.func(args)
     except ComGraspError as exc:
