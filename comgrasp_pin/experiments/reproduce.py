@@ -14,6 +14,7 @@ from comgrasp_pin.config import sensor_preset
 from comgrasp_pin.experiments import report
 from comgrasp_pin.experiments.ray_backend import check_backend
 from comgrasp_pin.experiments.report.sensors import sensors_comparison
+from comgrasp_pin.experiments.reproduce_report import ReportSections, report_markdown
 from comgrasp_pin.experiments.runner import (
     DEFAULT_TRIAL_TIMEOUT_S,
     kept_pool,
@@ -208,113 +209,41 @@ def _parts(meta: dict) -> str:
 
 def reproduce(opts: RunOptions) -> Path:
     """Both experiments and ``report.md`` with figures, tables and the settings used."""
-    out, objects, trials, seed, noise = opts.out, opts.objects, opts.trials, opts.seed, opts.noise
-    workers = opts.workers
     check_backend(opts.backend, opts.ray_address)
-    out.mkdir(parents=True, exist_ok=True)
-    with kept_pool(workers if opts.backend == "local" else 1):  # workers started once
+    opts.out.mkdir(parents=True, exist_ok=True)
+    with kept_pool(opts.workers if opts.backend == "local" else 1):  # workers started once
         start = time.perf_counter()
         acc = run_accuracy(opts)
         mid = time.perf_counter()
         reg = run_regrasp(opts)
         end = time.perf_counter()
-        second = _second_seed_section(opts, out)
+        second = _second_seed_section(opts, opts.out)
         after_second = time.perf_counter()
-        ideal = _ideal_section(opts, out, acc, reg)
+        ideal = _ideal_section(opts, opts.out, acc, reg)
         done = time.perf_counter()
-    beside = "" if opts.sensors == "ideal" else " (ideal sensors beside it below)"
-    settings = settings_summary(noise, opts.estimator, opts.sensors)
-    meta = {
-        "objects": list(objects), "trials_per_object": trials, "seed": seed, "workers": workers,
+    meta = _run_meta(opts, (start, mid, end, after_second, done))
+    (opts.out / "run.json").write_text(json.dumps(meta, indent=2, default=str))
+    calibration = report.calibration_section(acc, opts.out)  # writes calibration.png if recorded
+    sections = ReportSections(acc, reg, calibration, second, ideal)
+    path = opts.out / "report.md"
+    path.write_text(report_markdown(opts, meta, _parts(meta), sections))
+    return path
+
+
+def _run_meta(opts: RunOptions, times: tuple) -> dict:
+    """What ``run.json`` records: the run's objects, trials, seed and workers, the minutes of
+    each part from ``times`` (perf_counter at the start, after the accuracy run, the
+    pick-and-place run, the second seed and the ideal sensors), versions and settings."""
+    start, mid, end, after_second, done = times
+    return {
+        "objects": list(opts.objects), "trials_per_object": opts.trials, "seed": opts.seed,
+        "workers": opts.workers,
         "backend": opts.backend,
         "accuracy_minutes": (mid - start) / 60, "regrasp_minutes": (end - mid) / 60,
         "second_seed_minutes": (after_second - end) / 60,
         "ideal_minutes": (done - after_second) / 60,
         "total_minutes": (done - start) / 60,
         "trial_core_minutes": _trial_minutes(_run_folders(opts)),
-        "versions": _versions(), "settings": settings,
+        "versions": _versions(),
+        "settings": settings_summary(opts.noise, opts.estimator, opts.sensors),
     }  # fmt: skip
-    (out / "run.json").write_text(json.dumps(meta, indent=2, default=str))
-    trial = settings["trial"]
-    calibration = report.calibration_section(acc, out)  # writes calibration.png when recorded
-    text = f"""# comgrasp_pin: the paper's experiments, reproduced
-
-{report.run_summary(acc, reg, seed)}
-Sensors: the `{opts.sensors}` preset{beside}.
-Run time on {workers or "all the cluster's"} worker(s) ({opts.backend} backend):
-{meta["total_minutes"]:.1f} min in all ({_parts(meta)}); a resumed run counts its last part
-only. The trials' own time, every row's `wall_s` together: {meta["trial_core_minutes"]:.1f}
-core-minutes.
-
-## Experiment 1: CoM accuracy against the tilt in the jaws
-
-Accuracy per grasp = 1 − 5·|pos_esti − pos_real| / l (positions along the rod from its
-geometric centre). Every grasp is estimated twice from the same measurement: ours (estimator
-`{trial["estimator"]}`, a second pose rolled by {trial["roll_deg"]}°) and the paper's method
-({report.paper.METHOD}: the vertical line through the CoM from one static pose, met with the
-rod's axis), so the two meet grasp by grasp in our world. The paper's published values (read
-off its figure; obj1 and obj6 only) stand beside. Rows: bins of the tilt in the jaws, 0–90°
-from level. Figure: one panel per object; lines are bin means with the 95 % t interval of the
-mean (Student's t, n − 1 degrees of freedom; none for a bin of one grasp), broken where a bin
-is empty.
-
-![accuracy](accuracy.png)
-
-{report.accuracy_table(acc)}
-
-### Against the paper and the aims
-
-{report.accuracy_verdict(acc)}
-
-### Ours against the paper's method, measured in our world
-
-{report.method_comparison(acc)}
-
-## Calibration: is each estimate's stated uncertainty right?
-
-Each grasp states the standard deviation of its estimate along the rod (`pos_std_m`, from
-every error source the robot can know). If it is right, z = (pos_esti − pos_real) / pos_std
-follows N(0, 1): 68.3 % of the grasps within ±1σ, 95 % within ±1.96σ, rms z 1. The paper's
-six objects pooled here; each extra object in its own section.
-
-{calibration}
-
-{second}
-{ideal}
-## Experiment 2: pick-and-place success, regrasp planner against the geometric-centre grasp
-
-Success = the rod ends inside the drop box; baseline and regrasp see the same scenes. In
-brackets: successes/trials and the 95 % Wilson interval (%).
-
-![regrasp](regrasp.png)
-
-{report.regrasp_table(reg)}
-
-{report.regrasp_verdict(reg)}
-
-### The extra measurement pose
-
-{report.extra_pose_summary(reg)}
-
-## Extra objects, beyond the paper
-
-{report.extra_objects_section(acc, reg)}
-
-## Settings
-
-- torque sensor: white noise σ = {noise} N·m per sample at {1 / settings["world"]["sim_dt"]:.0f} Hz
-  (averaged over {trial["window"]} s after {trial["settle"]} s of settling), τ_before
-  {trial["tau_before"]}; estimator `{trial["estimator"]}`
-- grip force {settings["motion"]["grip_force"]} N per finger; pad friction
-  {settings["world"]["pad_friction"]} (sliding, torsional, rolling), condim
-  {settings["world"]["pad_condim"]}; noslip iterations {settings["world"]["noslip_iterations"]}
-- measurement {trial["lift_height"]} m above the table; regrasp when the tilt exceeds
-  {settings["regrasp"]["slip_tilt_deg"]} deg or the CoM lies more than
-  {settings["regrasp"]["max_com_offset"]} m from the jaws
-- software: {", ".join(f"{k} {v}" for k, v in meta["versions"].items())}
-
-Raw data: `accuracy.csv`, `regrasp.csv`; every setting: `run.json`.
-"""
-    path = out / "report.md"
-    path.write_text(text)
-    return path
