@@ -226,7 +226,7 @@ def reproduce(opts: RunOptions) -> Path:
     calibration = report.calibration_section(acc, opts.out)  # writes calibration.png if recorded
     sections = ReportSections(acc, reg, calibration, second, ideal)
     path = opts.out / "report.md"
-    path.write_text(report_markdown(opts, meta, _parts(meta), sections))
+    path.write_text(report_markdown(meta, opts.sensors, opts.noise, _parts(meta), sections))
     return path
 
 

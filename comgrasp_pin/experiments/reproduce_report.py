@@ -8,12 +8,8 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 from comgrasp_pin.experiments import report
-
-if TYPE_CHECKING:
-    from comgrasp_pin.experiments.reproduce import RunOptions
 
 
 @dataclass(frozen=True)
@@ -29,28 +25,31 @@ class ReportSections:
     ideal: str
 
 
-def report_markdown(opts: RunOptions, meta: dict, parts: str, sections: ReportSections) -> str:
-    """``report.md``'s text: ``meta`` as ``run.json`` records it, ``parts`` the minutes of
-    each part of the run in words."""
+def report_markdown(
+    meta: dict, sensors: str, noise: float, parts: str, sections: ReportSections
+) -> str:
+    """``report.md``'s text: ``meta`` as ``run.json`` records it, ``sensors`` the sensor
+    preset, ``noise`` the torque noise (N m per sample), ``parts`` the minutes of each part
+    of the run in words."""
     acc, reg, trial = sections.accuracy, sections.regrasp, meta["settings"]["trial"]
     return (
-        _run_part(opts, meta, parts, acc, reg)
+        _run_part(meta, sensors, parts, acc, reg)
         + _accuracy_part(trial, acc)
         + f"{sections.calibration}\n\n{sections.second_seed}\n{sections.ideal}\n"
         + _regrasp_part(acc, reg)
-        + _settings_part(opts.noise, meta["settings"], meta["versions"])
+        + _settings_part(noise, meta["settings"], meta["versions"])
     )
 
 
-def _run_part(opts: RunOptions, meta: dict, parts: str, acc: list, reg: list) -> str:
+def _run_part(meta: dict, sensors: str, parts: str, acc: list, reg: list) -> str:
     """The title, what ran and how long it took."""
-    beside = "" if opts.sensors == "ideal" else " (ideal sensors beside it below)"
-    workers = opts.workers
+    beside = "" if sensors == "ideal" else " (ideal sensors beside it below)"
+    workers, backend = meta["workers"], meta["backend"]
     return f"""# comgrasp_pin: the paper's experiments, reproduced
 
-{report.run_summary(acc, reg, opts.seed)}
-Sensors: the `{opts.sensors}` preset{beside}.
-Run time on {workers or "all the cluster's"} worker(s) ({opts.backend} backend):
+{report.run_summary(acc, reg, meta["seed"])}
+Sensors: the `{sensors}` preset{beside}.
+Run time on {workers or "all the cluster's"} worker(s) ({backend} backend):
 {meta["total_minutes"]:.1f} min in all ({parts}); a resumed run counts its last part
 only. The trials' own time, every row's `wall_s` together: {meta["trial_core_minutes"]:.1f}
 core-minutes.
