@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from comgrasp_pin import validate
-from comgrasp_pin.errors import CollisionError, InvalidInputError, UnobservableError
+from comgrasp_pin.errors import CollisionError, UnobservableError
 from comgrasp_pin.estimation.payload_regressor import (
     condition_number,
     parameter_scale,
@@ -42,7 +42,9 @@ from comgrasp_pin.estimation.payload_regressor import (
 from comgrasp_pin.motion.fourier import FourierMotion
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.collision import SelfCollision
-from comgrasp_pin.robot_io.excitation_search import Limits, search
+from comgrasp_pin.robot_io.excitation_limits import check_start, excitation_limits, within_limits
+from comgrasp_pin.robot_io.excitation_search import search
+from comgrasp_pin.robot_io.excitation_settings import ExcitationSettings, checked_settings
 from comgrasp_pin.robot_io.planning import feasible, floor_heights
 
 MAX_DURATION_S = 20.0
@@ -53,45 +55,6 @@ UR_JOINT_NAMES = ("shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
 UR_HOME = (0.0, -np.pi / 2, np.pi / 2, -np.pi / 2, -np.pi / 2, 0.0)
 """A UR arm's start when none is given: elbow up, tool pointing down."""
 SRDF_STATES = ("home", "default", "ready")
-
-
-@dataclass(frozen=True)
-class ExcitationSettings:
-    """Every number that tunes the motion and its search (units in the names; see module).
-
-    ``periods`` repetitions of the fundamental period fill the duration; ``harmonics`` per
-    period. Limits: ``velocity_scale`` of the URDF's, ``acceleration_limit`` (rad/s^2 or
-    m/s^2, every joint), ``position_margin_rad`` inside the URDF's. The joints before the
-    wrist keep ``arm_range_rad`` and ``arm_rate_scale`` of the velocity and acceleration
-    limits. Search: ``samples_per_period`` grid points, ``n_random`` random motions,
-    ``n_starts`` IPOPT refinements of ``max_iter`` iterations each, checked for collisions every
-    ``check_every_iter`` iterations.
-
-    The defaults are measured (``benchmarks/inertia_from_motion.py``): a payload's inertia
-    shows in its torques in proportion to the accelerations, which a velocity limit caps at
-    v * omega, so four 5 s periods at 0.8 of the URDF's velocity reach them where two 10 s
-    periods at 0.5 do not (UR5: condition number 270 -> 72, moments off by up to 44 % ->
-    within 10 %). 7.5 rad/s^2 is the Franka Panda's smallest joint acceleration limit
-    (joint 2, Franka's data sheet); a UR arm's wrists allow more (``--acceleration 12``).
-    """
-
-    periods: int = 4
-    harmonics: int = 5
-    velocity_scale: float = 0.8
-    acceleration_limit: float = 7.5
-    position_margin_rad: float = 0.1
-    wrist_joints: int = 3
-    wrist_range_rad: float = 1.5
-    arm_range_rad: float = 0.3
-    arm_rate_scale: float = 1.0
-    min_height_m: float = 0.05
-    typical_length_m: float = 0.1
-    sample_period_s: float = 0.01
-    samples_per_period: int = 100
-    n_random: int = 1000
-    n_starts: int = 3
-    max_iter: int = 60
-    check_every_iter: int = 10
 
 
 @dataclass(frozen=True)
@@ -164,21 +127,6 @@ def default_start(robot: RobotModel, checker: SelfCollision) -> np.ndarray:
     return pin.neutral(robot.model)
 
 
-def excitation_limits(robot: RobotModel, start: np.ndarray, s: ExcitationSettings) -> Limits:
-    """The per-joint limits the motion keeps, from the URDF and the settings."""
-    v_urdf = robot.model.velocityLimit
-    bad = [n for n, v in zip(robot.joint_names, v_urdf) if not (0 < v < 1e10)]
-    if bad:
-        raise InvalidInputError(f"the URDF gives no velocity limit for the joints {bad}")
-    n_wrist = min(s.wrist_joints, robot.nq)
-    n_arm = robot.nq - n_wrist
-    box = np.r_[np.full(n_arm, s.arm_range_rad), np.full(n_wrist, s.wrist_range_rad)]
-    rate = np.r_[np.full(n_arm, s.arm_rate_scale), np.ones(n_wrist)]
-    lower = np.maximum(robot.q_lower + s.position_margin_rad, start - box)
-    upper = np.minimum(robot.q_upper - s.position_margin_rad, start + box)
-    return Limits(lower, upper, rate * s.velocity_scale * v_urdf, rate * s.acceleration_limit)
-
-
 def plan_excitation(
     robot: RobotModel,
     duration_s: float = MAX_DURATION_S,
@@ -205,7 +153,7 @@ def plan_excitation(
         UnobservableError: fewer than ``MIN_JOINTS`` joints, or a motion of rank < 10.
         SolverError: every IPOPT refinement failed.
     """
-    s = _checked(settings or ExcitationSettings())
+    s = checked_settings(settings or ExcitationSettings())
     say = progress or (lambda _text: None)
     duration_s = validate.number(duration_s, "duration_s", low=MIN_DURATION_S, high=MAX_DURATION_S)
     if robot.nq < MIN_JOINTS:
@@ -218,17 +166,7 @@ def plan_excitation(
     checker = SelfCollision(robot, srdf)
     start = default_start(robot, checker) if start is None else robot.check_q(start)
     lim = excitation_limits(robot, start, s)
-    inside = robot.q_lower + s.position_margin_rad, robot.q_upper - s.position_margin_rad
-    if np.any(start < inside[0]) or np.any(start > inside[1]):
-        raise InvalidInputError(
-            f"the start {np.round(start, 4).tolist()} is not {s.position_margin_rad} rad inside "
-            f"the joint limits {robot.q_lower.tolist()} .. {robot.q_upper.tolist()}"
-        )
-    if not feasible(robot, checker, start, s.min_height_m):
-        raise CollisionError(
-            f"the start configuration collides ({checker.colliding_pairs(start)}) or puts the "
-            f"wrist or ee below {s.min_height_m} m: give another --start"
-        )
+    check_start(robot, checker, start, s)
     period_s = duration_s / s.periods
     scale = parameter_scale(s.typical_length_m)
     t = np.linspace(0.0, duration_s, int(round(duration_s / s.sample_period_s)) + 1)
@@ -259,45 +197,3 @@ def plan_excitation(
         min_height_m=float(heights.min()), gravity=robot.model.gravity.linear.copy(),
         settings=s, solver_status=tuple(status), plan_time_s=time.perf_counter() - t0,
     )  # fmt: skip
-
-
-def _checked(s: ExcitationSettings) -> ExcitationSettings:
-    """``s`` if every number is in its range, else InvalidInputError naming the field."""
-    for name in ("velocity_scale", "acceleration_limit", "wrist_range_rad", "typical_length_m",
-                 "sample_period_s", "arm_rate_scale"):  # fmt: skip
-        validate.number(getattr(s, name), name, low=0, low_open=True)
-    for name in ("position_margin_rad", "arm_range_rad", "min_height_m"):
-        validate.number(getattr(s, name), name, low=0)
-    validate.number(s.velocity_scale, "velocity_scale", high=1)
-    validate.number(s.arm_rate_scale, "arm_rate_scale", high=1)
-    for name, low in (("periods", 1), ("harmonics", 2), ("wrist_joints", 1),
-                      ("samples_per_period", 10), ("n_random", 1), ("n_starts", 1),
-                      ("max_iter", 0), ("check_every_iter", 1)):  # fmt: skip
-        validate.integer(getattr(s, name), name, low=low)
-    return s
-
-
-def within_limits(series: FourierMotion, t: np.ndarray, lim: Limits) -> FourierMotion:
-    """``series`` scaled down about its start where a peak on ``t`` exceeds a limit.
-
-    The search kept the limits on a coarser grid.
-    """
-    q, qd, qdd = series.evaluate(t)
-    dq = q - series.q0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratios = np.nan_to_num(
-            np.vstack(
-                [
-                    dq / (lim.upper - series.q0),
-                    dq / (lim.lower - series.q0),
-                    np.abs(qd) / lim.velocity,
-                    np.abs(qdd) / lim.acceleration,
-                ]
-            ),  # fmt: skip
-            nan=0.0,
-            posinf=np.inf,
-        )
-    worst = float(ratios.max())
-    if worst <= 1.0:
-        return series
-    return FourierMotion(series.q0, series.a / worst, series.b / worst, series.period_s)
