@@ -35,7 +35,7 @@ def check_options(
     if method not in METHODS:
         raise InvalidInputError(f"unknown method {method!r}; valid methods are {METHODS}")
     if not (type(rcond) is float and 0.0 < rcond < 1.0):  # the usual case in 50 ns
-        check_rcond(rcond)
+        validate.number(rcond, "rcond", low=0.0, high=1.0, low_open=True, high_open=True)
     if loss not in LOSSES:
         raise InvalidInputError(f"unknown loss {loss!r}; valid losses are {LOSSES}")
     if loss == "huber" and torque_std is None:
@@ -54,28 +54,6 @@ def check_options(
         )
 
 
-def check_rcond(rcond: object) -> float:
-    """``rcond`` as a float in (0, 1); InvalidInputError otherwise."""
-    return validate.number(rcond, "rcond", low=0.0, high=1.0, low_open=True, high_open=True)
-
-
-def validate_inputs(
-    robot: RobotModel,
-    q: np.ndarray,
-    tau_before: np.ndarray,
-    tau_after: np.ndarray,
-    torque_std: float | np.ndarray | None,
-) -> tuple[np.ndarray, np.ndarray, float | np.ndarray | None]:
-    """(Q (k, n), dtau (k, n), sigma) from the raw inputs, or a clear error.
-
-    sigma, the std of each torque reading (N m): a float where ``torque_std`` is a scalar,
-    an (n,) array where it is given per joint, None where it is not given.
-    """
-    q_arr, dtau, sigma = check_arrays(robot, q, tau_before, tau_after, torque_std)
-    n = q_arr.shape[-1]
-    return q_arr.reshape(-1, n), dtau.reshape(-1, n), sigma
-
-
 def check_arrays(
     robot: RobotModel,
     q: np.ndarray,
@@ -83,7 +61,11 @@ def check_arrays(
     tau_after: np.ndarray,
     torque_std: float | np.ndarray | None,
 ) -> tuple[np.ndarray, np.ndarray, float | np.ndarray | None]:
-    """``validate_inputs`` with q and dtau in the shape given: (n,) or (k, n)."""
+    """(q, dtau = tau_after - tau_before, sigma), q and dtau in the shape given: (n,) or (k, n).
+
+    sigma, the std of each torque reading (N m): a float where ``torque_std`` is a scalar,
+    an (n,) array where it is given per joint, None where it is not given.
+    """
     if not isinstance(robot, RobotModel):
         raise InvalidInputError(f"robot must be a RobotModel, got {type(robot).__name__}")
     n = robot.model.nq
