@@ -71,8 +71,6 @@ def _plot_curve(ax, series, colour, style, marker, filled, dodge):
 def _accuracy_plot(rows: Sequence[dict]):
     """The accuracy figure and its curves: (fig, {object: {"ours": Line2D, "line": ...}})."""
     plt = _pyplot()
-    from matplotlib.lines import Line2D
-
     ok = _ok(rows)
     paper_objs, extra = object_groups(rows)  # an object whose grasps all failed keeps a panel
     has_line = recorded(ok, "accuracy_line")
@@ -86,129 +84,154 @@ def _accuracy_plot(rows: Sequence[dict]):
     heights = [math.ceil(len(objs) / ncols) for _, objs in groups] or [1]
     fig = plt.figure(figsize=(4.1 * ncols, 3.1 * sum(heights) + 1.6), layout="constrained")
     subfigs = fig.subfigures(len(heights), 1, height_ratios=heights, squeeze=False)[:, 0]
-
     series = {o: {"ours": accuracy_series(_select(ok, [o]))} for o in paper_objs + extra}
     if has_line:
         for o in series:
             series[o]["line"] = accuracy_series(_select(ok, [o]), "accuracy_line")
-
-    def lowest(group: str, objs: list[str]) -> float:
-        """The group's shared y axis starts below every bin mean and paper value (a wide
-        interval of a bin of two or three grasps may run off it: it is cut at the axis)."""
-        candidates = [90.0]
-        for o in objs:
-            for c in series[o].values():
-                candidates += [v for v in c.mean if np.isfinite(v)]
-        if group == "paper":
-            candidates += [min(v) for v in paper.ACCURACY_PERCENT.values()]
-        return max(0.0, 5.0 * math.floor((min(candidates) - 2.0) / 5.0))
-
     curves: dict[str, dict] = {}
     for sub, (group, objs) in zip(subfigs, groups):
-        low = lowest(group, objs)
-        nrows = math.ceil(len(objs) / ncols)
-        axes = np.atleast_1d(sub.subplots(nrows, ncols, sharex=True, sharey=True, squeeze=False))
-        title = (
-            "The paper's six objects"
-            if group == "paper"
-            else "Extra objects (not in the paper; not part of the comparison with it)"
-        )
-        sub.suptitle(title, fontsize=11, fontweight="bold")
-        sub.supxlabel(
-            "grey: beyond the paper's range (> 30°), the axis compressed to a third",
-            fontsize=8,
-            color="0.35",
-        )
+        low = _lowest(group, [series[o] for o in objs])
+        axes = _group_axes(sub, group, math.ceil(len(objs) / ncols), ncols)
         for k, ax in enumerate(axes.flat):
             if k >= len(objs):
                 ax.set_visible(False)
                 continue
-            obj = objs[k]
-            sel = _select(ok, [obj])
-            failed = len(_select(rows, [obj])) - len(sel)
-            if not sel:
-                ax.text(
-                    0.5,
-                    0.5,
-                    f"no grasp gave an estimate\n({failed} failed)",
-                    ha="center",
-                    va="center",
-                    transform=ax.transAxes,
-                    color="0.3",
-                    zorder=6,
-                    bbox={"facecolor": "white", "edgecolor": "0.6"},
-                )
-            ax.set_xscale("function", functions=(_compress, _expand))
-            ax.axvspan(PAPER_RANGE_DEG, 90.0, color="0.93", zorder=0, lw=0)
-            theta = _abs_theta(sel)
-            for column, colour, marker in (
-                ("accuracy", C_OURS, "o"),
-                ("accuracy_line", C_LINE, "s"),
-            ):
-                if column == "accuracy_line" and not has_line:
-                    continue
-                y = 100.0 * _column(sel, column)
-                below = y < low + 0.5
-                ax.scatter(
-                    theta[~below],
-                    y[~below],
-                    s=7,
-                    marker=marker,
-                    color=colour,
-                    alpha=0.22,
-                    lw=0,
-                    zorder=2,
-                )
-                if below.any():  # grasps below the axis: a small arrow at its bottom edge
-                    ax.scatter(
-                        theta[below],
-                        np.full(below.sum(), low + 0.6),
-                        s=14,
-                        marker="v",
-                        color=colour,
-                        alpha=0.55,
-                        lw=0,
-                        zorder=2,
-                    )
-            curves[obj] = {
-                "ours": _plot_curve(ax, series[obj]["ours"], C_OURS, "-", "o", True, -0.12)
-            }
-            if has_line:
-                curves[obj]["line"] = _plot_curve(
-                    ax, series[obj]["line"], C_LINE, "--", "s", False, 0.12
-                )
-            if group == "paper":
-                for ref, marker in PUBLISHED_MARKER.items():
-                    ax.plot(
-                        paper.ACCURACY_THETA_DEG,
-                        paper.ACCURACY_PERCENT[ref],
-                        ls="none",
-                        marker=marker,
-                        ms=5,
-                        mfc="white",
-                        mec="k",
-                        mew=1.1,
-                        zorder=5,
-                    )
-            desc = describe(obj)
-            ax.set_title(
-                f"{obj}"
-                + (f": {desc}" if desc else "")
-                + f"  (n = {len(sel)}"
-                + (f", {failed} failed)" if failed else ")"),
-                fontsize=8.5,
-                loc="left",
+            curves[objs[k]] = _object_panel(ax, objs[k], rows, series[objs[k]], low, group)
+            _label_edges(ax, k, ncols, len(objs))
+    _legend(fig, ok, has_line, bool(paper_objs))
+    return fig, curves
+
+
+def _lowest(group: str, group_series: list[dict]) -> float:
+    """Where the group's shared y axis starts (%): below every bin mean of its objects'
+    ``group_series`` and every paper value (a wide interval of a bin of two or three
+    grasps may run off it: it is cut at the axis)."""
+    candidates = [90.0]
+    for curves in group_series:
+        for c in curves.values():
+            candidates += [v for v in c.mean if np.isfinite(v)]
+    if group == "paper":
+        candidates += [min(v) for v in paper.ACCURACY_PERCENT.values()]
+    return max(0.0, 5.0 * math.floor((min(candidates) - 2.0) / 5.0))
+
+
+def _group_axes(sub, group: str, nrows: int, ncols: int):
+    """The group's panels, (nrows, ncols) sharing their axes, under its title."""
+    axes = np.atleast_1d(sub.subplots(nrows, ncols, sharex=True, sharey=True, squeeze=False))
+    title = (
+        "The paper's six objects"
+        if group == "paper"
+        else "Extra objects (not in the paper; not part of the comparison with it)"
+    )
+    sub.suptitle(title, fontsize=11, fontweight="bold")
+    sub.supxlabel(
+        "grey: beyond the paper's range (> 30°), the axis compressed to a third",
+        fontsize=8,
+        color="0.35",
+    )
+    return axes
+
+
+def _object_panel(ax, obj: str, rows: Sequence[dict], series: dict, low: float, group: str):
+    """One object's panel: its grasps, its curves (``series``: "ours" and, if recorded,
+    "line"), the paper's published values for a paper object; its curves as Line2Ds."""
+    sel = _select(_ok(rows), [obj])  # the grasps that gave an estimate
+    failed = len(_select(rows, [obj])) - len(sel)
+    if not sel:
+        ax.text(
+            0.5,
+            0.5,
+            f"no grasp gave an estimate\n({failed} failed)",
+            ha="center",
+            va="center",
+            transform=ax.transAxes,
+            color="0.3",
+            zorder=6,
+            bbox={"facecolor": "white", "edgecolor": "0.6"},
+        )
+    ax.set_xscale("function", functions=(_compress, _expand))
+    ax.axvspan(PAPER_RANGE_DEG, 90.0, color="0.93", zorder=0, lw=0)
+    _grasp_dots(ax, sel, low, "line" in series)
+    curves = {"ours": _plot_curve(ax, series["ours"], C_OURS, "-", "o", True, -0.12)}
+    if "line" in series:
+        curves["line"] = _plot_curve(ax, series["line"], C_LINE, "--", "s", False, 0.12)
+    if group == "paper":
+        for ref, marker in PUBLISHED_MARKER.items():
+            ax.plot(
+                paper.ACCURACY_THETA_DEG,
+                paper.ACCURACY_PERCENT[ref],
+                ls="none",
+                marker=marker,
+                ms=5,
+                mfc="white",
+                mec="k",
+                mew=1.1,
+                zorder=5,
             )
-            ax.set_xlim(-1.0, 90.0)
-            ax.set_ylim(low, 100.8)
-            ax.set_xticks([0, 5, 10, 15, 20, 25, 30, 45, 60, 75, 90])
-            ax.tick_params(labelsize=8)
-            ax.grid(alpha=0.3, lw=0.6)
-            if k % ncols == 0:
-                ax.set_ylabel("CoM accuracy (%)", fontsize=9)
-            if k >= len(objs) - ncols:
-                ax.set_xlabel("tilt in the jaws, 0–90° from level (deg)", fontsize=8.5)
-                ax.tick_params(labelbottom=True)
+    desc = describe(obj)
+    ax.set_title(
+        f"{obj}"
+        + (f": {desc}" if desc else "")
+        + f"  (n = {len(sel)}"
+        + (f", {failed} failed)" if failed else ")"),
+        fontsize=8.5,
+        loc="left",
+    )
+    ax.set_xlim(-1.0, 90.0)
+    ax.set_ylim(low, 100.8)
+    ax.set_xticks([0, 5, 10, 15, 20, 25, 30, 45, 60, 75, 90])
+    ax.tick_params(labelsize=8)
+    ax.grid(alpha=0.3, lw=0.6)
+    return curves
+
+
+def _grasp_dots(ax, sel: Sequence[dict], low: float, has_line: bool) -> None:
+    """Every grasp faint, ours and (``has_line``) the paper's method's; a grasp below the
+    axis' bottom ``low`` (%) as a small arrow at that edge."""
+    theta = _abs_theta(sel)
+    for column, colour, marker in (
+        ("accuracy", C_OURS, "o"),
+        ("accuracy_line", C_LINE, "s"),
+    ):
+        if column == "accuracy_line" and not has_line:
+            continue
+        y = 100.0 * _column(sel, column)
+        below = y < low + 0.5
+        ax.scatter(
+            theta[~below],
+            y[~below],
+            s=7,
+            marker=marker,
+            color=colour,
+            alpha=0.22,
+            lw=0,
+            zorder=2,
+        )
+        if below.any():  # grasps below the axis: a small arrow at its bottom edge
+            ax.scatter(
+                theta[below],
+                np.full(below.sum(), low + 0.6),
+                s=14,
+                marker="v",
+                color=colour,
+                alpha=0.55,
+                lw=0,
+                zorder=2,
+            )
+
+
+def _label_edges(ax, k: int, ncols: int, n_panels: int) -> None:
+    """The y label on the left column's panel ``k``, the x label on the bottom row's."""
+    if k % ncols == 0:
+        ax.set_ylabel("CoM accuracy (%)", fontsize=9)
+    if k >= n_panels - ncols:
+        ax.set_xlabel("tilt in the jaws, 0–90° from level (deg)", fontsize=8.5)
+        ax.tick_params(labelbottom=True)
+
+
+def _legend(fig, ok: Sequence[dict], has_line: bool, paper_objects: bool) -> None:
+    """The figure's legend below its panels, with the note on what the lines are."""
+    from matplotlib.lines import Line2D
 
     handles = [
         Line2D([], [], color=C_OURS, ls="-", marker="o", mfc=C_OURS, label=estimator_label(ok))
@@ -218,7 +241,7 @@ def _accuracy_plot(rows: Sequence[dict]):
         if has_line
         else Line2D([], [], ls="none", label=f"paper's method in our world: {NOT_RECORDED}")
     )
-    if paper_objs:
+    if paper_objects:
         for ref, marker in PUBLISHED_MARKER.items():
             handles.append(
                 Line2D(
@@ -247,7 +270,6 @@ def _accuracy_plot(rows: Sequence[dict]):
         title=note,
         title_fontsize=8,
     )
-    return fig, curves
 
 
 def accuracy_figure(rows: Sequence[dict], path: Path) -> Path:
