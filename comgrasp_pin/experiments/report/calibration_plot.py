@@ -31,14 +31,13 @@ from comgrasp_pin.experiments.stats import (
     wilson_interval,
 )
 
+Z_SPAN = 5.0  # the histogram's z axis: -5 to 5, beyond in the end bins
+Z_BIN = 0.5  # the histogram's bin width in z
+
 
 def _calibration_row(axes, rows, objects, edges, colours, markers, extra: bool):
     """One row of the calibration figure: histogram of z, coverage per bin, rms z per bin."""
     ax_h, ax_c, ax_r = axes
-    span = 5.0
-    grid = np.linspace(-span, span, 400)
-    width = 0.5
-    bins = np.arange(-span, span + 1e-9, width)
     positions = np.arange(len(edges))  # the bins and "all"
     labels = [_bin_name(lo, hi) for lo, hi in zip(edges[:-1], edges[1:])] + ["all"]
     n_tick = [[] for _ in positions]
@@ -51,48 +50,10 @@ def _calibration_row(axes, rows, objects, edges, colours, markers, extra: bool):
         z, theta = z[good], theta[good]
         total += len(z)
         colour, marker = colours[g % len(colours)], markers[g % len(markers)]
-        clipped = np.clip(z, -span + 1e-9, span - 1e-9)
-        out_lo, out_hi = int(np.sum(z <= -span)), int(np.sum(z >= span))
-        label = f"{name}, n = {len(z)}"
-        if out_lo or out_hi:
-            label += f"\n({out_lo} below −{span:g}, {out_hi} above +{span:g}: in the end bins)"
-        ax_h.hist(
-            clipped,
-            bins=bins,
-            histtype="stepfilled" if not extra else "step",
-            color=colour,
-            alpha=0.55 if not extra else 1.0,
-            lw=1.5,
-            label=label,
-        )
+        _z_histogram(ax_h, z, name, colour, extra)
         per_bin = binned_calibration(theta, z, edges) + [(0, 0, calibration(z))]
         dodge = 0.0 if not extra else (g - 0.5 * (len(groups) - 1)) * 0.25
-        for level, (attr, mk, filled) in enumerate(
-            (("inside95", marker, True), ("inside68", "o" if not extra else marker, False))
-        ):
-            xs, ps, lo_err, hi_err = [], [], [], []
-            for p, (_, _, c) in zip(positions, per_bin):
-                if not c.n:
-                    continue
-                k = getattr(c, attr)
-                lo, hi = wilson_interval(k, c.n)
-                xs.append(p + dodge + (0.0 if level == 0 else 0.12))
-                ps.append(100 * k / c.n)
-                lo_err.append(max(0.0, 100 * k / c.n - 100 * lo))
-                hi_err.append(max(0.0, 100 * hi - 100 * k / c.n))
-            ax_c.errorbar(
-                xs,
-                ps,
-                yerr=[lo_err, hi_err],
-                fmt=mk,
-                color=colour,
-                mfc=colour if filled else "white",
-                ms=6,
-                capsize=2.5,
-                lw=1.0,
-                label=(f"{name}: " if extra else "")
-                + ("inside ±1.96σ (95 %)" if level == 0 else "inside ±1σ (68 %)"),
-            )
+        _coverage_points(ax_c, positions + dodge, per_bin, name, colour, marker, extra)
         xs = [p + dodge for p, (_, _, c) in zip(positions, per_bin) if c.n]
         ax_r.plot(
             xs,
@@ -105,80 +66,137 @@ def _calibration_row(axes, rows, objects, edges, colours, markers, extra: bool):
         )
         for p, (_, _, c) in zip(positions, per_bin):
             n_tick[p].append(str(c.n))
-    n_ref = total / max(1, len(groups))
-    ax_h.plot(
+    _finish_histogram(ax_h, total / max(1, len(groups)))
+    _finish_coverage(ax_c)
+    _finish_rms(ax_r)
+    ticks = [f"{lab}\nn={'/'.join(ns)}" for lab, ns in zip(labels, n_tick)]
+    for ax in (ax_c, ax_r):
+        _tilt_bin_axis(ax, positions, ticks, objects if extra else None)
+    for ax in axes:
+        ax.grid(alpha=0.3, lw=0.6)
+        ax.tick_params(labelsize=8)
+
+
+def _z_histogram(ax, z: np.ndarray, name: str, colour: str, extra: bool) -> None:
+    """One group's z as a histogram, |z| beyond Z_SPAN in the end bins (said in its label);
+    filled for the pooled paper objects, a step line for each extra object."""
+    span = Z_SPAN
+    clipped = np.clip(z, -span + 1e-9, span - 1e-9)
+    out_lo, out_hi = int(np.sum(z <= -span)), int(np.sum(z >= span))
+    label = f"{name}, n = {len(z)}"
+    if out_lo or out_hi:
+        label += f"\n({out_lo} below −{span:g}, {out_hi} above +{span:g}: in the end bins)"
+    ax.hist(
+        clipped,
+        bins=np.arange(-span, span + 1e-9, Z_BIN),
+        histtype="stepfilled" if not extra else "step",
+        color=colour,
+        alpha=0.55 if not extra else 1.0,
+        lw=1.5,
+        label=label,
+    )
+
+
+def _coverage_points(ax, xs, per_bin: list, name: str, colour: str, marker: str, extra: bool):
+    """One group's share of grasps inside ±1.96σ and ±1σ per tilt bin (``per_bin``: the
+    bins' and "all"'s (lo, hi, Calibration) at ``xs``), with their 95 % Wilson intervals."""
+    for level, (attr, mk, filled) in enumerate(
+        (("inside95", marker, True), ("inside68", "o" if not extra else marker, False))
+    ):
+        x_drawn, ps, lo_err, hi_err = [], [], [], []
+        for x, (_, _, c) in zip(xs, per_bin):
+            if not c.n:
+                continue
+            k = getattr(c, attr)
+            lo, hi = wilson_interval(k, c.n)
+            x_drawn.append(x + (0.0 if level == 0 else 0.12))
+            ps.append(100 * k / c.n)
+            lo_err.append(max(0.0, 100 * k / c.n - 100 * lo))
+            hi_err.append(max(0.0, 100 * hi - 100 * k / c.n))
+        ax.errorbar(
+            x_drawn,
+            ps,
+            yerr=[lo_err, hi_err],
+            fmt=mk,
+            color=colour,
+            mfc=colour if filled else "white",
+            ms=6,
+            capsize=2.5,
+            lw=1.0,
+            label=(f"{name}: " if extra else "")
+            + ("inside ±1.96σ (95 %)" if level == 0 else "inside ±1σ (68 %)"),
+        )
+
+
+def _finish_histogram(ax, n_ref: float) -> None:
+    """The N(0, 1) curve for ``n_ref`` grasps a group, the axes' labels and legend."""
+    grid = np.linspace(-Z_SPAN, Z_SPAN, 400)
+    ax.plot(
         grid,
-        n_ref * width * np.exp(-0.5 * grid**2) / math.sqrt(2 * math.pi),
+        n_ref * Z_BIN * np.exp(-0.5 * grid**2) / math.sqrt(2 * math.pi),
         "k--",
         lw=1.3,
         label=f"N(0, 1) for n = {n_ref:.0f}",
     )
-    ax_h.set_xlim(-span, span)
-    ax_h.set_xlabel("z = (pos_esti − pos_real) / pos_std", fontsize=9)
-    ax_h.set_ylabel("grasps per 0.5 of z", fontsize=9)
-    ax_h.legend(fontsize=7, loc="upper left")
-    ax_h.set_ylim(0, 1.35 * ax_h.get_ylim()[1])  # room for the legend
-    ax_h.set_title("distribution of z (|z| > 5 in the end bins)", fontsize=9, loc="left")
-    ax_c.axhspan(
+    ax.set_xlim(-Z_SPAN, Z_SPAN)
+    ax.set_xlabel("z = (pos_esti − pos_real) / pos_std", fontsize=9)
+    ax.set_ylabel("grasps per 0.5 of z", fontsize=9)
+    ax.legend(fontsize=7, loc="upper left")
+    ax.set_ylim(0, 1.35 * ax.get_ylim()[1])  # room for the legend
+    ax.set_title("distribution of z (|z| > 5 in the end bins)", fontsize=9, loc="left")
+
+
+def _finish_coverage(ax) -> None:
+    """The coverage targets and N(0, 1)'s 68.3 %, the axes' labels."""
+    ax.axhspan(
         100 * TARGET_COV95_OVERALL[0],
         100 * TARGET_COV95_OVERALL[1],
         color="#cfe8cf",
         zorder=0,
         label="95 % target, overall (93–97 %)",
     )
-    ax_c.axhline(
+    ax.axhline(
         100 * TARGET_COV95_BIN, color="0.35", ls="--", lw=1, label="95 % target, every bin (≥ 90 %)"
     )
-    ax_c.axhline(100 * N01_COV68, color="0.35", ls=":", lw=1, label="N(0, 1) inside ±1σ: 68.3 %")
-    ax_c.set_ylim(0, 103)
-    ax_c.set_ylabel("grasps inside the interval (%)", fontsize=9)
-    ax_c.set_title("coverage per tilt bin (95 % Wilson intervals)", fontsize=9, loc="left")
-    ax_r.axhspan(
-        TARGET_RMS_Z[0], TARGET_RMS_Z[1], color="#cfe8cf", zorder=0, label="target 0.9–1.1"
-    )
-    ax_r.axhline(1.0, color="0.35", ls=":", lw=1)
-    top = max(
-        [1.2]
-        + [
-            v
-            for line in ax_r.get_lines()
-            for v in np.asarray(line.get_ydata(), float)
-            if np.isfinite(v)
-        ]
-    )
+    ax.axhline(100 * N01_COV68, color="0.35", ls=":", lw=1, label="N(0, 1) inside ±1σ: 68.3 %")
+    ax.set_ylim(0, 103)
+    ax.set_ylabel("grasps inside the interval (%)", fontsize=9)
+    ax.set_title("coverage per tilt bin (95 % Wilson intervals)", fontsize=9, loc="left")
+
+
+def _finish_rms(ax) -> None:
+    """The rms z target band and the y axis: linear, or log with plain numbers where a
+    heavy tail takes rms z above 3."""
+    ax.axhspan(TARGET_RMS_Z[0], TARGET_RMS_Z[1], color="#cfe8cf", zorder=0, label="target 0.9–1.1")
+    ax.axhline(1.0, color="0.35", ls=":", lw=1)
+    drawn = [v for line in ax.get_lines() for v in np.asarray(line.get_ydata(), float)]
+    top = max([1.2] + [v for v in drawn if np.isfinite(v)])
     if top > 3.0:  # heavy tails: a log axis with plain numbers
         from matplotlib.ticker import FixedLocator, FuncFormatter, NullLocator
 
-        ax_r.set_yscale("log")
-        bottom = min(
-            v
-            for line in ax_r.get_lines()
-            for v in np.asarray(line.get_ydata(), float)
-            if np.isfinite(v) and v > 0
-        )
+        ax.set_yscale("log")
+        bottom = min(v for v in drawn if np.isfinite(v) and v > 0)
         every = (0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)
         ticks = [t for t in every if bottom / 2.5 <= t <= 2.5 * top]
-        ax_r.yaxis.set_major_locator(FixedLocator(ticks))
-        ax_r.yaxis.set_minor_locator(NullLocator())
-        ax_r.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
-        ax_r.set_ylabel("rms z (log scale)", fontsize=9)
+        ax.yaxis.set_major_locator(FixedLocator(ticks))
+        ax.yaxis.set_minor_locator(NullLocator())
+        ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+        ax.set_ylabel("rms z (log scale)", fontsize=9)
     else:
-        ax_r.set_ylim(0, max(1.5, 1.1 * top))
-        ax_r.set_ylabel("rms z", fontsize=9)
-    ax_r.set_title("rms z per tilt bin", fontsize=9, loc="left")
-    for ax in (ax_c, ax_r):
-        ticks = [f"{lab}\nn={'/'.join(ns)}" for lab, ns in zip(labels, n_tick)]
-        ax.set_xticks(positions, ticks, fontsize=7)
-        label = "tilt in the jaws, 0–90° from level (deg)"
-        ax.set_xlabel(label + (f"; n = {'/'.join(objects)}" if extra else ""), fontsize=9)
-        ax.axvline(positions[-1] - 0.5, color="0.6", lw=0.8)
-        ax.set_xlim(-0.6, positions[-1] + 0.6)
-        ax.legend(
-            fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.24), ncol=2, frameon=False
-        )
-    for ax in axes:
-        ax.grid(alpha=0.3, lw=0.6)
-        ax.tick_params(labelsize=8)
+        ax.set_ylim(0, max(1.5, 1.1 * top))
+        ax.set_ylabel("rms z", fontsize=9)
+    ax.set_title("rms z per tilt bin", fontsize=9, loc="left")
+
+
+def _tilt_bin_axis(ax, positions: np.ndarray, ticks: list, extra_objects) -> None:
+    """The x axis of tilt bins (and "all", set apart) with each bin's counts in ``ticks``;
+    the extra objects' names (``extra_objects``, or None) in the label; the legend below."""
+    ax.set_xticks(positions, ticks, fontsize=7)
+    label = "tilt in the jaws, 0–90° from level (deg)"
+    ax.set_xlabel(label + (f"; n = {'/'.join(extra_objects)}" if extra_objects else ""), fontsize=9)
+    ax.axvline(positions[-1] - 0.5, color="0.6", lw=0.8)
+    ax.set_xlim(-0.6, positions[-1] + 0.6)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.24), ncol=2, frameon=False)
 
 
 def calibration_figure(rows: Sequence[dict], path: Path) -> Path:
