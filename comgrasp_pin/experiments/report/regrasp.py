@@ -23,6 +23,8 @@ from comgrasp_pin.experiments.stats import (
     wilson_interval,
 )
 
+BAR_HALF_WIDTH = 0.2  # a method's bar beside an object's tick (x units: objects)
+
 
 def success_rates(rows: Sequence[dict]) -> dict[tuple[str, str], tuple[int, int]]:
     """(object, method) -> (successes, trials); failed trials (errors) count as failures."""
@@ -43,58 +45,20 @@ def regrasp_figure(rows: Sequence[dict], path: Path) -> Path:
     intervals and the trial counts on the bars; the paper's values as diamonds; extra
     objects to the right, apart."""
     plt = _pyplot()
-    from matplotlib.lines import Line2D
-    from matplotlib.patches import Patch
-
     rates = success_rates(rows)
     paper_objs, extra = object_groups(rows)
-    xs = {o: float(k) for k, o in enumerate(paper_objs)}
-    xs.update(
-        {o: len(paper_objs) + 0.8 + k for k, o in enumerate(extra)}
-        if paper_objs
-        else {o: float(k) for k, o in enumerate(extra)}
-    )
+    xs = _bar_positions(paper_objs, extra)
     objects = paper_objs + extra
     fig, ax = plt.subplots(figsize=(max(6.5, 1.15 * len(objects) + 2.0), 4.8), layout="constrained")
-    half = 0.2
     for offset, method, colour, hatch in (
-        (-half, "baseline", C_BASELINE, "///"),
-        (half, "regrasp", C_REGRASP, None),
+        (-BAR_HALF_WIDTH, "baseline", C_BASELINE, "///"),
+        (BAR_HALF_WIDTH, "regrasp", C_REGRASP, None),
     ):
         for obj in objects:
-            s, n = rates.get((obj, method), (0, 0))
-            x = xs[obj] + offset
-            if not n:
-                ax.text(x, 1.5, "no trials", rotation=90, ha="center", va="bottom", fontsize=7)
-                continue
-            p = s / n
-            lo, hi = wilson_interval(s, n)
-            ax.bar(x, 100 * p, 2 * half * 0.95, color=colour, hatch=hatch, edgecolor="0.25", lw=0.6)
-            ax.errorbar(
-                x,
-                100 * p,
-                yerr=[[max(0.0, 100 * (p - lo))], [max(0.0, 100 * (hi - p))]],
-                fmt="none",
-                ecolor="k",
-                capsize=3,
-                lw=1.1,
-            )
-            ax.text(
-                x,
-                1.5,
-                f"{s}/{n}",
-                rotation=90,
-                ha="center",
-                va="bottom",
-                fontsize=7.5,
-                bbox={"facecolor": "white", "alpha": 0.7, "lw": 0, "pad": 0.8},
-            )
             ref = paper.SUCCESS_PERCENT.get(obj)
-            if ref is not None:
-                value = ref[0] if method == "regrasp" else ref[1]
-                ax.plot(
-                    x, value, ls="none", marker="D", ms=7, mfc="white", mec="k", mew=1.4, zorder=5
-                )
+            paper_value = None if ref is None else ref[0] if method == "regrasp" else ref[1]
+            _success_bar(ax, xs[obj] + offset, rates.get((obj, method), (0, 0)), colour, hatch,
+                         paper_value)  # fmt: skip
     if paper_objs and extra:
         sep = len(paper_objs) - 0.1
         ax.axvline(sep, color="0.5", ls=":", lw=1)
@@ -106,6 +70,70 @@ def regrasp_figure(rows: Sequence[dict], path: Path) -> Path:
     ax.set_ylim(0, 110)
     ax.set_yticks(range(0, 101, 20))
     ax.grid(axis="y", alpha=0.3)
+    _regrasp_legend(fig, bool(paper_objs))
+    ax.set_title(
+        "Pick-and-place success per object; on the bars: successes / trials",
+        fontsize=9.5,
+        loc="left",
+    )
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return Path(path)
+
+
+def _bar_positions(paper_objs: list[str], extra: list[str]) -> dict[str, float]:
+    """Each object's x on the figure: the paper's objects 0, 1, ..., the extra objects to
+    their right after a gap."""
+    xs = {o: float(k) for k, o in enumerate(paper_objs)}
+    xs.update(
+        {o: len(paper_objs) + 0.8 + k for k, o in enumerate(extra)}
+        if paper_objs
+        else {o: float(k) for k, o in enumerate(extra)}
+    )
+    return xs
+
+
+def _success_bar(ax, x: float, rate: tuple[int, int], colour, hatch, paper_value) -> None:
+    """One method's bar at ``x``: ``rate`` = (successes, trials) as a percentage with its
+    95 % Wilson interval and "s/n" on it; the paper's value (%, or None) as a diamond."""
+    s, n = rate
+    if not n:
+        ax.text(x, 1.5, "no trials", rotation=90, ha="center", va="bottom", fontsize=7)
+        return
+    p = s / n
+    lo, hi = wilson_interval(s, n)
+    half = BAR_HALF_WIDTH
+    ax.bar(x, 100 * p, 2 * half * 0.95, color=colour, hatch=hatch, edgecolor="0.25", lw=0.6)
+    ax.errorbar(
+        x,
+        100 * p,
+        yerr=[[max(0.0, 100 * (p - lo))], [max(0.0, 100 * (hi - p))]],
+        fmt="none",
+        ecolor="k",
+        capsize=3,
+        lw=1.1,
+    )
+    ax.text(
+        x,
+        1.5,
+        f"{s}/{n}",
+        rotation=90,
+        ha="center",
+        va="bottom",
+        fontsize=7.5,
+        bbox={"facecolor": "white", "alpha": 0.7, "lw": 0, "pad": 0.8},
+    )
+    if paper_value is not None:
+        ax.plot(
+            x, paper_value, ls="none", marker="D", ms=7, mfc="white", mec="k", mew=1.4, zorder=5
+        )
+
+
+def _regrasp_legend(fig, paper_objects: bool) -> None:
+    """The legend below the figure: the two methods, the interval, the paper's diamonds."""
+    from matplotlib.lines import Line2D
+    from matplotlib.patches import Patch
+
     handles = [
         Patch(
             facecolor=C_BASELINE,
@@ -116,7 +144,7 @@ def regrasp_figure(rows: Sequence[dict], path: Path) -> Path:
         Patch(facecolor=C_REGRASP, edgecolor="0.25", label="regrasp planner (ours)"),
         Line2D([], [], color="k", marker="|", ms=10, ls="none", label="95 % Wilson interval"),
     ]
-    if paper_objs:
+    if paper_objects:
         handles.append(
             Line2D(
                 [],
@@ -130,14 +158,6 @@ def regrasp_figure(rows: Sequence[dict], path: Path) -> Path:
             )
         )
     fig.legend(handles=handles, loc="outside lower center", ncol=2, fontsize=8, frameon=False)
-    ax.set_title(
-        "Pick-and-place success per object; on the bars: successes / trials",
-        fontsize=9.5,
-        loc="left",
-    )
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
-    return Path(path)
 
 
 def regrasp_table(rows: Sequence[dict], objects: Sequence[str] | None = None) -> str:
