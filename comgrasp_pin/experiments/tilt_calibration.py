@@ -184,37 +184,58 @@ def calibrate(
     config = trials.episode_config(None, "ipopt")
     seeds = list(seeds)
     start = time.perf_counter()
-    curves_of = [(o, key) for o in objects for key in SIDES]
-    results: dict[tuple, dict[float, tuple]] = {c: {} for c in curves_of}
-
-    def measure(pool: _Pool, todo: list[tuple]) -> None:
-        tasks = [t for (o, key), r in todo for t in _tasks(o, [r], seeds, SIDES[key])]
-        rows = pool.map(tilt_trial, tasks)
-        for k, (c, r) in enumerate(todo):
-            tilt, dropped = _tilts(rows[k * len(seeds) : (k + 1) * len(seeds)], [r], len(seeds))
-            results[c][r] = (tilt[0], dropped[0])
-
+    results: dict[tuple, dict[float, tuple]] = {(o, key): {} for o in objects for key in SIDES}
     log = out.with_name(out.stem + ".partial.jsonl")
     out.parent.mkdir(parents=True, exist_ok=True)
     with _Pool(workers, log) as pool:
-        measure(pool, [(c, float(r)) for c in curves_of for r in levers])
-        todo = []
-        for c in curves_of:
-            rs = sorted(results[c])
-            coarse = monotone([np.median(results[c][r][0]) for r in rs])
-            todo += [(c, r) for r in dense_levers(rs, coarse, dense) if r not in results[c]]
-        measure(pool, todo)
+        _measure(pool, results, [(c, float(r)) for c in results for r in levers], seeds)
+        rise = _next_levers(results, lambda rs, tilts: dense_levers(rs, tilts, dense))
+        _measure(pool, results, rise, seeds)
         for _ in range(int(refine)):
-            todo = []
-            for c in curves_of:
-                rs = sorted(results[c])
-                # per lever, not pooled: pooling over neighbours smears a step out
-                curve = monotone([np.median(results[c][r][0]) for r in rs])
-                todo += [(c, r) for r in step_levers(rs, curve) if r not in results[c]]
-            measure(pool, todo)
+            _measure(pool, results, _next_levers(results, step_levers), seeds)
     curves = _curves(results, config)
     n_grasps = sum(len(v) for v in results.values()) * len(seeds)
-    made = {
+    how = (
+        f"coarse levers {list(levers)}, then {dense} levers evenly across each curve's rise "
+        f"(from the last coarse lever below {RISE_DEG[0]} deg to the first above {RISE_DEG[1]} "
+        f"deg), then {refine} rounds of bisecting each step (a rise of more than {GAP_DEG} deg, "
+        f"down to {MIN_STEP:g}); {len(seeds)} grasps per lever and side; {n_grasps} grasps in all"
+    )
+    made = _provenance(objects, out, how, config, workers, round(time.perf_counter() - start, 1))
+    data = merged(json.loads(out.read_text()) if out.exists() else {}, curves, made)
+    out.write_text(dumps(data) + "\n")
+    log.unlink(missing_ok=True)
+    load_calibration.cache_clear()
+    return data
+
+
+def _measure(pool: _Pool, results: dict, todo: list[tuple], seeds: list[int]) -> None:
+    """Grasp every (curve, lever) of ``todo`` once per seed; put each lever's |tilts| and
+    drops into ``results[curve][lever]``."""
+    tasks = [t for (o, key), r in todo for t in _tasks(o, [r], seeds, SIDES[key])]
+    rows = pool.map(tilt_trial, tasks)
+    for k, (c, r) in enumerate(todo):
+        tilt, dropped = _tilts(rows[k * len(seeds) : (k + 1) * len(seeds)], [r], len(seeds))
+        results[c][r] = (tilt[0], dropped[0])
+
+
+def _next_levers(results: dict, choose) -> list[tuple]:
+    """The (curve, lever) pairs to measure next: per curve of ``results``, what
+    ``choose(levers, tilts)`` picks from its measured levers and monotone median tilts (per
+    lever, not pooled: pooling smears a step out), less the levers measured already."""
+    todo = []
+    for c, by_lever in results.items():
+        rs = sorted(by_lever)
+        curve = monotone([np.median(by_lever[r][0]) for r in rs])
+        todo += [(c, r) for r in choose(rs, curve) if r not in by_lever]
+    return todo
+
+
+def _provenance(objects, out: Path, how: str, config, workers: int, wall_s: float) -> dict:
+    """How the curves were made, kept beside them in the calibration JSON."""
+    from comgrasp_pin.experiments import trials
+
+    return {
         "sensors": "ideal",
         "objects": list(objects),
         "utc": time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
@@ -222,13 +243,7 @@ def calibrate(
             f"python -m comgrasp_pin.experiments.tilt_calibration --objects "
             f"{','.join(objects)} --out {out}"
         ),  # fmt: skip
-        "how": (
-            f"coarse levers {list(levers)}, then {dense} levers evenly across each "
-            f"curve's rise (from the last coarse lever below {RISE_DEG[0]} deg to the "
-            f"first above {RISE_DEG[1]} deg), then {refine} rounds of bisecting each step "
-            f"(a rise of more than {GAP_DEG} deg, down to {MIN_STEP:g}); {len(seeds)} "
-            f"grasps per lever and side; {n_grasps} grasps in all"
-        ),
+        "how": how,
         "scene_seeds": "tilt_calibration.calibration_seed(object, lever, seed, side)",
         "config": "trials.episode_config(None, 'ipopt'): the ideal preset's procedure",
         "grip_force_N": config.motion.grip_force,
@@ -236,13 +251,8 @@ def calibrate(
         "com_range": list(trials.ACCURACY_COM_RANGE),
         "grasp_limit": trials.ACCURACY_GRASP_OFFSET,
         "workers": workers,
-        "wall_s": round(time.perf_counter() - start, 1),
+        "wall_s": wall_s,
     }
-    data = merged(json.loads(out.read_text()) if out.exists() else {}, curves, made)
-    out.write_text(dumps(data) + "\n")
-    log.unlink(missing_ok=True)
-    load_calibration.cache_clear()
-    return data
 
 
 def _curves(results: dict[tuple, dict[float, tuple]], config) -> dict[str, dict]:
