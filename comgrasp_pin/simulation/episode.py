@@ -122,64 +122,24 @@ def run_episode(
     key-frame strip (PNG) of the episode there. ``viewer``: show it in MuJoCo's interactive
     viewer (needs a display), in real time. ``rerun``: write a Rerun recording (.rrd) there
     (needs the ``rerun`` extra)."""
-    if method not in METHODS:
-        raise InvalidInputError(f"method must be one of {METHODS}, got {method!r}")
-    if config is not None and not isinstance(config, EpisodeConfig):
-        raise InvalidInputError(f"config must be an EpisodeConfig, got {type(config).__name__}")
-    config = config or EpisodeConfig()
+    config = _checked(method, config)
     if rerun is not None:
-        from comgrasp_pin.simulation.rerun_log import RerunLog, import_rerun
+        from comgrasp_pin.simulation.rerun_log import import_rerun
 
         import_rerun()  # MissingExtraError before anything is built
     scene = Scene.sample(obj, seed, pos_real)
     world = World(scene, config, seed)
-    recorder = rerun_log = None
-    if viewer:
-        from comgrasp_pin.simulation.viewer import LiveViewer
-
-        world.sim.observers.append(LiveViewer(world.sim))
-    if video is not None:
-        from comgrasp_pin.simulation.recorder import EpisodeRecorder
-
-        recorder = EpisodeRecorder(world.sim, world.truth)
-        world.sim.observers.append(recorder)
-    if rerun is not None:
-        rerun_log = RerunLog(world.sim, rerun, world.truth)
-        world.sim.observers.append(rerun_log)
+    recorder, rerun_log = _observers(world, video, viewer, rerun)
     cell = SimCell(world, recorder)
     timings: dict[str, float] = {}
     start = time.perf_counter()
-    grasped, success, final_offset = None, False, float("nan")
+    grasped, final_offset = None, float("nan")
     try:
-        try:
-            run = pick_and_place.regrasp if method == "regrasp" else pick_and_place.baseline
-            grasped = run(cell, config)
-            timings["trial"] = time.perf_counter() - start
-            mark = time.perf_counter()
-            pick_and_place.deliver(cell, config)
-            timings["carry"] = time.perf_counter() - mark
-            success = in_drop_box(world.truth().p_world_com)
-            reason = grasped.reason
-            if not success:
-                reason += f"; the rod ended {where_is(world.truth().p_world_com)}"
-        except (RodDroppedError, PerceptionError, IKError) as exc:
-            # The robot lost the rod, or cannot see or reach it any more: a failed episode.
-            reason = (
-                f"{type(exc).__name__}: {exc}; the rod ended {where_is(world.truth().p_world_com)}"
-            )
+        grasped, success, reason = _pick_and_place(cell, method, config, timings, start)
         if pick_and_place.CARRYING in cell.snapshots:
             final_offset = cell.snapshots[pick_and_place.CARRYING].grasp_offset
-        if recorder is not None or rerun_log is not None:
-            trial = grasped.trial if grasped is not None else None
-            estimate = estimate_on_rod(trial, cell)
-        if recorder is not None:
-            video.parent.mkdir(parents=True, exist_ok=True)
-            recorder.finish(estimate, cell.phases)
-            recorder.write_video(video)
-            title = f"{obj}, seed {seed}, {method}: {'delivered' if success else 'not delivered'}"
-            recorder.write_strip(video.with_suffix(".png"), title=title)
-        if rerun_log is not None:
-            rerun_log.finish(estimate, cell.phases, trial)
+        title = f"{obj}, seed {seed}, {method}: {'delivered' if success else 'not delivered'}"
+        _finish_recordings(cell, grasped, recorder, rerun_log, video, title)
     finally:
         sim_s = world.sim.time
         for observer in (recorder, rerun_log):
@@ -192,3 +152,77 @@ def run_episode(
     return EpisodeResult(scene, method, success, grasped is not None and grasped.regrasped,
                          reason, trial, trial_score, final_offset, timings, sim_s,
                          tuple(cell.phases))  # fmt: skip
+
+
+def _checked(method: str, config: EpisodeConfig | None) -> EpisodeConfig:
+    """``config`` (default ``EpisodeConfig()``) once ``method`` and it are valid."""
+    if method not in METHODS:
+        raise InvalidInputError(f"method must be one of {METHODS}, got {method!r}")
+    if config is not None and not isinstance(config, EpisodeConfig):
+        raise InvalidInputError(f"config must be an EpisodeConfig, got {type(config).__name__}")
+    return config or EpisodeConfig()
+
+
+def _observers(world: World, video: Path | None, viewer: bool, rerun: Path | None) -> tuple:
+    """(recorder, rerun log), each None unless asked for, attached to ``world``'s simulation
+    with the live viewer (``viewer``)."""
+    recorder = rerun_log = None
+    if viewer:
+        from comgrasp_pin.simulation.viewer import LiveViewer
+
+        world.sim.observers.append(LiveViewer(world.sim))
+    if video is not None:
+        from comgrasp_pin.simulation.recorder import EpisodeRecorder
+
+        recorder = EpisodeRecorder(world.sim, world.truth)
+        world.sim.observers.append(recorder)
+    if rerun is not None:
+        from comgrasp_pin.simulation.rerun_log import RerunLog
+
+        rerun_log = RerunLog(world.sim, rerun, world.truth)
+        world.sim.observers.append(rerun_log)
+    return recorder, rerun_log
+
+
+def _pick_and_place(cell: SimCell, method: str, config: EpisodeConfig, timings: dict,
+                    start: float) -> tuple:  # fmt: skip
+    """(the grasp that lifted the rod or None, delivered, why): ``method``'s pick and place,
+    the physics deciding. ``timings`` gets the trial's and the carry's wall time (s, from
+    ``start``)."""
+    grasped = None
+    truth = cell.world.truth
+    try:
+        run = pick_and_place.regrasp if method == "regrasp" else pick_and_place.baseline
+        grasped = run(cell, config)
+        timings["trial"] = time.perf_counter() - start
+        mark = time.perf_counter()
+        pick_and_place.deliver(cell, config)
+        timings["carry"] = time.perf_counter() - mark
+    except (RodDroppedError, PerceptionError, IKError) as exc:
+        # The robot lost the rod, or cannot see or reach it any more: a failed episode.
+        return (
+            grasped,
+            False,
+            (f"{type(exc).__name__}: {exc}; the rod ended {where_is(truth().p_world_com)}"),
+        )
+    success = in_drop_box(truth().p_world_com)
+    reason = grasped.reason
+    if not success:
+        reason += f"; the rod ended {where_is(truth().p_world_com)}"
+    return grasped, success, reason
+
+
+def _finish_recordings(cell: SimCell, grasped, recorder, rerun_log, video, title: str) -> None:
+    """Write the episode's video and key-frame strip (``title`` on it) and finish its Rerun
+    log, where they were asked for, with the CoM estimate on the rod."""
+    if recorder is None and rerun_log is None:
+        return
+    trial = grasped.trial if grasped is not None else None
+    estimate = estimate_on_rod(trial, cell)
+    if recorder is not None:
+        video.parent.mkdir(parents=True, exist_ok=True)
+        recorder.finish(estimate, cell.phases)
+        recorder.write_video(video)
+        recorder.write_strip(video.with_suffix(".png"), title=title)
+    if rerun_log is not None:
+        rerun_log.finish(estimate, cell.phases, trial)
