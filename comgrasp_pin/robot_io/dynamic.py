@@ -30,7 +30,6 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from comgrasp_pin.estimation import ComEstimate
-from comgrasp_pin.estimation.inertial_fit import fit_inertial
 from comgrasp_pin.estimation.payload_regressor import (
     condition_number,
     parameter_scale,
@@ -38,6 +37,7 @@ from comgrasp_pin.estimation.payload_regressor import (
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io import dynamic_uncertainty as du
 from comgrasp_pin.robot_io.arm_model import ArmModel
+from comgrasp_pin.robot_io.dynamic_fit import error_sources, fit_payload, std_parts
 from comgrasp_pin.robot_io.logs import JointLog
 from comgrasp_pin.robot_io.motion_signals import CUTOFF_HZ
 from comgrasp_pin.robot_io.motion_system import (
@@ -51,7 +51,7 @@ from comgrasp_pin.robot_io.payload_system import (
     NOMINAL,
     payload_system,
 )
-from comgrasp_pin.robot_io.verdict import Z95, Checks, verdict
+from comgrasp_pin.robot_io.verdict import Checks, verdict
 
 
 @dataclass(frozen=True)
@@ -172,40 +172,18 @@ def estimate_payload_dynamic(
     if empty_log is not None and arm_model is not None:
         raise InvalidInputError("give an empty run or an arm model, not both")
     system = payload_system(robot, log, empty_log, window, empty_window, cutoff_hz, arm_model)
-    S, source, alignment, arm_jac = system.S, system.source, system.alignment, system.arm_jac
+    S, source, b_gain, columns = system.S, system.source, system.b_gain, system.per_joint
     k, n = S.q.shape
-    Y, b_gain, columns = system.Y, system.b_gain, system.per_joint
-    A_pi, A_x, b_rows = Y.reshape(-1, 10), system.A_x, system.b.reshape(-1)
+    A_pi, A_x, b_rows = system.Y.reshape(-1, 10), system.A_x, system.b.reshape(-1)
     A = np.column_stack([A_pi, A_x])
     sigma = row_noise(A, b_rows, k, n)
     w = np.tile(1.0 / sigma, k)
-
-    # every error source, linearised through the weighted least squares
-    blocks = du.contiguous_blocks(k, du.block_count(float(S.t[-1] - S.t[0])))
-    white = du.white_cov(A, b_rows, w)
-    jk = du.jackknife_cov(A, b_rows, w, k, n, blocks)
-    factor = np.sqrt(np.maximum(np.diag(jk) / np.maximum(np.diag(white), 1e-300), 1.0))
-    P = du.sensitivity(A, w)
     rel = du.relative_gain_cov(gain_cov, log.current_gains, n)
-    rel = np.zeros((n, n)) if rel is None else rel
-    J_gain = du.gains_jacobian(P, b_gain)
-    cov_gain = J_gain @ rel @ J_gain.T
-    cov_arm = np.zeros((10, 10))
-    if arm_model is not None and arm_jac is not None:
-        D = P @ arm_jac @ arm_model.replicates.T  # each replicate's effect on pi
-        cov_arm = D @ D.T
-    pi_ls = P @ b_rows
-
-    data_cov = white * np.outer(factor, factor)
-    m_std = np.sqrt(data_cov[0, 0] + cov_gain[0, 0] + cov_arm[0, 0])
-    if pi_ls[0] - Z95 * m_std > 0:
-        fit = fit_inertial(A_pi, A_x, b_rows, w, prior_of(prior))
-        pi, x, status = fit.pi, fit.x, fit.return_status
-        data_cov = fit.cov * np.outer(factor, factor)
-    else:  # nothing held: a consistent body of zero mass does not exist
-        beta = np.linalg.lstsq(A * w[:, None], b_rows * w, rcond=None)[0]
-        pi, x, status = beta[:10], beta[10:], "not run: no payload seen"
-    params_cov = data_cov + cov_gain + cov_arm
+    err = error_sources(A, b_rows, w, (k, n), float(S.t[-1] - S.t[0]), b_gain, rel, arm_model,
+                        system.arm_jac)  # fmt: skip
+    fit = fit_payload(A_pi, A_x, b_rows, w, prior_of(prior), err)
+    pi, x = fit.pi, fit.x
+    params_cov = fit.data_cov + err.gains + err.arm
     tau_fit = (A_pi @ pi).reshape(k, n)
     tau_payload = (b_rows - A_x @ x).reshape(k, n)
     residual = tau_fit - tau_payload
@@ -214,23 +192,19 @@ def estimate_payload_dynamic(
     mass, com, inertia_c, cov4, inertia_cov = about_com(pi, params_cov)
     inertia_std = np.sqrt(np.clip(np.diag(inertia_cov), 0, None)).reshape(3, 3)
     validation = du.held_out(A_pi, A_x, b_rows, w, S.t, k, n)
-    halves, halves_std = _halves(A, b_rows, w, k, n, factor, b_gain, rel)
-    cond = condition_number(Y, parameter_scale())
+    halves, halves_std = _halves(A, b_rows, w, k, n, err.factor, b_gain, err.rel_gain_cov)
+    cond = condition_number(system.Y, parameter_scale())
     checks = Checks(mass, float(np.sqrt(params_cov[0, 0])), source,
                     validation.explained_total, halves, halves_std)  # fmt: skip
     word, reasons = verdict(checks)
-    parts = {"data and model (block jackknife)": float(np.sqrt(data_cov[0, 0]))}
-    if log.current_gains is not None:
-        parts["gains"] = float(np.sqrt(cov_gain[0, 0]))
-    if arm_model is not None:
-        parts["arm model"] = float(np.sqrt(cov_arm[0, 0]))
+    parts = std_parts(fit.data_cov, err, log.current_gains is not None, arm_model is not None)
     return DynamicEstimate(
         mass, com, inertia_c, pi, params_cov, cov4, inertia_std, inertia_cov, cond,
         np.sqrt(np.mean(residual**2, axis=0)), sigma, source, extras[0],
         2 * extras[1 : 1 + DRIFT_DEGREE : 2].sum(axis=0),
         extras[1 + DRIFT_DEGREE :].T if source == NOMINAL else None,
-        k, float(S.t[-1] - S.t[0]), S.cutoff_hz, S.velocity_from, status, pi_ls, S.t,
-        tau_payload, tau_fit, parts, validation, word, tuple(reasons), halves, alignment,
+        k, float(S.t[-1] - S.t[0]), S.cutoff_hz, S.velocity_from, fit.status, fit.pi_ls, S.t,
+        tau_payload, tau_fit, parts, validation, word, tuple(reasons), halves, system.alignment,
         gains_source if log.current_gains is not None else None, delay,
     )  # fmt: skip
 
