@@ -138,57 +138,73 @@ def jackknife_cov(A, b, w, k: int, n: int, blocks: list[np.ndarray], p: int = 10
     return R.T @ R
 
 
-def _pinv_rows(Aw: np.ndarray, p: int) -> tuple[np.ndarray, np.ndarray]:
-    """(p, r) the first p rows of Aw's pseudo-inverse and (p, p) those of (Aw^T Aw)^-1.
+def _refuse_flat(flat_vectors: np.ndarray, ratio: float, p: int) -> None:
+    """Refuse a flat direction that moves the first p unknowns.
 
-    Columns are scaled to unit norm first; a flat direction (``FLAT_RCOND``) is dropped only
-    where it leaves the first p unknowns alone (a still joint's friction column, say).
+    ``flat_vectors``: the flat directions as rows (unit, in column-scaled unknowns). One
+    that leaves the first p alone (a still joint's friction column, say) is let through.
 
     Raises:
-        UnobservableError: a flat direction moves the first p unknowns; the message names
-            them (the payload's parameters when p is 10).
+        UnobservableError: naming the unknowns it mixes (the payload's parameters when p is
+            10).
     """
+    if not len(flat_vectors):
+        return
+    part = flat_vectors[:, :p]
+    worst = part[np.argmax(np.linalg.norm(part, axis=1))]
+    if np.linalg.norm(worst) > 1e-3:
+        names = PAYLOAD_NAMES if p == len(PAYLOAD_NAMES) else [f"unknown {i}" for i in range(p)]
+        mixed = [names[i] for i in np.flatnonzero(np.abs(worst) > 0.2 * np.abs(worst).max())]
+        raise UnobservableError(
+            f"the motion does not determine {' + '.join(mixed)} ({len(flat_vectors)} flat "
+            f"direction(s), scaled singular value ratio {max(ratio, 1e-16):.0e}): a pseudo-"
+            "inverse would give it zero variance; move every joint, the wrist's too"
+        )
+
+
+def _column_scale(Aw: np.ndarray) -> np.ndarray:
     scale = np.linalg.norm(Aw, axis=0)
-    scale = np.where(scale > 0, scale, 1.0)
-    U, s, Vt = np.linalg.svd(Aw / scale, full_matrices=False)
-    flat = s < FLAT_RCOND * s[0]
-    V = Vt.T / scale[:, None]  # back to the unknowns' own units
-    if np.any(flat):
-        V_flat = Vt[flat, :p]  # the flat directions' part in the first p (scaled)
-        worst = V_flat[np.argmax(np.linalg.norm(V_flat, axis=1))]
-        if np.linalg.norm(worst) > 1e-3:
-            names = PAYLOAD_NAMES if p == len(PAYLOAD_NAMES) else [f"unknown {i}" for i in range(p)]
-            mixed = [names[i] for i in np.flatnonzero(np.abs(worst) > 0.2 * np.abs(worst).max())]
-            raise UnobservableError(
-                f"the motion does not determine {' + '.join(mixed)} ({int(flat.sum())} flat "
-                f"direction(s), scaled singular value ratio {s[-1] / s[0]:.1e}): a pseudo-"
-                "inverse would give it zero variance; move every joint, the wrist's too"
-            )
-    keep = ~flat
-    Vk, sk = V[:p, keep], s[keep]
-    return (Vk / sk) @ U[:, keep].T, (Vk / sk**2) @ Vk.T
+    return np.where(scale > 0, scale, 1.0)
 
 
 def white_cov(A, b, w, p: int = 10) -> np.ndarray:
     """(p, p) the LS fit's covariance with white, independent rows (residual-scaled).
 
+    The normal matrix is inverted with its columns scaled to unit diagonal; a direction
+    below ``FLAT_RCOND`` (in singular values) is dropped only where it leaves the first p
+    unknowns alone.
+
     Raises:
-        UnobservableError: the rows do not determine the first p unknowns (``_pinv_rows``).
+        UnobservableError: the rows do not determine the first p unknowns (``_refuse_flat``).
     """
     Aw = A * w[:, None]
     beta, *_ = np.linalg.lstsq(Aw, b * w, rcond=None)
     r = Aw @ beta - b * w
     s2 = float(r @ r) / max(len(b) - A.shape[1], 1)
-    return s2 * _pinv_rows(Aw, p)[1]
+    scale = _column_scale(Aw)
+    e, V = np.linalg.eigh((Aw / scale).T @ (Aw / scale))
+    flat = e < FLAT_RCOND**2 * e[-1]
+    _refuse_flat(V[:, flat].T, np.sqrt(max(e[0], 0.0) / e[-1]), p)
+    Vk = V[:p, ~flat] / scale[:p, None]
+    return s2 * (Vk / e[~flat]) @ Vk.T
 
 
 def sensitivity(A: np.ndarray, w: np.ndarray, p: int = 10) -> np.ndarray:
     """(p, r) d pi / d b of the weighted least squares (its first p unknowns).
 
+    The first p rows of the column-scaled system's pseudo-inverse, a flat direction dropped
+    only where it leaves them alone.
+
     Raises:
-        UnobservableError: the rows do not determine the first p unknowns (``_pinv_rows``).
+        UnobservableError: the rows do not determine the first p unknowns (``_refuse_flat``).
     """
-    return _pinv_rows(A * w[:, None], p)[0] * w[None, :]
+    Aw = A * w[:, None]
+    scale = _column_scale(Aw)
+    U, s, Vt = np.linalg.svd(Aw / scale, full_matrices=False)
+    flat = s < FLAT_RCOND * s[0]
+    _refuse_flat(Vt[flat], s[-1] / s[0], p)
+    Vk = Vt[~flat, :p].T / scale[:p, None]
+    return (Vk / s[~flat]) @ U[:, ~flat].T * w[None, :]
 
 
 def relative_gain_cov(gain_cov, gains, n: int) -> np.ndarray | None:
