@@ -253,7 +253,7 @@ def robot_logs(tmp_path_factory):
     }  # fmt: skip
 
 
-ROBOT_COMMANDS = {
+ARM_RUNS = {
     "estimate --help": lambda L: ["estimate", "--help"],
     "estimate, CSV, payload files": lambda L: [
         "estimate", *L["robot"], "--csv", L["csv"], *L["windows"],
@@ -288,9 +288,11 @@ ROBOT_COMMANDS = {
 }  # fmt: skip
 
 
-@pytest.mark.parametrize("name", ROBOT_COMMANDS)
+@pytest.mark.parametrize("name", ARM_RUNS)
 def test_robot_commands_load_no_simulator_camera_or_plot_library(robot_logs, name):
-    loaded = _run_alone(ROBOT_COMMANDS[name](robot_logs))
+    """Not MuJoCo, cv2, matplotlib, nor the package's simulation, experiments, perception or
+    procedures."""
+    loaded = _run_alone(ARM_RUNS[name](robot_logs))
     assert loaded == [], f"comgrasp {name} loaded {loaded}"
 
 
