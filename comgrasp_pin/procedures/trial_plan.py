@@ -85,10 +85,10 @@ def plan_trial(
     T_world_ee_meas = grasp_frame(grasp)
     T_world_ee_meas[:3, :3] = robot.ee_pose(q_pre)[:3, :3]
     T_world_ee_meas[2, 3] = lift_height
-    goals = [T_world_ee_meas] + ([rolled(T_world_ee_meas, roll_deg)] if roll_deg else [])
-    poses = [solve_ik(robot, goals[0], q_pre)]
-    if roll_deg:
-        poses.append(solve_ik(robot, goals[1], poses[0]))
+    T_world_ee_rolled = rolled(T_world_ee_meas, roll_deg) if roll_deg else None
+    poses = [solve_ik(robot, T_world_ee_meas, q_pre)]
+    if T_world_ee_rolled is not None:
+        poses.append(solve_ik(robot, T_world_ee_rolled, poses[0]))
     return TrialPlan(grasp, poses, centre_hint, T_world_ee_meas, detection)
 
 
