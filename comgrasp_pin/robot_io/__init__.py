@@ -19,7 +19,7 @@ shared modules, never ``simulation`` (no MuJoCo here): it runs on a real robot's
 
 from comgrasp_pin.robot_io.arm_model import ArmModel, identify_arm, load_arm_model
 from comgrasp_pin.robot_io.dynamic import DynamicEstimate, check_on_log, estimate_payload_dynamic
-from comgrasp_pin.robot_io.estimate import LogEstimate, estimate_from_log, result_dict, summary
+from comgrasp_pin.robot_io.estimate import LogEstimate, estimate_from_log
 from comgrasp_pin.robot_io.excitation import (
     ExcitationMotion,
     ExcitationSettings,
@@ -41,6 +41,7 @@ from comgrasp_pin.robot_io.payload import Payload, T_flange_ee, payload_in_flang
 from comgrasp_pin.robot_io.planning import PosePlan, plan_measurement_poses
 from comgrasp_pin.robot_io.record import write_bag, write_csv
 from comgrasp_pin.robot_io.rtde import read_rtde
+from comgrasp_pin.robot_io.static_report import result_dict, summary
 from comgrasp_pin.robot_io.windows import (
     StaticReading,
     find_static_windows,

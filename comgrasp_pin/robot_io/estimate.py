@@ -124,32 +124,14 @@ def estimate_from_log(
         NotStaticError: a window moves.
         ComGraspError: the errors of ``estimate_com``.
     """
-    if tuple(log.joint_names) != tuple(robot.joint_names):
-        raise LogError(f"the log's joints {log.joint_names} are not the arm's {robot.joint_names}")
-    if len(before) != len(after):
-        raise LogError(
-            f"{len(before)} --before window(s) but {len(after)} --after window(s): each "
-            "before window pairs with the after window of the same pose (same count needed)"
-        )
-    if not before:
-        raise LogError("no windows given: at least one before/after pair is needed")
+    rb, ra = _read_windows(robot, log, before, after, max_speed)
     rel = relative_gain_cov(gain_cov, log.current_gains, robot.nq)
-    rb = tuple(read_window(log, *w, max_speed, f"before window {i}") for i, w in enumerate(before))
-    ra = tuple(read_window(log, *w, max_speed, f"after window {i}") for i, w in enumerate(after))
     Q = np.array([r.q for r in ra])
     tau_a = np.array([r.tau for r in ra])
     tau_b = np.array(
         [b.tau + robot.gravity_torques(a.q) - robot.gravity_torques(b.q) for b, a in zip(rb, ra)]
     )
-    if torque_std is None:
-        var = np.array([(b.tau_mean_std**2 + a.tau_mean_std**2) / 2 for b, a in zip(rb, ra)])
-        sigma = np.maximum(np.sqrt(var.mean(axis=0)), NOISE_FLOOR)
-        noise_from = "samples"
-    else:
-        if not (np.isfinite(torque_std) and torque_std > 0):
-            raise InvalidInputError(f"torque_std must be finite and > 0 (N m), got {torque_std}")
-        sigma = np.full(robot.nq, float(torque_std))
-        noise_from = "given"
+    sigma, noise_from = _reading_std(rb, ra, torque_std, robot.nq)
     cov = _drift_covariance(rb, ra, sigma, noise_from, drift_std)
 
     def solve(factor: np.ndarray | None, how: str) -> ComEstimate:
@@ -174,6 +156,36 @@ def estimate_from_log(
         a.setflags(write=False)
     estimate = dataclasses.replace(est, cov=total)
     return dataclasses.replace(result, estimate=estimate, gains_cov=part)
+
+
+def _read_windows(robot: RobotModel, log: JointLog, before, after, max_speed: float):
+    """(before readings, after readings) of the paired windows, or a LogError saying why not."""
+    if tuple(log.joint_names) != tuple(robot.joint_names):
+        raise LogError(f"the log's joints {log.joint_names} are not the arm's {robot.joint_names}")
+    if len(before) != len(after):
+        raise LogError(
+            f"{len(before)} --before window(s) but {len(after)} --after window(s): each "
+            "before window pairs with the after window of the same pose (same count needed)"
+        )
+    if not before:
+        raise LogError("no windows given: at least one before/after pair is needed")
+    rb = tuple(read_window(log, *w, max_speed, f"before window {i}") for i, w in enumerate(before))
+    ra = tuple(read_window(log, *w, max_speed, f"after window {i}") for i, w in enumerate(after))
+    return rb, ra
+
+
+def _reading_std(rb, ra, torque_std: float | None, n: int) -> tuple[np.ndarray, str]:
+    """(std of one averaged reading per joint (N m), "samples" or "given").
+
+    Without ``torque_std``, per joint the RMS over poses of sqrt((s_b^2 + s_a^2) / 2) of the
+    windows' means (their samples' spread), floored at NOISE_FLOOR.
+    """
+    if torque_std is None:
+        var = np.array([(b.tau_mean_std**2 + a.tau_mean_std**2) / 2 for b, a in zip(rb, ra)])
+        return np.maximum(np.sqrt(var.mean(axis=0)), NOISE_FLOOR), "samples"
+    if not (np.isfinite(torque_std) and torque_std > 0):
+        raise InvalidInputError(f"torque_std must be finite and > 0 (N m), got {torque_std}")
+    return np.full(n, float(torque_std)), "given"
 
 
 def _gains_covariance(
@@ -221,74 +233,3 @@ def _drift_covariance(rb, ra, sigma, noise_from, drift_std) -> np.ndarray | None
     white = np.array([r.tau_mean_std if noise_from == "samples" else sigma for r in readings])
     spans = [(r.t0, r.t1 - r.t0) for r in readings]
     return difference_covariance(spans, np.maximum(white, NOISE_FLOOR), weights, drift_std)
-
-
-def result_dict(result: LogEstimate, frame: str) -> dict:
-    """The RESULT.json contents (DESIGN.md section 4b): SI units, CoM in the ee frame."""
-    est = result.estimate
-    std = est.std
-    u = est.unobservable_ee
-    return {
-        "mass_kg": est.mass,
-        "com_m": [float(v) for v in est.com_ee],
-        "frame": frame,
-        "cov": None if est.cov is None else np.asarray(est.cov).tolist(),
-        "unobservable": None if u is None else [float(v) for v in u],
-        "n_poses": est.n_poses,
-        "residual_rms_Nm": est.residual_rms,
-        "std": None if std is None else _std_dict(result, std),
-        "torque_std_Nm": result.torque_std.tolist(),
-        "torque_std_from": result.noise_from,
-        "torque_drift_Nm_per_sqrt_s": result.drift_std,
-        "method": est.method,
-        "solver_status": est.solver_status,
-        "condition_number": est.condition_number,
-        "q_rad": result.q.tolist(),
-        "windows": {
-            "before": [[r.t0, r.t1, r.n_samples] for r in result.before],
-            "after": [[r.t0, r.t1, r.n_samples] for r in result.after],
-        },
-    }
-
-
-def _std_dict(result: LogEstimate, std: np.ndarray) -> dict:
-    """RESULT.json's ``std``; with the gains' covariance, the mass's std per source."""
-    out: dict = {"mass_kg": float(std[0]), "com_m": std[1:].tolist()}
-    parts = result.mass_std_by_source
-    if parts is not None:
-        out["covers"] = "the torque noise and the drive gains"
-        out["mass_kg_by_source"] = parts
-    return out
-
-
-def summary(result: LogEstimate, frame: str) -> str:
-    """A few lines for a person: mass and CoM with their std, what was not observed and why."""
-    est = result.estimate
-    std = est.std
-    s = np.full(4, np.nan) if std is None else std
-    c = est.com_ee
-    lines = [
-        f"payload from {est.n_poses} static pose(s), {est.method} "
-        f"(torque std {result.noise_from}: {np.mean(result.torque_std):.3g} N m per averaged "
-        "reading" + (f"; drift {result.drift_std:g} N m/sqrt(s)" if result.drift_std else "") + ")",
-        f"  mass  {est.mass:.4f} +- {s[0]:.4f} kg",
-        f"  CoM in {frame}:  x {1e3 * c[0]:8.2f} +- {1e3 * s[1]:.2f} mm",
-        f"                 y {1e3 * c[1]:8.2f} +- {1e3 * s[2]:.2f} mm",
-        f"                 z {1e3 * c[2]:8.2f} +- {1e3 * s[3]:.2f} mm",
-        f"  residual RMS {est.residual_rms:.3g} N m",
-    ]
-    parts = result.mass_std_by_source
-    if parts is not None:
-        lines.insert(2, f"  mass std from the noise {parts['noise']:.4f} kg, from the drive "
-                        f"gains {parts['gains']:.4f} kg")  # fmt: skip
-    if est.unobservable_ee is not None:
-        u = np.array2string(np.asarray(est.unobservable_ee), precision=3)
-        lines.insert(2, f"  CoM: a line in {frame}; below, its point nearest the origin")
-        lines.append(
-            f"  unobservable: the CoM along {u} ({frame}) is set to 0, and the +- above hold "
-            "across that line only: the CoM can be anywhere along it. That is gravity's "
-            "direction at the pose(s): a weight along its own line of action exerts no moment, "
-            "so static torques fix only the vertical line through the CoM. Add poses that turn "
-            "the wrist against gravity (comgrasp plan-poses)."
-        )
-    return "\n".join(lines)
