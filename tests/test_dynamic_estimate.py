@@ -113,33 +113,36 @@ def test_payload_from_a_motion_within_its_stated_uncertainty(robot, empty_run):
         np.testing.assert_allclose(est.friction[:, 1], 0.3, atol=0.1)
 
 
+MC_PAYLOAD = pin.Inertia(0.8, np.array([0.02, -0.01, 0.08]), np.diag([4e-3, 5e-3, 3e-3]))
+"""PAYLOAD with its spread inside the consistent set (PAYLOAD's own is flat along y: the
+consistent fit's errors there are cut at the boundary and its error bars read wide)."""
 MC_DRAWS = 40
 RMS_Z_BAND = (0.7, 1.45)
 """The pooled rms z of the ten parameters over MC_DRAWS noise draws. A correct covariance gives
-about 0.95 here (the jackknife's factor is floored at 1, so slightly conservative); its
+about 0.92 here (the jackknife's factor is floored at 1, so slightly conservative); its
 sampling spread over 40 draws is about 0.06. A variance 3 times too large or too small gives
-0.53 or 1.58, and fails, as does a std 10 times off (0.09 or 9)."""
+0.53 or 1.59, and fails, as does a std 10 times off (0.09 or 9)."""
 GROUP_BAND = (0.6, 1.6)
 """Each group alone (the mass; the CoM; the inertia about the CoM): fewer values, wider band."""
 
 
-def dynamic_z(robot, draws: int = MC_DRAWS, seed: int = 100, duration: float = 8.0):
+def dynamic_z(robot, draws=MC_DRAWS, seed=100, duration=8.0, empty_run=True):
     """(draws, 20) z of the ten parameters (params_cov), of (mass, CoM) (cov) and of the six
     entries of the inertia about the CoM (inertia_cov), each draw with its own noise on the
-    loaded and the empty run, against the appended body's truth. A short (8 s) motion: each
-    draw costs about 0.1 s."""
+    loaded and the empty run (or no empty run: the URDF model and friction), against the
+    appended body's truth. A short (8 s) motion: each draw costs about 0.1 s."""
     motion = fourier_motion(robot, duration=duration)
-    truth = PAYLOAD.toDynamicParameters()
+    truth = MC_PAYLOAD.toDynamicParameters()
     upper = [0, 1, 2, 4, 5, 8]  # the inertia's six entries in the flattened (3, 3)
     z = []
     for i in range(draws):
-        log = rnea_log(robot, PAYLOAD, motion, seed=seed + 2 * i)
+        log = rnea_log(robot, MC_PAYLOAD, motion, seed=seed + 2 * i)
         empty = rnea_log(robot, None, motion, seed=seed + 2 * i + 1, offset=0.25)
-        est = estimate_payload_dynamic(robot, log, empty)
+        est = estimate_payload_dynamic(robot, log, empty if empty_run else None)
         z_params = (est.params - truth) / np.sqrt(np.diag(est.params_cov))
-        z_com = np.r_[est.mass - PAYLOAD.mass, est.com_ee - PAYLOAD.lever]
+        z_com = np.r_[est.mass - MC_PAYLOAD.mass, est.com_ee - MC_PAYLOAD.lever]
         z_com /= np.sqrt(np.diag(est.cov))
-        z_inertia = (est.inertia_com_ee - PAYLOAD.inertia).ravel()
+        z_inertia = (est.inertia_com_ee - MC_PAYLOAD.inertia).ravel()
         z_inertia = (z_inertia / np.sqrt(np.diag(est.inertia_cov)))[upper]
         z.append(np.r_[z_params, z_com, z_inertia])
     return np.array(z)
@@ -163,6 +166,21 @@ def test_the_motion_error_bars_are_neither_too_wide_nor_too_narrow(robot):
     in a band, so a covariance three times too wide or too narrow in variance fails (the
     |z| < 4.5 above passes a covariance 100 times too wide)."""
     check_rms_z(rms_z_groups(dynamic_z(robot)))
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="the URDF-model path's error bars are too wide on this motion: rms z of the inertia "
+    "about the CoM 0.47 (16 s, 24 draws; 0.65 on 8 s), of the ten parameters 0.70; the error "
+    "is a deterministic model error (the test's Coulomb friction 0.3 tanh(qd / 0.01) against "
+    "the model's smoother shape), the same in every draw, which the block jackknife reads as "
+    "a larger variance than the whole motion's fit is left with (the jackknife's own "
+    "covariance in place of the per-parameter widening: 0.52); issue 33",
+)
+def test_the_urdf_model_path_error_bars_are_neither_too_wide_nor_too_narrow(robot):
+    """The same check without an empty run: the arm's torques from the URDF model, offsets
+    and friction fitted with the payload, the friction's shape not the model's."""
+    check_rms_z(rms_z_groups(dynamic_z(robot, draws=24, duration=16.0, empty_run=False)))
 
 
 def test_logged_velocities_are_used(robot):
