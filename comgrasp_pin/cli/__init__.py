@@ -63,8 +63,8 @@ def build_parser(robot_only: bool = False) -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """Run `comgrasp` with ``argv`` (default: the process's); the exit status."""
     argv = sys.argv[1:] if argv is None else list(argv)
-    command = next((a for a in argv if not a.startswith("-")), None)  # no top option takes a value
-    args = build_parser(robot_only=command in ROBOT_COMMANDS).parse_args(argv)
+    robot_only = bool(argv) and argv[0] in ROBOT_COMMANDS  # `comgrasp -h ...`: every command
+    args = build_parser(robot_only).parse_args(argv)
     try:
         return args.func(args)
     except ComGraspError as exc:
