@@ -336,6 +336,14 @@ def test_the_robot_only_parser_has_the_robot_commands():
     assert commands(build_parser())[-len(ROBOT_COMMANDS) :] == list(ROBOT_COMMANDS)
 
 
+def test_a_top_option_before_a_robot_command_sees_every_command(capsys):
+    from comgrasp_pin.cli import main
+
+    with pytest.raises(SystemExit):
+        main(["-h", "estimate"])
+    assert "reproduce" in capsys.readouterr().out
+
+
 def test_the_parsers_rods_are_the_simulations():
     """``cli.args.OBJECTS`` reads sim/objects.json itself (no MuJoCo): the same names, order."""
     from comgrasp_pin.cli.args import OBJECTS
