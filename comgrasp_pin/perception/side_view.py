@@ -12,7 +12,7 @@ The depth is cleaned, and the handle's surface followed along the jaw axis, in
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import cv2
@@ -198,7 +198,7 @@ class _Frame:
     candidate: np.ndarray
     mask: np.ndarray
     T_cam_ee: np.ndarray
-    excluded: object
+    excluded: Callable[[np.ndarray], np.ndarray]
 
 
 def _check_one_rod(

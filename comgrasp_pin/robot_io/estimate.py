@@ -158,7 +158,13 @@ def estimate_from_log(
     return dataclasses.replace(result, estimate=estimate, gains_cov=part)
 
 
-def _read_windows(robot: RobotModel, log: JointLog, before, after, max_speed: float):
+def _read_windows(
+    robot: RobotModel,
+    log: JointLog,
+    before: list[tuple[float, float]],
+    after: list[tuple[float, float]],
+    max_speed: float,
+) -> tuple[tuple[StaticReading, ...], tuple[StaticReading, ...]]:
     """(before readings, after readings) of the paired windows, or a LogError saying why not."""
     if tuple(log.joint_names) != tuple(robot.joint_names):
         raise LogError(f"the log's joints {log.joint_names} are not the arm's {robot.joint_names}")
@@ -169,8 +175,10 @@ def _read_windows(robot: RobotModel, log: JointLog, before, after, max_speed: fl
         )
     if not before:
         raise LogError("no windows given: at least one before/after pair is needed")
-    rb = tuple(read_window(log, *w, max_speed, f"before window {i}") for i, w in enumerate(before))
-    ra = tuple(read_window(log, *w, max_speed, f"after window {i}") for i, w in enumerate(after))
+    rb = tuple(read_window(log, t0, t1, max_speed, f"before window {i}")
+               for i, (t0, t1) in enumerate(before))  # fmt: skip
+    ra = tuple(read_window(log, t0, t1, max_speed, f"after window {i}")
+               for i, (t0, t1) in enumerate(after))  # fmt: skip
     return rb, ra
 
 
