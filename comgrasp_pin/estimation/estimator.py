@@ -35,7 +35,7 @@ from comgrasp_pin.estimation.estimate import (
     refuse_empty_gripper,
 )
 from comgrasp_pin.estimation.inputs import check_arrays, check_dtau_cov, check_options
-from comgrasp_pin.estimation.least_squares import Fit, Observed, fit, observe
+from comgrasp_pin.estimation.least_squares import Fit, Observed, fit, observe, whitened
 from comgrasp_pin.estimation.prior import AxisPrior
 from comgrasp_pin.estimation.regressor import stacked_regressor
 from comgrasp_pin.estimation.rod_axis import MIN_AXIS_GRAVITY_ANGLE
@@ -98,12 +98,12 @@ def estimate_com(
     n = q_arr.shape[-1]
     Q, b = q_arr.reshape(-1, n), dtau.ravel()
     chol = check_dtau_cov(dtau_cov, b.size, torque_std)
-    Y, T = stacked_regressor(robot, Q)
+    g = robot.model.gravity.linear
+    g_norm = math.sqrt(float(g @ g))
+    Y, T = stacked_regressor(robot, Q, g)
     if payload_motion_ee is not None:
         maps = motion_maps(payload_motion_ee, len(Q))
         Y = np.concatenate([Y[i * n : (i + 1) * n] @ maps[i] for i in range(len(Q))])
-    g = robot.model.gravity.linear
-    g_norm = math.sqrt(float(g @ g))
     seen = observe(Y, rcond, lambda: (g @ T[0, :3, :3]) / g_norm)  # gravity in the ee frame
     data = _Data(Y, b, T, g_norm)
     row_std = None if sigma is None else math.sqrt(2.0) * sigma  # of a difference
@@ -155,7 +155,7 @@ def motion_maps(motion: np.ndarray, k: int) -> np.ndarray:
 
 def _ipopt_free(ls: Fit, seen: Observed, data: _Data, loss: str, delta: float) -> ComEstimate:
     """IPOPT without a prior, over the observed directions x = Vt theta."""
-    A, b_w, w = _for_ipopt(ls, data.Y)
+    A, b_w, w = _for_ipopt(ls, data.Y, data.b)
     res = ipopt.solve(A @ ls.Vt.T, b_w, w, ls.Vt @ ls.theta, loss, delta)
     theta = ls.Vt.T @ res.x
     cov = delta_method(theta, ls.Vt.T @ ipopt.laplace_covariance(res.hessian) @ ls.Vt)
@@ -185,7 +185,7 @@ def _with_prior(ls: Fit, seen: Observed, data: _Data, loss, delta, prior: AxisPr
         v = c0 - prior.point_ee
         c0 = c0 - (float(u @ v) - ud * float(v @ d)) / (1.0 - ud * ud) * u
     x0 = np.concatenate(([m0], c0))
-    res = ipopt.solve(*_for_ipopt(ls, data.Y), x0, loss, delta, prior)
+    res = ipopt.solve(*_for_ipopt(ls, data.Y, data.b), x0, loss, delta, prior)
     m = float(res.x[0])
     theta = np.concatenate(([m], m * res.x[1:]))
     seen_full = seen._replace(u=None)
@@ -193,15 +193,16 @@ def _with_prior(ls: Fit, seen: Observed, data: _Data, loss, delta, prior: AxisPr
                    res.return_status, res.iterations)  # fmt: skip
 
 
-def _for_ipopt(ls: Fit, Y: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(A / c, b_w / c, weights c) of the whitened problem, c its scale against Y.
+def _for_ipopt(ls: Fit, Y: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(A / c, b_w / c, weights c) of the whitened problem (A, b_w), c its scale against Y.
 
     IPOPT's residuals w (A / c theta - b_w / c) are the whitened ones (in standard deviations,
     as the Huber threshold), and its objective is scaled to Y's units (``ipopt.parameters``
     divides by max(w)^2): its tolerances then hold for any noise level.
     """
-    c = float(np.linalg.norm(ls.A) / np.linalg.norm(Y))
-    return ls.A / c, ls.b_w / c, np.full(len(ls.b_w), c)
+    A, b_w = whitened(Y, b, ls.row_std, ls.chol)
+    c = float(np.linalg.norm(A) / np.linalg.norm(Y))
+    return A / c, b_w / c, np.full(len(b_w), c)
 
 
 def _finish(theta, cov, seen: Observed, data: _Data, torque_std, status, iterations) -> ComEstimate:

@@ -88,17 +88,18 @@ class Fit(NamedTuple):
         cov_root: (4, rank) R with cov(theta) = R R^T (V S^-1 of the whitened regression),
             or None where the noise is unknown and cannot be estimated (no more readings
             than observed unknowns).
-        A, b_w: the whitened regression (rows, 4) and differences (rows,) (unit noise where
-            ``cov_root`` is known; A = Y, b_w = b otherwise).
-        Vt: (rank, 4) the observed directions of theta (A's right singular vectors).
+        Vt: (rank, 4) the observed directions of theta (the whitened regression's).
+        row_std: (rows,) std of each torque difference (N m) where it is not the same for
+            all (per joint; None with a full covariance), else a float, or None (unknown).
+        chol: the full covariance's Cholesky factor, or None.
         torque_std: std of one reading estimated from the residuals (N m), or None.
     """
 
     theta: np.ndarray
     cov_root: np.ndarray | None
-    A: np.ndarray
-    b_w: np.ndarray
     Vt: np.ndarray
+    row_std: np.ndarray | float | None
+    chol: np.ndarray | None
     torque_std: float | None
 
 
@@ -120,21 +121,32 @@ def fit(
         chol: the lower Cholesky factor of the differences' covariance, in place of
             ``row_std``, or None.
     """
-    if chol is not None:
-        A, b_w = np.linalg.solve(chol, Y), np.linalg.solve(chol, b)
-    elif isinstance(row_std, np.ndarray):
-        A, b_w = Y / row_std[:, None], b / row_std
-    else:  # one std for all: Y's own SVD, scaled
+    if chol is None and not isinstance(row_std, np.ndarray):  # one std: Y's own SVD
         root = seen.Vt.T * (1.0 / seen.s)  # V S^-1
         theta = root @ (seen.U.T @ b)
         torque_std = None
         if row_std is None:
             if len(b) <= seen.rank:
-                return Fit(theta, None, Y, b, seen.Vt, None)
+                return Fit(theta, None, seen.Vt, None, None, None)
             r = b - Y @ theta
             row_std = max(math.sqrt(float(r @ r) / (len(b) - seen.rank)), NOISE_FLOOR)
             torque_std = row_std / math.sqrt(2.0)  # a difference is of two readings
-        return Fit(theta, root * row_std, Y / row_std, b / row_std, seen.Vt, torque_std)
+        return Fit(theta, root * row_std, seen.Vt, row_std, None, torque_std)
+    A, b_w = whitened(Y, b, row_std, chol)
     U, s, Vt = np.linalg.svd(A, full_matrices=False)
     root = Vt[: seen.rank].T * (1.0 / s[: seen.rank])
-    return Fit(root @ (U[:, : seen.rank].T @ b_w), root, A, b_w, Vt[: seen.rank], None)
+    theta = root @ (U[:, : seen.rank].T @ b_w)
+    return Fit(theta, root, Vt[: seen.rank], row_std, chol, None)
+
+
+def whitened(
+    Y: np.ndarray, b: np.ndarray, row_std: np.ndarray | float | None, chol: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray]:
+    """(W Y, W b): W = L^-1 for a full covariance L L^T, else 1 / each row's std."""
+    if chol is not None:
+        return np.linalg.solve(chol, Y), np.linalg.solve(chol, b)
+    if row_std is None:
+        return Y, b
+    if isinstance(row_std, np.ndarray):
+        return Y / row_std[:, None], b / row_std
+    return Y / row_std, b / row_std

@@ -27,23 +27,27 @@ from comgrasp_pin.robot import RobotModel
 _WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 
-def stacked_regressor(robot: RobotModel, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def stacked_regressor(
+    robot: RobotModel, Q: np.ndarray, gravity: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """Regression over k poses: Y (k*n, 4), pose-major rows, and T_world_ee (k, 4, 4).
 
     ``Q`` is (k, n); the unknowns are shared because theta is written in the ee frame.
+    ``gravity``: (3,) the model's gravity (world, m/s^2), read from ``robot.model`` if None.
+    Per pose Y = J^T M with M (6, 4) = [[-g, 0], [0, [g]x R]].
     """
     k, n = Q.shape
     model, data, fid = robot.model, robot.data, robot.ee_frame_id
-    g = model.gravity.linear
-    g_skew = pin.skew(g)
-    Y = np.empty((k, n, 4))
+    g = model.gravity.linear if gravity is None else gravity
+    J = np.empty((k, 6, n))
     T = np.empty((k, 4, 4))
     for i in range(k):
-        J = pin.computeFrameJacobian(model, data, Q[i], fid, _WORLD_ALIGNED)
+        J[i] = pin.computeFrameJacobian(model, data, Q[i], fid, _WORLD_ALIGNED).reshape(6, n)
         T[i] = data.oMf[fid].homogeneous
-        Y[i, :, 0] = -(g @ J[:3])
-        Y[i, :, 1:] = J[3:].T @ (g_skew @ T[i, :3, :3])
-    return Y.reshape(k * n, 4), T
+    M = np.zeros((k, 6, 4))
+    M[:, :3, 0] = -g
+    M[:, 3:, 1:] = pin.skew(g) @ T[:, :3, :3]
+    return (J.transpose(0, 2, 1) @ M).reshape(k * n, 4), T
 
 
 def pose_regressor(robot: RobotModel, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
