@@ -183,7 +183,7 @@ class BackendError(ComGraspError, RuntimeError):
 class InternalTrialError(ComGraspError, RuntimeError):
     """Trials raised an exception that is not a ``ComGraspError`` (a bug: a ``TypeError``,
     a ``KeyError``, ...), not the world's failure. Raised when the command's runs have ended
-    (``runner.fail_on_internal_errors``): their rows are in the CSVs, marked ``internal
+    (``internal_errors.fail_on_internal_errors``): their rows are in the CSVs, marked ``internal
     error`` and left out of every rate and mean; ``--resume`` runs them again. The command
     line exits with status 1.
 

@@ -11,8 +11,12 @@ import pytest
 
 from comgrasp_pin.errors import ComGraspError, InternalTrialError, RodDroppedError
 from comgrasp_pin.experiments import report
-from comgrasp_pin.experiments.run_files import is_internal_error, tracebacks_path
-from comgrasp_pin.experiments.runner import fail_on_internal_errors, read_rows, run_trials
+from comgrasp_pin.experiments.internal_errors import (
+    fail_on_internal_errors,
+    is_internal_error,
+    tracebacks_path,
+)
+from comgrasp_pin.experiments.runner import read_rows, run_trials
 
 COLUMNS = ["object", "trial", "method", "value"]
 BUG = "unsupported operand type(s) for +: 'int' and 'str'"

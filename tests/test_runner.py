@@ -105,7 +105,9 @@ def test_the_tilt_calibration_pool_is_the_runners(tmp_path, monkeypatch):
     assert len(log.read_text().splitlines()) == 6
 
 
-def test_threads_per_worker():
+def test_threads_per_worker(monkeypatch):
+    for name in THREAD_VARIABLES:  # none set by the user (tests/conftest.py sets some)
+        monkeypatch.delenv(name, raising=False)
     assert thread_env(2, cores=2) == dict.fromkeys(THREAD_VARIABLES, "1")
     assert thread_env(1, cores=2)["LP_NUM_THREADS"] == "2"
     assert thread_env(3, cores=8)["OPENBLAS_NUM_THREADS"] == "2"

@@ -52,9 +52,9 @@ def run_options(args: argparse.Namespace):
 
 def exit_status(command: str, run: Callable[[], None]) -> int:
     """Call ``run()`` (the command's runs and files); 0, or 1 with a message naming the
-    trials that ended in an internal error (``runner.fail_on_internal_errors``)."""
+    trials that ended in an internal error (``internal_errors.fail_on_internal_errors``)."""
     from comgrasp_pin.errors import InternalTrialError
-    from comgrasp_pin.experiments.runner import fail_on_internal_errors
+    from comgrasp_pin.experiments.internal_errors import fail_on_internal_errors
 
     try:
         with fail_on_internal_errors():

@@ -16,9 +16,8 @@
   ``os.replace``: a reader sees the old file or the new one, never half of one.
 - A run holds ``DIR/.NAME.csv.lock`` (``fcntl.flock``) while it writes: a second run on the
   same CSV is refused instead of interleaving its rows.
-- A trial that raised something other than a ``ComGraspError`` (a bug) has a row whose
-  ``error`` begins with ``INTERNAL_ERROR``; its whole traceback is appended to
-  ``DIR/NAME.tracebacks.txt`` (``append_traceback``) before the row is written.
+- A trial that ended in an internal error (a bug) keeps its traceback in
+  ``DIR/NAME.tracebacks.txt`` (``internal_errors``).
 """
 
 from __future__ import annotations
@@ -31,7 +30,6 @@ import os
 import warnings
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
-from datetime import datetime, timezone
 from pathlib import Path
 
 from comgrasp_pin import file_checks
@@ -42,46 +40,6 @@ GROWABLE = ("objects", "trials")
 FREE = ("backend", "ray_address", "trial_timeout_s")
 """Settings recorded but not compared: where the trials run, and how long one may take,
 change none of the finished rows."""
-
-
-INTERNAL_ERROR = "internal error"
-"""How the ``error`` of a trial that raised something other than a ``ComGraspError`` begins
-(``internal error: TypeError: ...``): a bug, not the world's failure. Such a row is not an
-outcome: the report leaves it out of every rate and mean, the command exits with status 1,
-and ``--resume`` runs the trial again."""
-TRACEBACK = "traceback"
-"""The key of a row (never a CSV column) that carries an internal error's traceback from the
-worker to the driver, which moves it to ``tracebacks_path``."""
-
-
-def is_internal_error(row: dict) -> bool:
-    """Whether ``row`` is a trial that ended in an internal error (see ``INTERNAL_ERROR``)."""
-    return str(row.get("error") or "").startswith(INTERNAL_ERROR)
-
-
-def tracebacks_path(csv_path: Path) -> Path:
-    """Where the tracebacks of the run writing ``csv_path``'s internal errors are kept
-    (``NAME.tracebacks.txt``)."""
-    return csv_path.with_suffix(".tracebacks.txt")
-
-
-def append_traceback(csv_path: Path, trial: str, text: str) -> None:
-    """Append the traceback ``text`` of ``trial`` (its name) to ``tracebacks_path``, flushed
-    and fsynced before its row is written.
-
-    Raises:
-        OutputError: the file cannot be written.
-    """
-    path = tracebacks_path(csv_path)
-    stamp = datetime.now(timezone.utc).isoformat(timespec="seconds")
-    entry = f"=== {trial} ({stamp}) ===\n{text.rstrip()}\n\n"
-    try:
-        with path.open("a", encoding="utf-8") as f:
-            f.write(entry)
-            f.flush()
-            os.fsync(f.fileno())
-    except OSError as exc:
-        raise OutputError(f"cannot write {path}: {exc.strerror or exc}") from None
 
 
 def settings_path(csv_path: Path) -> Path:

@@ -9,7 +9,8 @@ not stop the run; ``retry_failed=True`` runs those again. A trial that raises an
 error:``, its traceback goes to ``NAME.tracebacks.txt`` beside the CSV); the run goes on,
 the report never counts it as a failed trial, ``resume=True`` runs it again (with or without
 ``retry_failed``: it has no outcome to keep), and a command run within
-``fail_on_internal_errors`` ends with ``InternalTrialError`` (exit status 1) naming it.
+``internal_errors.fail_on_internal_errors`` ends with ``InternalTrialError`` (exit
+status 1) naming it.
 ``backend="ray"`` runs the same trials as Ray tasks (``ray_backend``), the driver appending
 rows as they finish. Locally, trials run in worker processes (``workers``: spawned, each
 with its own MuJoCo and OpenGL context), one per worker for a serial run with a time limit:
@@ -36,8 +37,8 @@ from pathlib import Path
 from tqdm import tqdm
 
 from comgrasp_pin import validate
-from comgrasp_pin.errors import InternalTrialError, InvalidInputError, ResumeError
-from comgrasp_pin.experiments import run_files
+from comgrasp_pin.errors import InvalidInputError, ResumeError
+from comgrasp_pin.experiments import internal_errors, run_files
 from comgrasp_pin.experiments.ray_backend import check_backend, ensure_ray, run_on_ray
 from comgrasp_pin.experiments.run_files import RowAppender
 from comgrasp_pin.experiments.threads import worker_threads
@@ -72,7 +73,7 @@ def _kept_rows(csv_path: Path, columns: list[str], resume: bool, overwrite: bool
         rows, rewrite = [], True
         if settings is not None:
             run_files.write_settings(csv_path, settings)
-        run_files.tracebacks_path(csv_path).unlink(missing_ok=True)  # an earlier run's
+        internal_errors.tracebacks_path(csv_path).unlink(missing_ok=True)  # an earlier run's
     elif not resume:
         raise ResumeError(
             f"{csv_path} already holds results: pass resume (--resume) to continue it or "
@@ -83,7 +84,7 @@ def _kept_rows(csv_path: Path, columns: list[str], resume: bool, overwrite: bool
         if settings is not None:
             run_files.write_settings(csv_path, run_files.check_settings(csv_path, settings))
         # an internal error is no outcome: its trial runs again, retry_failed or not
-        again = run_files.is_internal_error if not retry_failed else lambda r: r.get("error")
+        again = internal_errors.is_internal_error if not retry_failed else lambda r: r.get("error")
         kept = [row for row in rows if not again(row)]
         rewrite = repaired or len(kept) < len(rows)
         rows = kept
@@ -132,8 +133,8 @@ def run_trials(
 
     Returns:
         Every row, the CSV's order; those of trials that ended in an internal error too
-        (``run_files.is_internal_error``), which are also reported to the open
-        ``fail_on_internal_errors`` blocks.
+        (``internal_errors.is_internal_error``), which are also reported to the open
+        ``internal_errors.fail_on_internal_errors`` blocks.
 
     Raises:
         ResumeError: the CSV cannot be continued (see ``run_files``).
@@ -153,9 +154,8 @@ def run_trials(
     with run_files.run_lock(Path(csv_path)):
         rows = _kept_rows(Path(csv_path), columns, resume, overwrite, retry_failed, settings)
         rows = _run_missing(fn, tasks, rows, Path(csv_path), columns, execute, desc, tuple(keys))
-    for found in _WATCHING:
-        found += [(Path(csv_path), _name(row, keys), row["error"])
-                  for row in rows if run_files.is_internal_error(row)]  # fmt: skip
+    internal_errors.found(Path(csv_path), [(_name(row, keys), row["error"]) for row in rows
+                                           if internal_errors.is_internal_error(row)])  # fmt: skip
     return rows
 
 
@@ -210,24 +210,24 @@ def _run_local(fn, todo, workers: int, record, timeout_s: float | None) -> None:
 def _run_missing(fn, tasks, rows: list[dict], csv_path: Path, columns: list[str],
                  execute, desc: str, keys: tuple[str, ...]) -> list[dict]:  # fmt: skip
     """Run the tasks that have no row in ``rows`` yet, appending theirs; all rows. An
-    internal error's traceback goes to ``run_files.tracebacks_path`` before its row."""
+    internal error's traceback goes to ``internal_errors.tracebacks_path`` before its row."""
     key = _key_of(keys)
     done = {key(row) for row in rows}
     todo = [task for task in tasks if key(task) not in done]
     bar = tqdm(total=len(tasks), initial=len(tasks) - len(todo), desc=desc, unit="trial")
-    tracebacks = run_files.tracebacks_path(csv_path)
+    tracebacks = internal_errors.tracebacks_path(csv_path)
     with RowAppender(csv_path, columns) as out:
 
         def record(*finished: dict) -> None:
             for row in finished:
-                text = row.pop(run_files.TRACEBACK, None)
-                if run_files.is_internal_error(row):
-                    run_files.append_traceback(csv_path, _name(row, keys), text or NO_TRACEBACK)
+                text = row.pop(internal_errors.TRACEBACK, None)
+                if internal_errors.is_internal_error(row):
+                    internal_errors.append_traceback(csv_path, _name(row, keys), text)
             out.write_rows(finished)  # one fsync for the rows that finished together
             rows.extend(finished)
             bar.update(len(finished))
             for row in finished:
-                if run_files.is_internal_error(row):
+                if internal_errors.is_internal_error(row):
                     bar.write(
                         f"trial {key(row)} ended in an internal error (a bug, not a "
                         f"failed trial; traceback in {tracebacks}): {row['error']}"
@@ -240,52 +240,6 @@ def _run_missing(fn, tasks, rows: list[dict], csv_path: Path, columns: list[str]
         finally:
             bar.close()
     return rows
-
-
-NO_TRACEBACK = "(no traceback: the trial's process sent none)"
-_WATCHING: list[list[tuple[Path, str, str]]] = []
-"""The open ``fail_on_internal_errors`` blocks' lists of (CSV, trial, error)."""
-SHOWN_TRIALS = 10
-"""``InternalTrialError`` names at most this many trials (and counts the others)."""
-
-
-@contextmanager
-def fail_on_internal_errors() -> Iterator[list[tuple[Path, str, str]]]:
-    """Within the block, the trials of every run (``run_trials``) that end in an internal
-    error are listed (CSV path, the trial's name, its error) in the list it yields; when the
-    block ends without an exception of its own and the list is not empty, it raises
-    ``InternalTrialError`` naming them and the files with their tracebacks. The experiment
-    commands run in one, so every run goes to its end (figures and report written, those
-    trials left out of them) and the command still fails (exit status 1).
-
-    Raises:
-        InternalTrialError: a trial ended in an internal error.
-    """
-    found: list[tuple[Path, str, str]] = []
-    _WATCHING.append(found)
-    try:
-        yield found
-    finally:
-        _WATCHING.remove(found)
-    if found:
-        raise internal_trial_error(found)
-
-
-def internal_trial_error(found: Sequence[tuple[Path, str, str]]) -> InternalTrialError:
-    """The ``InternalTrialError`` of the (CSV, trial, error) listed in ``found``."""
-    paths = list(dict.fromkeys(run_files.tracebacks_path(csv) for csv, _, _ in found))
-    named = "; ".join(f"{trial} in {csv} ({error})" for csv, trial, error in found[:SHOWN_TRIALS])
-    more = len(found) - SHOWN_TRIALS
-    return InternalTrialError(
-        f"{len(found)} trial(s) ended in an internal error: an exception that is not a "
-        "ComGraspError, a bug and not the world's failure. Their rows are marked 'internal "
-        "error' and left out of every rate and mean: "
-        f"{named}{f'; and {more} more' if more > 0 else ''}. Tracebacks: "
-        f"{', '.join(map(str, paths))}. Fix the cause, then run the same command with "
-        "--resume: those trials run again",
-        [trial for _, trial, _ in found],
-        paths,
-    )
 
 
 _KEPT: dict[int, WorkerSet] = {}

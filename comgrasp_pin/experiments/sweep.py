@@ -27,8 +27,8 @@ import numpy as np
 
 from comgrasp_pin.config import paths as config_paths
 from comgrasp_pin.errors import InvalidInputError
+from comgrasp_pin.experiments.internal_errors import is_internal_error
 from comgrasp_pin.experiments.reproduce import RunOptions, run_settings
-from comgrasp_pin.experiments.run_files import is_internal_error
 from comgrasp_pin.experiments.runner import KEY_COLUMNS, run_trials
 from comgrasp_pin.experiments.stats import coverage, mean_ci, wilson_interval, z_scores
 from comgrasp_pin.experiments.trials import (

@@ -19,7 +19,7 @@ What a trial raises decides what its row is (``safe_call``):
   verdict on that trial: a row with the error's last line, counted as a failed trial;
 - anything else (``TypeError``, ``KeyError``, ``MemoryError``, ...) is an internal error, a
   bug and not the world's failure: a row whose error begins ``internal error:``
-  (``run_files.INTERNAL_ERROR``) carrying the whole traceback, which the driver keeps in
+  (``internal_errors``) carrying the whole traceback, which the driver keeps in
   ``NAME.tracebacks.txt`` beside the CSV. The run goes on (the other trials are worth
   having), but such a row is never counted as a failed trial: the report leaves it out of
   every rate and mean and names it, the command ends with exit status 1 naming it, and
@@ -45,7 +45,7 @@ from collections.abc import Callable, Sequence
 from multiprocessing.connection import wait
 
 from comgrasp_pin.errors import ComGraspError, TrialTimeoutError, WorkerDiedError
-from comgrasp_pin.experiments.run_files import INTERNAL_ERROR, TRACEBACK
+from comgrasp_pin.experiments.internal_errors import INTERNAL_ERROR, TRACEBACK
 from comgrasp_pin.experiments.threads import worker_threads
 
 PARENT_CHECK_S = 1.0  # how often a worker checks that its driver is still there (s)

@@ -1,6 +1,6 @@
 """What the report's parts share: object groups, labels, colours, small helpers.
 
-Rows of trials that ended in an internal error (``run_files.is_internal_error``: a bug, not
+Rows of trials that ended in an internal error (``internal_errors.is_internal_error``: a bug, not
 the world's failure) are no outcome: ``_select``, through which every table, figure and
 verdict takes its rows, leaves them out, so they are in no count, rate or mean, and
 ``internal_error_note`` names them (the run summary says it).
@@ -18,7 +18,7 @@ from statistics import NormalDist
 import numpy as np
 
 from comgrasp_pin.experiments import paper
-from comgrasp_pin.experiments.run_files import INTERNAL_ERROR, is_internal_error
+from comgrasp_pin.experiments.internal_errors import INTERNAL_ERROR, is_internal_error
 
 DEFAULT_PAPER_OBJECTS = ("obj1", "obj2", "obj3", "obj4", "obj5", "obj6")
 OBJECTS = DEFAULT_PAPER_OBJECTS  # kept for callers of the old name
