@@ -14,12 +14,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import comgrasp_pin as cg
-from comgrasp_pin.config import EpisodeConfig, SensorConfig, TorqueSensorConfig, TrialConfig
+from comgrasp_pin.config import TorqueSensorConfig
 from comgrasp_pin.estimation import AxisPrior
 from comgrasp_pin.estimation.drift import mean_min
 from comgrasp_pin.estimation.regressor import stacked_regressor
 from comgrasp_pin.procedures.cell import TorqueMeasurement
-from comgrasp_pin.procedures.torques import drift_cov, pair_noise
+from comgrasp_pin.procedures.com_location import NoiseRule, drift_cov, pair_noise
 from comgrasp_pin.simulation.torque_sensor import JointTorqueSensor
 from comgrasp_pin.workcell import Q_PARK
 
@@ -189,9 +189,8 @@ def test_stated_std_covers_the_truth_under_drift():
 
     before = [measurement(0.0, 1.0), measurement(3.0, 1.0)]
     after = [measurement(12.0, 1.0), measurement(15.0, 1.0)]
-    sensors = SensorConfig(torque=TorqueSensorConfig(drift_std=0.005))
-    config = EpisodeConfig(trial=TrialConfig(torque_std_from="measured"), sensors=sensors)
-    noise = pair_noise(before, after, config)
+    rule = NoiseRule("measured", TorqueSensorConfig(drift_std=0.005), modelled=False)
+    noise = pair_noise(before, after, rule)
     assert noise.std is None and noise.cov.shape == (2 * N, 2 * N)
     L = np.linalg.cholesky(noise.cov)
     z = []

@@ -10,7 +10,8 @@ import pytest
 
 from comgrasp_pin.geometry import GraspPose
 from comgrasp_pin.procedures.cell import TorqueMeasurement
-from comgrasp_pin.procedures.measurement import ComLocation, HeldReadings
+from comgrasp_pin.procedures.com_location import ComLocation
+from comgrasp_pin.procedures.measurement import HeldReadings
 from comgrasp_pin.procedures.trial_grasp import trial_measurement
 from comgrasp_pin.procedures.trial_plan import extra_pose, plan_trial, rolled
 from comgrasp_pin.workcell import Q_HOME

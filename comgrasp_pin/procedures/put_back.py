@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from comgrasp_pin.config import EpisodeConfig
 from comgrasp_pin.motion.ik import grasp_frame
 from comgrasp_pin.planning.put_down import put_back_jaws_xy
 from comgrasp_pin.procedures.cell import Cell, SlipWatch
@@ -33,18 +32,18 @@ def release_height_above_grasp(length: float, centre_hint: float, tilt: float,
 
 
 def put_back(cell: Cell, grasp, length: float, centre_hint: float, watch: SlipWatch,
-             config: EpisodeConfig) -> None:  # fmt: skip
+             duration: float, table_margin: float, area_margin: float) -> None:  # fmt: skip
     """Carry the held rod, as it hangs, to where it comes to lie on the put-down spot
-    (``put_back_jaws_xy``, at the largest tilt the watch saw); lower it until its lower end
-    is just above the table (``grasp``, the GraspPose it was grasped at, gives the height
-    of the jaws on the table); let go and retreat."""
-    trial = config.trial
+    (``put_back_jaws_xy``, at the largest tilt the watch saw, its ends ``area_margin`` m
+    inside the pick area); lower it until its lower end is ``table_margin`` m above the
+    table (``grasp``, the GraspPose it was grasped at, gives the height of the jaws on the
+    table); let go and retreat, each move taking ``duration`` s."""
     signed = watch.monitor.largest_tilt() if watch.monitor.times else 0.0
-    tilt = abs(signed)
+    release_z = grasp_frame(grasp)[2, 3] + release_height_above_grasp(
+        length, centre_hint, abs(signed), table_margin)  # fmt: skip
     T = cell.robot.ee_pose(cell.q_des)
     T[:2, 3] = put_back_jaws_xy(PUT_DOWN_XY, T[:3, 0], signed, length, centre_hint, PICK_AREA,
-                                config.regrasp.put_back_margin)  # fmt: skip
-    cell.move_linear(T.copy(), trial.put_back_time)
-    T[2, 3] = grasp_frame(grasp)[2, 3] + release_height_above_grasp(
-        length, centre_hint, tilt, trial.put_back_margin)  # fmt: skip
-    cell.place(T, trial.put_back_time)
+                                area_margin)  # fmt: skip
+    cell.move_linear(T.copy(), duration)
+    T[2, 3] = release_z
+    cell.place(T, duration)

@@ -10,8 +10,11 @@ observable. When the CoM is still known too poorly, one more rolled pose is meas
 (``needs_another_pose``). The result is a measurement only: scoring against the truth lives
 in ``comgrasp_pin.simulation.scoring``.
 
-``trial_grasp`` is the orchestration; where to go is planned in ``trial_plan`` (pure), and
-each step that moves the arm is in ``trial_steps``.
+``trial_grasp`` is the orchestration; it reads the config tree and hands each part the few
+numbers it uses. Where to go is planned in ``trial_plan`` (pure); each step that moves the
+arm, and the one way to measure at a pose (arrive, settle, average, look), is in
+``trial_steps``; where the CoM lies, and how well that is known, is found in
+``com_location`` (pure).
 """
 
 from __future__ import annotations
@@ -29,12 +32,8 @@ from comgrasp_pin.perception import RodDetection
 from comgrasp_pin.planning.regrasp import needs_another_pose
 from comgrasp_pin.procedures import phases
 from comgrasp_pin.procedures.cell import Cell
-from comgrasp_pin.procedures.measurement import (
-    ComLocation,
-    HeldReadings,
-    TrialMeasurement,
-    locate_com,
-)
+from comgrasp_pin.procedures.com_location import ComLocation, NoiseRule, locate_com
+from comgrasp_pin.procedures.measurement import HeldReadings, TrialMeasurement
 from comgrasp_pin.procedures.put_back import put_back
 from comgrasp_pin.procedures.trial_plan import (
     TrialPlan,
@@ -66,7 +65,12 @@ def trial_grasp(
     lift, measure, estimate (see the module docstring). ``careful``: see ``grasp_and_lift``.
     ``detection``: the top view of the rod as it lies now, if the caller has looked already.
     Raises RodDroppedError (or RodSlippedError) when the rod fell or turned."""
-    trial, motion = config.trial, config.motion
+    trial = config.trial
+    motion = config.motion
+    sensors = config.sensors
+    regrasp = config.regrasp
+    noise = NoiseRule(trial.torque_std_from, sensors.torque, trial.tau_before != "measured")
+    depth_bounds = (trial.max_depth_shift, np.radians(trial.max_depth_turn_deg))
     if detection is None:
         detection = cell.look_from_above()
     plan = plan_trial(cell.robot, cell.q_des, detection, offset, motion.approach,
@@ -74,28 +78,31 @@ def trial_grasp(
     cell.announce(f"{phases.EMPTY_ARM}: torques at the measurement poses")
     before = measure_empty(cell, plan, trial)
     cell.announce(phases.trial_grasp_at(offset))
-    watch = cell.slip_watch(config.sensors.watch_dt, motion.grip_force, plan.rod_length,
+    watch = cell.slip_watch(sensors.watch_dt, motion.grip_force, plan.rod_length,
                             plan.centre_hint)  # fmt: skip
     grasp_and_lift(cell, plan, watch, careful, trial, motion.grip_force)
     try:
         held = measure_held(cell, plan, watch, before, trial)
     except UntrustedImageError as exc:
-        put_back(cell, plan.grasp, plan.rod_length, plan.centre_hint, watch, config)
-        heavy = heavy_side(watch, plan, trial.heavy_side_min_deg)
+        heavy = heavy_side(watch, plan, trial.heavy_side_min_deg)  # it watches no more
+        put_back(cell, plan.grasp, plan.rod_length, plan.centre_hint, watch,
+                 trial.put_back_time, trial.put_back_margin, regrasp.put_back_margin)  # fmt: skip
         raise HeldRodUnmeasuredError(str(exc), heavy) from exc
     try:
-        loc = locate_com(cell.robot, held, config)
-        if needs_another_pose(loc.std, loc.estimate.mass, motion.grip_force, config.regrasp):
+        loc = locate_com(cell.robot, held, trial.estimator, noise, depth_bounds,
+                         sensors.side_depth)  # fmt: skip
+        if needs_another_pose(loc.std, loc.estimate.mass, motion.grip_force, regrasp):
             q_measured = [m.q for m in held.after]
-            q = extra_pose(cell.robot, plan, np.array(q_measured), config.regrasp.extra_rolls_deg)
+            q = extra_pose(cell.robot, plan, np.array(q_measured), regrasp.extra_rolls_deg)
             if q is not None:
                 after, view = measure_pose(cell, q, plan, trial)
                 tau_before = modelled_tau_before(cell.robot, after.q, q_measured,
                                                  held.tau_before)  # fmt: skip
                 held = held.with_pose(after, tau_before, view)
-                loc = locate_com(cell.robot, held, config)
+                loc = locate_com(cell.robot, held, trial.estimator, noise, depth_bounds,
+                                 sensors.side_depth)  # fmt: skip
     except EmptyGripperError as exc:
-        raise RodDroppedError(str(exc), heavy_side(watch, plan, trial.heavy_side_min_deg)) from exc
+        raise RodDroppedError(str(exc), held.heavy_side) from exc
     return trial_measurement(cell.robot, plan, held, loc)
 
 

@@ -8,7 +8,7 @@ the jaws. Its variance is the sum of
 - ``tilt`` (one pose): the view's tilt is known to its standard error (``SideView.tilt_std``):
   the position recomputed with the view turned by it about the jaw axis;
 - two poses: the rod's motion in the jaws between the poses, measured by the two views
-  (``measurement.rod_motion``), is known to the views' standard errors: ``tilt`` (its turn
+  (``rod_motion``), is known to the views' standard errors: ``tilt`` (its turn
   in the jaws' plane), ``shift`` (along the jaw axis), ``out of plane``; and ``slide``, along
   the rod's own axis, which the views do not measure well: half their disagreement on where
   the jaws hold the rod;
@@ -16,7 +16,8 @@ the jaws. Its variance is the sum of
 - ``calibration``: the side camera's pose and depth scale, known to its calibration's
   stated accuracy (``calibration_std``); none for the ideal preset's exact camera.
 Sensitivities are first order (finite differences of the same computation the estimate
-ran), so a source the robot measured small stays small and none is inflated by a factor.
+ran: ``position``, the caller's), so a source the robot measured small stays small and none
+is inflated by a factor. ``std_parts`` gathers them all.
 """
 
 from __future__ import annotations
@@ -26,9 +27,9 @@ from dataclasses import replace
 import numpy as np
 import pinocchio as pin
 
-from comgrasp_pin.estimation import AxisPrior, ComEstimate, com_along_axis, estimate_com
-from comgrasp_pin.procedures.rod_motion import depth_change_std, rod_motion
-from comgrasp_pin.robot import RobotModel
+from comgrasp_pin.config import DepthNoiseConfig
+from comgrasp_pin.estimation import ComEstimate, com_along_axis
+from comgrasp_pin.procedures.rod_motion import depth_change_std
 
 STEP = 1e-5
 """Finite-difference step for the CoM (m) and for angles (rad)."""
@@ -98,40 +99,52 @@ def tilt_std_one_view(est: ComEstimate, T_ee_obj: np.ndarray, tilt_std: float) -
     return abs(com_along_axis(est, rotate_about_jaws(T_ee_obj, tilt_std)) - x0)
 
 
-def motion_stds(
-    robot: RobotModel,
-    q: np.ndarray,
-    tau_before: np.ndarray,
-    tau_after: np.ndarray,
-    est: ComEstimate,
-    T_ee_obj: np.ndarray,
-    views: list,
-    depth: list,
-    bounds: tuple[float, float],
-    method: str,
-    noise,
-    prior: AxisPrior | None,
-) -> dict:
-    """The several-pose position's error sources from the rod's motion between the views (m).
+def std_parts(est: ComEstimate, views: list, depth: list, bounds: tuple[float, float],
+              position, calibration: DepthNoiseConfig, off_axis: float | None) -> dict:  # fmt: skip
+    """The CoM point's standard deviation along the rod (m) by source.
 
-    Each of what the views measure of the motion (``rod_motion``) is moved by its standard
-    error and the position recomputed; the slide along the rod's axis, which the views do
-    not separate from their own error, by half their disagreement on where the jaws hold
-    it. Each source is summed in quadrature over the later views. Where a view's depth line
-    was not used (``depth`` False), the shift and the out-of-plane turn are taken as uniform
-    within the compliance's bounds (``bounds``: m, rad), standard error bound / sqrt 3.
-    ``noise``: the torque differences' (``procedures.torques.PairNoise``).
+    ``est``: the estimate from the poses of ``views`` (each pose's SideView; the first
+    defines the rod's axis). One view: its ``tilt``. Several: the rod's motion between them
+    (``motion_stds``; ``depth``, ``bounds`` and ``position`` as there). Then the
+    ``estimator``'s, the side camera's ``calibration`` (its stated accuracy, where
+    ``enabled``: ``calibration_std``) and ``off axis`` (m; None: not a source here).
     """
     first = views[0]
-    x0 = com_along_axis(est, T_ee_obj)
+    T_ee_obj = first.T_ee_obj
+    if len(views) > 1:
+        x0 = com_along_axis(est, T_ee_obj)
+        parts = motion_stds(position, views, depth, bounds, x0)
+    else:
+        parts = {"tilt": tilt_std_one_view(est, T_ee_obj, first.tilt_std)}
+    parts["estimator"] = estimator_std(est, T_ee_obj)
+    cal = calibration
+    if first.camera_ee is not None and cal.enabled:
+        parts["calibration"] = calibration_std(est, T_ee_obj, first.camera_ee,
+                                               cal.extrinsic_shift,
+                                               np.radians(cal.extrinsic_turn_deg),
+                                               cal.scale_std)  # fmt: skip
+    if off_axis is not None:
+        parts["off axis"] = off_axis
+    return parts
 
-    def position(motions: list) -> float:
-        other = estimate_com(robot, q, tau_before, tau_after, method=method,
-                             torque_std=noise.std, com_prior=prior, dtau_cov=noise.cov,
-                             payload_motion_ee=np.stack([np.eye(4), *motions]))  # fmt: skip
-        return com_along_axis(other, T_ee_obj)
 
-    nominal = [rod_motion(first, v, depth=d) for v, d in zip(views[1:], depth, strict=True)]
+def motion_stds(position, views: list, depth: list, bounds: tuple[float, float],
+                x0: float) -> dict:  # fmt: skip
+    """The several-pose position's error sources from the rod's motion between the views (m).
+
+    ``position(views, depth, slides)``: the CoM point along the first view's rod axis (m)
+    estimated with the rod moved between the views as they saw it (``rod_motion``, with the
+    depth lines where ``depth`` says, each later view's slide along the rod in ``slides``);
+    ``x0`` is its value for ``views`` as they are. Each of what the views measure of the
+    motion is moved by its standard error and the position recomputed; the slide along the
+    rod's axis, which the views do not separate from their own error, by half their
+    disagreement on where the jaws hold it. Each source is summed in quadrature over the
+    later views. Where a view's depth line was not used (``depth`` False), the shift and the
+    out-of-plane turn are taken as uniform within the compliance's bounds (``bounds``: m,
+    rad), standard error bound / sqrt 3.
+    """
+    first = views[0]
+    no_slide = [0.0] * (len(views) - 1)
     parts = {"tilt": 0.0, "shift": 0.0, "out of plane": 0.0, "slide": 0.0}
     for i, view in enumerate(views[1:]):
         if depth[i]:
@@ -150,20 +163,22 @@ def motion_stds(
             "slide": (view, 0.5 * abs(abs(first.grasp_offset) - abs(view.grasp_offset))),
         }  # fmt: skip
         for name, (other_view, slide) in changed.items():
-            motions = list(nominal)
-            motions[i] = rod_motion(first, other_view, slide, depth=True)
-            parts[name] += (position(motions) - x0) ** 2
-    parts["creep"] = _creep_std(robot, q, tau_before, tau_after, views, depth, method,
-                                noise, prior, x0)  # fmt: skip
+            moved = list(views)
+            moved[i + 1] = other_view
+            moved_depth = [*depth[:i], True, *depth[i + 1 :]]
+            slides = [*no_slide[:i], slide, *no_slide[i + 1 :]]
+            parts[name] += (position(moved, moved_depth, slides) - x0) ** 2
+    parts["creep"] = _creep_std(position, views, depth, x0)
     return {name: float(np.sqrt(v)) for name, v in parts.items()}
 
 
-def _creep_std(robot, q, tau_before, tau_after, views, depth, method, noise, prior, x0):
+def _creep_std(position, views: list, depth: list, x0: float) -> float:
     """Variance (m^2) from the rod creeping in the jaws while the torques were averaged: the
     mean position is taken halfway between the window's start and end views; where in
     between it really was is uniform over half the creep either way (std: half / sqrt 3),
     each view turned by that much about the jaws in turn."""
     total = 0.0
+    no_slide = [0.0] * (len(views) - 1)
     for i, view in enumerate(views):
         if view.creep is None:
             continue
@@ -172,11 +187,5 @@ def _creep_std(robot, q, tau_before, tau_after, views, depth, method, noise, pri
         turned[i] = replace(
             view, T_ee_obj=rotate_about_jaws(view.T_ee_obj, 0.5 * creep_tilt / np.sqrt(3.0))
         )
-        motions = [
-            rod_motion(turned[0], v, depth=d) for v, d in zip(turned[1:], depth, strict=True)
-        ]
-        other = estimate_com(robot, q, tau_before, tau_after, method=method,
-                             torque_std=noise.std, com_prior=prior, dtau_cov=noise.cov,
-                             payload_motion_ee=np.stack([np.eye(4), *motions]))  # fmt: skip
-        total += (com_along_axis(other, turned[0].T_ee_obj) - x0) ** 2
+        total += (position(turned, depth, no_slide) - x0) ** 2
     return total
