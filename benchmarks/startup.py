@@ -154,9 +154,11 @@ def main() -> None:
     data = {
         "about": __doc__.split("\n\n")[2].replace("\n", " "),
         "commands": {
-            name: "python -m comgrasp_pin.cli " + " ".join(argv).replace(tmp, "TMP")
+            name: "python -m comgrasp_pin.cli "
+            + " ".join(argv).replace(tmp, "TMP").replace(URDF, "PANDA_URDF")
             for name, argv in cmds.items()
-        },  # fmt: skip
+        },
+        "PANDA_URDF": "example-robot-data's robots/panda_description/urdf/panda.urdf",
         "trees": {name: str(tree) for name, tree in trees.items()},
         "results": results,
         "environment": {
