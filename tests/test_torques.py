@@ -25,8 +25,8 @@ def _measurement(samples: np.ndarray, dt: float = 0.002, time: float = 0.0):
 
 def _rule(config: EpisodeConfig) -> com_location.NoiseRule:
     trial = config.trial
-    return com_location.NoiseRule(trial.torque_std_from, config.sensors.torque,
-                             trial.tau_before != "measured")  # fmt: skip
+    modelled = trial.tau_before != "measured"
+    return com_location.NoiseRule(trial.torque_std_from, config.sensors.torque, modelled)
 
 
 def test_two_windows_combine_as_one_window_of_all_their_samples():
