@@ -258,11 +258,6 @@ def test_a_sweeps_rates_and_means_leave_internal_errors_out():
     assert point_measures(with_bug, "regrasp")["success"][:1] == (100.0,)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="needs report/regrasp.py's success_rates to count outcomes only: `for r in "
-    "outcomes(rows):` (issue 33 item 3; that file is being split by another engineer)",
-)
 def test_success_rates_leave_internal_errors_out():
     assert report.success_rates([*_regrasp_rows(), *BUG_ROWS]) == report.success_rates(
         _regrasp_rows()

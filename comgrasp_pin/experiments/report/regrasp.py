@@ -16,6 +16,7 @@ from comgrasp_pin.experiments.report.common import (
     _pyplot,
     _select,
     object_groups,
+    outcomes,
     recorded,
 )
 from comgrasp_pin.experiments.stats import (
@@ -29,7 +30,7 @@ BAR_HALF_WIDTH = 0.2  # a method's bar beside an object's tick (x units: objects
 def success_rates(rows: Sequence[dict]) -> dict[tuple[str, str], tuple[int, int]]:
     """(object, method) -> (successes, trials); failed trials (errors) count as failures."""
     out: dict[tuple[str, str], tuple[int, int]] = {}
-    for r in rows:
+    for r in outcomes(rows):
         key = (r["object"], r["method"])
         s, n = out.get(key, (0, 0))
         out[key] = (s + int(_succeeded(r)), n + 1)
@@ -210,7 +211,7 @@ def extra_pose_summary(
         return "No regrasp trials of these objects."
     if not recorded(reg, "extra_pose"):
         return f"Extra measurement pose (`extra_pose`): {NOT_RECORDED} in this run."
-    base = {_scene_key(r): _succeeded(r) for r in rows if r.get("method") == "baseline"}
+    base = {_scene_key(r): _succeeded(r) for r in outcomes(rows) if r.get("method") == "baseline"}
     lines = [
         "| object | regrasp trials | one more pose | success with it | success without it "
         "| baseline on the scenes with it |",
