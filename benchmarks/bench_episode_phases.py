@@ -43,7 +43,7 @@ from pathlib import Path  # noqa: E402
 import mujoco  # noqa: E402
 
 from comgrasp_pin.experiments.trials import accuracy_trial, make_tasks, regrasp_trial  # noqa: E402
-from comgrasp_pin.procedures import measurement, pick_and_place, trial_grasp, uncertainty  # noqa: E402
+from comgrasp_pin.procedures import com_location, pick_and_place, trial_plan  # noqa: E402
 from comgrasp_pin.simulation import eyes, scene, skills  # noqa: E402
 from comgrasp_pin.simulation import sim as sim_module  # noqa: E402
 from comgrasp_pin.simulation.cameras import CameraRig  # noqa: E402
@@ -55,10 +55,9 @@ PHASES = {
     "perception_top": [(eyes, "detect_rod_top_down")],
     "perception_side": [(eyes, "observe_held_rod")],
     "slip_watch_python": [(eyes.SlipWatcher, "__call__")],
-    "estimation": [(measurement, "estimate_com"), (uncertainty, "estimate_com"),
-                   (trial_grasp, "best_next_pose")],
+    "estimation": [(com_location, "estimate_com"), (trial_plan, "best_next_pose")],
     "ik": [(skills, "solve_ik"), (skills, "solve_top_down"), (pick_and_place, "solve_ik"),
-           (trial_grasp, "solve_ik"), (trial_grasp, "solve_top_down")],
+           (trial_plan, "solve_ik"), (trial_plan, "solve_top_down")],
     "world_build": [(scene, "build_model"), (scene.RobotModel, "ur5"), (CameraRig, "__init__")],
 }  # fmt: skip
 

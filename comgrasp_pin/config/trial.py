@@ -62,7 +62,7 @@ class TrialConfig:
         approach_deg, approach_time: reach each measurement pose by way of the pose plus
             this much in every joint (deg), the last this long (s), so that every joint
             comes to rest moving the same way before and after the grasp (a current-based
-            reading's friction then cancels; ``procedures.torques.arrive``); 0: straight.
+            reading's friction then cancels; ``procedures.trial_steps.arrive``); 0: straight.
         window_sem, window_max: average on until every joint's measured standard error is
             below this (N m; 0: the fixed ``window``), the window at most this long (s).
         look_attempts, look_period: a side view refused as untrusted (a real camera's
@@ -75,7 +75,7 @@ class TrialConfig:
             sensor's white noise over the samples) or "measured" (their spread, and the
             sensor's drift over the time between the empty and the held windows, as a full
             covariance of the poses' differences, which share drift where their intervals
-            overlap; ``procedures.torques.pair_noise``; the estimator then solves the
+            overlap; ``procedures.com_location.pair_noise``; the estimator then solves the
             generalised least squares).
     """
 
@@ -137,7 +137,7 @@ def hardware_trial(trial: TrialConfig) -> TrialConfig:
     windows averaged on until each joint's measured standard error is below 3 mN m, 4 s at
     most (a 0.1 N m current reading at 500 Hz needs 2.2 s; a 0.05 N m torque sensor's 1 s
     is enough); the estimator's noise from the windows' spread and the sensor's drift
-    (its correlation across poses and windows included: ``procedures.torques.pair_noise``);
+    (its correlation across poses and windows included: ``procedures.com_location.pair_noise``);
     the empty arm measured at the first pose last (``empty_first_last``).
     """
     return replace(trial, approach_deg=1.0, approach_time=1.0, window_sem=0.003,
