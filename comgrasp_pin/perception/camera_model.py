@@ -21,13 +21,14 @@ import numpy as np
 
 from comgrasp_pin import validate
 from comgrasp_pin.camera import PinholeCamera
-from comgrasp_pin.errors import InvalidInputError
+from comgrasp_pin.errors import CameraFileError, InvalidInputError
 
 # The lens models OpenCV undistorts, by name (ROS's, RealSense's), and their coefficients.
 OPENCV_MODELS = {"plumb_bob": (4, 5, 8, 12, 14), "rational_polynomial": (8,),
                  "brown_conrady": (5,), "inverse_brown_conrady": (5,),
                  "equidistant": (4,), "kannala_brandt4": (4,)}  # fmt: skip
 FISHEYE = ("equidistant", "kannala_brandt4")
+YAML_MODELS = ("none", *OPENCV_MODELS)  # the models a camera_calibration YAML may name
 REALSENSE = ("fx", "fy", "ppx", "ppy", "width", "height")
 CAMERA_INFO = ("k", "width", "height")
 CALIBRATION_YAML = ("camera_matrix", "image_width", "image_height")
@@ -151,12 +152,7 @@ def camera_model(camera: object, image_shape: tuple[int, ...] | None = None) -> 
     if all(k in fields for k in REALSENSE):
         return _from_realsense(fields)
     if all(k in fields for k in CALIBRATION_YAML):
-        return CameraModel(
-            _int(fields, "image_width"), _int(fields, "image_height"),
-            _matrix(fields, "camera_matrix", 9).reshape(3, 3),
-            str(fields.get("distortion_model") or "none"),
-            _matrix(fields, "distortion_coefficients", None, default=()),
-        )  # fmt: skip
+        return _from_calibration_yaml(fields)
     lower = {k.lower(): v for k, v in fields.items()}
     if all(k in lower for k in CAMERA_INFO):
         return CameraModel(
@@ -191,6 +187,49 @@ def _from_realsense(f: dict) -> CameraModel:
                        "ppy"), model, coeffs)  # fmt: skip
 
 
+def _from_calibration_yaml(f: dict) -> CameraModel:
+    """From ROS camera_calibration's YAML, read as ROS's ``camera_calibration_parsers`` does.
+
+    K is ``camera_matrix.data`` (row-major 3x3), D ``distortion_coefficients.data`` (rows x
+    cols numbers), the size ``image_width`` x ``image_height``. The model is
+    ``distortion_model``, or ``camera_model`` (older drivers' name for it; both given must
+    agree). Without either, ROS's ``readCalibrationYml`` (ros-perception/image_common,
+    camera_calibration_parsers/src/parse_yml.cpp) sets ``distortion_models::PLUMB_BOB``
+    "for backwards compatibility" and warns "did not specify distortion model, assuming
+    plumb bob"; here that is taken where D has plumb_bob's 5 coefficients (or all are 0: no
+    distortion), and any other count is refused rather than guessed.
+
+    Raises:
+        CameraFileError: the two keys disagree, a model not in the valid list, no model
+            with a count of coefficients other than 5.
+    """
+    D = _matrix(f, "distortion_coefficients", None, default=())
+    names = {k: str(f[k]).strip().lower() for k in ("distortion_model", "camera_model")
+             if f.get(k) is not None and str(f[k]).strip()}  # fmt: skip
+    valid = ", ".join(YAML_MODELS)
+    if len(set(names.values())) > 1:
+        raise CameraFileError(
+            f"distortion_model {f['distortion_model']!r} and camera_model {f['camera_model']!r} "
+            f"disagree: give one lens model, one of {valid}"
+        )
+    if names:
+        model = next(iter(names.values()))
+        if model not in YAML_MODELS:
+            key = next(iter(names))
+            raise CameraFileError(f"{key} {f[key]!r} is not a lens model read here; valid: {valid}")
+    elif len(D) == 5:
+        model = "plumb_bob"  # as ROS's camera_calibration_parsers assumes
+    elif np.any(D != 0):
+        raise CameraFileError(
+            f"no distortion_model and {len(D)} distortion coefficients: ROS assumes plumb_bob, "
+            f"which has 5 here; name the model (distortion_model: one of {valid})"
+        )
+    else:
+        model = "none"
+    K = _matrix(f, "camera_matrix", 9).reshape(3, 3)
+    return CameraModel(_int(f, "image_width"), _int(f, "image_height"), K, model, D)
+
+
 def _int(f: dict, key: str) -> int:
     value = f[key]
     if isinstance(value, float) and value.is_integer():
@@ -208,7 +247,13 @@ def _matrix(f: dict, key: str, size: int | None, default=None) -> np.ndarray:
     if isinstance(value, Mapping):
         if "data" not in value:
             raise InvalidInputError(f"{key} must have a data list (rows, cols, data)")
+        rows, cols = value.get("rows"), value.get("cols")
         value = value["data"]
+        if rows is not None and cols is not None and np.size(value) != rows * cols:
+            raise InvalidInputError(
+                f"{key} says rows x cols = {rows} x {cols} but its data has {np.size(value)} "
+                "numbers"
+            )
     a = validate.real_array(value, key).reshape(-1)
     if size is not None and a.size != size:
         raise InvalidInputError(f"{key} must have {size} numbers (row-major), got {a.size}")
