@@ -32,8 +32,6 @@ import numpy as np
 
 from comgrasp_pin.errors import SolverError, UnobservableError
 
-LOSSES = ("l2", "huber")
-
 IPOPT_OPTIONS: dict = {
     "expand": True,  # MX -> SX: cheaper function evaluations
     "print_time": False,
