@@ -81,10 +81,20 @@ class AmbiguousObjectError(PerceptionError):
     one blob. Measuring it would give a pose that belongs to neither."""
 
 
+class ClutterError(AmbiguousObjectError):
+    """Three objects or more (or piles of them) lie where one rod should lie alone."""
+
+
 class UntrustedImageError(PerceptionError):
     """The object is in view, but this image cannot measure it to the accuracy asked (a
     real camera's holes and noise where the method needs a clean surface): refused rather
     than measured with a known bias."""
+
+
+class ColourDepthMismatchError(UntrustedImageError):
+    """The colour image and the depth image do not line up (not registered): the object's
+    outline sits at other pixels in each, so the colour cannot say which pixels are the
+    object's. The depth alone may still measure it."""
 
 
 class InvalidDepthError(PerceptionError):

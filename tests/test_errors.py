@@ -12,7 +12,9 @@ from comgrasp_pin.errors import (
     AmbiguousObjectError,
     BackendError,
     CameraFileError,
+    ClutterError,
     CollisionError,
+    ColourDepthMismatchError,
     ComGraspError,
     EmptyGripperError,
     HeldRodUnmeasuredError,
@@ -42,8 +44,8 @@ from comgrasp_pin.errors import (
 from comgrasp_pin.planning import retry
 
 INPUT = [InvalidInputError, UnobservableError, EmptyGripperError, SolverError, PerceptionError,
-         ObjectNotFoundError, ObjectCutByBorderError, AmbiguousObjectError, UntrustedImageError,
-         InvalidDepthError, HeldRodUnmeasuredError, CameraFileError, IKError, CollisionError,
+         ObjectNotFoundError, ObjectCutByBorderError, AmbiguousObjectError, ClutterError,
+         UntrustedImageError, ColourDepthMismatchError, InvalidDepthError, HeldRodUnmeasuredError, CameraFileError, IKError, CollisionError,
          LogError, MotionLogError, NotStaticError]  # fmt: skip
 HARNESS = {
     UnstablePhysicsError: RuntimeError,

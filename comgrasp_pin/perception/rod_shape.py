@@ -11,9 +11,10 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from comgrasp_pin.errors import AmbiguousObjectError
+from comgrasp_pin.errors import AmbiguousObjectError, ClutterError
 
 SECOND_OBJECT = 0.05  # another blob of this share of the rod's pixels is another object
+CLUTTER_OBJECTS = 3  # this many objects (or piles) in the pick area are clutter
 END_REACH, END_BAND = 0.05, 0.003  # pixels this far beyond an end, on the axis (m) ...
 END_PIXELS = 3  # ... this many: the rod may go on
 SLICE = 0.01  # slices across the rod (m)
@@ -40,10 +41,11 @@ _KERNEL3, _KERNEL5 = np.ones((3, 3), np.uint8), np.ones((5, 5), np.uint8)
 
 
 def check_one_object(standing: np.ndarray, blob: np.ndarray, min_pixels: int = 40) -> None:
-    """AmbiguousObjectError when a second object lies in the pick area.
+    """AmbiguousObjectError when a second object lies in the pick area; ClutterError when
+    CLUTTER_OBJECTS or more do.
 
-    That is: besides ``blob``, another blob of ``standing`` (both (H, W) bool) is at least
-    SECOND_OBJECT of its size: a second object lies in the pick area.
+    That is: besides ``blob``, other blobs of ``standing`` (both (H, W) bool) of at least
+    SECOND_OBJECT of its size, each another object (or a pile of them).
     """
     mask = cv2.morphologyEx(standing.astype(np.uint8), cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
@@ -51,10 +53,16 @@ def check_one_object(standing: np.ndarray, blob: np.ndarray, min_pixels: int = 4
     own = set(np.unique(labels[blob & (labels > 0)]).tolist())
     others = [int(stats[k, cv2.CC_STAT_AREA]) for k in range(1, count) if k not in own]
     big = [a for a in others if a >= max(min_pixels, SECOND_OBJECT * area)]
+    if 1 + len(big) >= CLUTTER_OBJECTS:
+        raise ClutterError(
+            f"clutter: {1 + len(big)} objects or piles lie in the pick area (the largest "
+            f"{area} px seen from above); the top view measures one rod alone on the table: "
+            "clear the table around it"
+        )
     if big:
         raise AmbiguousObjectError(
-            f"{1 + len(big)} objects lie in the pick area ({area} px and {max(big)} px seen "
-            "from above); the top view measures one rod alone on the table: clear the others"
+            f"2 objects lie in the pick area ({area} px and {max(big)} px seen from above); "
+            "the top view measures one rod alone on the table: clear the other"
         )
 
 

@@ -6,10 +6,16 @@ that most of the image sees (RANSAC, then a least-squares fit to its inliers), w
 frame ``table``: z along its normal towards the camera, origin below the camera's centre,
 x the camera's x laid on the plane. Lengths, widths, heights and yaw differences are then
 metric; positions are in that frame.
+
+The pick area it gives is the largest rectangle of the table that the camera sees whole
+(``clear_rectangle``): the table's pixels, with what lies on them, gridded on the plane. A
+robot's fingers reaching into the view, the table's edge and the floor beyond it lie
+outside that rectangle, while objects lying on the table lie inside it.
 """
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 
 from comgrasp_pin.camera import PinholeCamera
@@ -20,20 +26,24 @@ INLIER_DISTANCE = 0.005  # a point this close to the plane is on it (m)
 MIN_SHARE = 0.3  # the table must be at least this share of the valid pixels
 SAMPLES = 300  # RANSAC's draws of three points
 MAX_POINTS = 20_000  # points the plane is fitted to (an even subsample of the image)
+GRID = 0.005  # the table's cells when its clear rectangle is sought (m)
+EDGE_MARGIN = 0.02  # the clear rectangle less this on each side (m): a board's edge may be
+# bevelled or warped, and a depth camera's pixels fly at it
 
 
 def fit_table_plane(
     depth: np.ndarray, camera: PinholeCamera, seed: int = 0
 ) -> tuple[np.ndarray, tuple[float, float, float, float]]:
-    """(T_table_cam (4, 4), the plane's inliers' extent (x_min, x_max, y_min, y_max)) (m).
+    """(T_table_cam (4, 4), the pick area (x_min, x_max, y_min, y_max)) (m).
 
-    ``depth``: (H, W) float z-depth (m), 0 or inf where none. The extent, in the table
-    frame, is the pick area: the part of the table in view.
+    ``depth``: (H, W) float z-depth (m), 0 or inf where none. The pick area, in the table
+    frame, is the largest rectangle of the table seen whole (``clear_rectangle``).
 
     Raises:
         ObjectNotFoundError: no plane holds MIN_SHARE of the valid pixels.
     """
-    points = points_in(np.eye(4), depth, camera).reshape(-1, 3)
+    image_points = points_in(np.eye(4), depth, camera)
+    points = image_points.reshape(-1, 3)
     points = points[np.isfinite(points[:, 2])]
     if len(points) < 100:
         raise ObjectNotFoundError("the depth image has too few valid pixels to find a table")
@@ -67,6 +77,60 @@ def fit_table_plane(
     T_cam_table[:3, :3] = np.column_stack([x, np.cross(normal, x), normal])
     T_cam_table[:3, 3] = foot
     T_table_cam = np.linalg.inv(T_cam_table)
-    on_table = inliers @ T_table_cam[:3, :3].T + T_table_cam[:3, 3]
-    lo, hi = on_table[:, :2].min(axis=0), on_table[:, :2].max(axis=0)
-    return T_table_cam, (float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1]))
+    return T_table_cam, clear_rectangle(image_points, T_table_cam)
+
+
+def clear_rectangle(points_cam: np.ndarray, T_table_cam: np.ndarray):
+    """The largest axis-aligned rectangle (x_min, x_max, y_min, y_max) of the table seen whole.
+
+    ``points_cam``: (H, W, 3) every pixel's point in the camera (NaN where no depth). The
+    table's pixels (within INLIER_DISTANCE of its plane z = 0), their largest connected
+    region with the holes in it filled (what lies on the table), are laid on the plane in
+    GRID cells; the rectangle is the largest that holds only such cells, less EDGE_MARGIN
+    (m, table frame).
+    """
+    points = points_cam @ T_table_cam[:3, :3].T + T_table_cam[:3, 3]
+    z = points[..., 2]
+    on = (np.abs(np.nan_to_num(z, nan=np.inf)) < INLIER_DISTANCE).astype(np.uint8)
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(on, connectivity=8)
+    table = labels == 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
+    outline, _ = cv2.findContours(table.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    filled = cv2.drawContours(np.zeros_like(on), outline, -1, 1, cv2.FILLED) > 0
+    filled &= np.isfinite(z)
+    # a pixel that sees an object on the table stands on the plane where its ray meets it
+    ray = points_cam[filled] / points_cam[filled][:, 2:]
+    origin = T_table_cam[:3, 3]
+    direction = ray @ T_table_cam[:3, :3].T
+    xy = origin[:2] + (-origin[2] / direction[:, 2])[:, None] * direction[:, :2]
+    lo = xy.min(axis=0)
+    cells = np.floor((xy - lo) / GRID).astype(int)
+    grid = np.zeros(cells.max(axis=0) + 1, np.uint8)
+    grid[cells[:, 0], cells[:, 1]] = 1
+    grid = cv2.morphologyEx(grid, cv2.MORPH_CLOSE, np.ones((3, 3), np.uint8))  # gaps between rays
+    (i0, i1), (j0, j1) = _largest_rectangle(grid > 0)
+    x0, x1 = lo[0] + i0 * GRID + EDGE_MARGIN, lo[0] + i1 * GRID - EDGE_MARGIN
+    y0, y1 = lo[1] + j0 * GRID + EDGE_MARGIN, lo[1] + j1 * GRID - EDGE_MARGIN
+    if x1 <= x0 or y1 <= y0:
+        raise ObjectNotFoundError("the table in view is too small to pick from")
+    return float(x0), float(x1), float(y0), float(y1)
+
+
+def _largest_rectangle(grid: np.ndarray) -> tuple[tuple[int, int], tuple[int, int]]:
+    """((row_start, row_end), (col_start, col_end)) of the largest all-True rectangle.
+
+    The classic histogram method: per row, the run of True above each column, and the
+    largest rectangle under that histogram by a stack.
+    """
+    runs = np.zeros(grid.shape[1] + 1, int)
+    best, where = 0, ((0, 0), (0, 0))
+    for i, row in enumerate(grid):
+        runs[:-1] = np.where(row, runs[:-1] + 1, 0)
+        stack: list[int] = []
+        for j, height in enumerate(runs):
+            while stack and runs[stack[-1]] >= height:
+                top = runs[stack.pop()]
+                left = stack[-1] + 1 if stack else 0
+                if top * (j - left) > best:
+                    best, where = top * (j - left), ((i + 1 - top, i + 1), (left, j))
+            stack.append(j)
+    return where

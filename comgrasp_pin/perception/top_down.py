@@ -26,6 +26,7 @@ from comgrasp_pin.errors import (
     ObjectCutByBorderError,
     ObjectNotFoundError,
     PerceptionError,
+    UntrustedImageError,
 )
 from comgrasp_pin.geometry import GraspPose
 from comgrasp_pin.perception._points import (
@@ -39,8 +40,10 @@ from comgrasp_pin.perception.grasp_points import (  # noqa: F401 (their home bef
     nearest_graspable,
     nearest_on_handle,
 )
+from comgrasp_pin.perception.registration import check_registered
 from comgrasp_pin.perception.rod_detection import RodDetection
 from comgrasp_pin.perception.rod_shape import check_ends_seen, check_one_object, check_one_rod
+from comgrasp_pin.perception.thin_parts import check_no_thin_part
 from comgrasp_pin.perception.table_view import (
     TableView,
     check_no_dip,
@@ -62,8 +65,12 @@ HEIGHT_SIGMAS = 2.5
 CLOSE_KERNEL = np.ones((5, 5), np.uint8)
 ERODE_PX = 1  # (2 holds flying pixels better, 35 % dropouts worse)
 KEEP_EXTENT = 0.8  # ... unless the eroded rod is shorter than this share (a thin rod's handle gone)
-END_SNR = 8.0  # a rod lower than this many noise stds (after the median) may lose its ends
+DETECT_SNR = 4.0  # a rod lower than this many noise stds (after the median) is not told
+# from the noise's own bumps
+END_SNR = 8.0  # ... and below this many its ends are left to a colour image, if one is given
 EDGE_BAND = 0.01  # the table's height and noise are measured this far inside its edge (m)
+THIN_PART_CLEAR = np.ones((9, 9), np.uint8)  # the table's noise is measured this far from
+# what stands on it (``thin_parts``)
 
 
 def detect_rod_top_down(
@@ -93,19 +100,23 @@ def detect_rod_top_down(
             or parts of the rod lost in a noisy image beyond the end seen.
         InvalidDepthError: unusable depth.
 
-    The depth alone is measured first. When a real camera's depth (``view.cleaned``) cannot
-    measure the rod (a 1 cm rod's ends lost in the noise, its handle broken in two) and the
-    colour image ``rgb`` (H, W, 3 uint8, registered to the depth) is given, the rod is
-    measured again with the colour's help (``_segment``); if that fails too, its error is
-    raised. ``rgb`` may be a function that takes the colour image: it is then called only
-    when the colour is needed (a render saved on every other view).
+    Height first: the object is what stands above the table in the depth, measured alone
+    first. When a real camera's depth (``view.cleaned``) cannot measure it (a 1 cm rod's
+    ends near the noise, its handle broken in two, a thin part too low for the threshold)
+    and the colour image ``rgb`` (H, W, 3 uint8) is given, the colour is checked against
+    the depth (``registration``) and, where it lines up, marks the object's pixels with the
+    depth (``_segment``). Colour that does not line up is refused
+    (ColourDepthMismatchError) unless the depth alone measures the rod after all (a rod of
+    DETECT_SNR to END_SNR noise stds, whose ends the colour was to give). ``rgb`` may be a
+    function that takes the colour image: it is then called only when the colour is needed
+    (a render saved on every other view).
     """
     rgb, depth, camera = camera_frame(rgb, depth, camera, depth_scale, color_order)
     depth = check_images(None if callable(rgb) else rgb, depth, camera)
     view = view_table(depth, camera, T_world_cam, pick_area, EDGE_BAND)
     try:
-        return _detect(view, None, depth, camera, T_world_cam, pick_area)
-    except (ObjectNotFoundError, AmbiguousObjectError) as exc:
+        return _detect(view, None, depth, camera, T_world_cam, pick_area, rgb is not None)
+    except (ObjectNotFoundError, AmbiguousObjectError, UntrustedImageError) as exc:
         if rgb is None or not view.cleaned or isinstance(exc, ObjectCutByBorderError):
             raise
         if callable(rgb):
@@ -113,12 +124,25 @@ def detect_rod_top_down(
             check_images(rgb, depth, camera)
         try:
             return _detect(view, rgb, depth, camera, T_world_cam, pick_area)
-        except PerceptionError as again:
+        except (_ColourNoHelp, PerceptionError) as again:
+            if isinstance(exc, _LeftToColour):  # the depth alone may measure it after all
+                try:
+                    return _detect(view, None, depth, camera, T_world_cam, pick_area)
+                except PerceptionError:
+                    pass
+            if isinstance(again, _ColourNoHelp):
+                raise exc from None
             raise again from exc
 
 
-def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area) -> RodDetection:
-    """``detect_rod_top_down`` in ``view``, with the colour's help when ``rgb`` is given."""
+def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
+            colour_to_come: bool = False) -> RodDetection:  # fmt: skip
+    """``detect_rod_top_down`` in ``view``, with the colour's help when ``rgb`` is given.
+
+    ``colour_to_come``: the depth is measured alone first, and a colour image is there to
+    help if it fails: a rod lower than END_SNR noise stds is then left to the colour (its
+    ends), rather than measured from the depth down to DETECT_SNR.
+    """
     mask, standing, unmeasured, cut = _segment(view, pick_area, rgb)
     if unmeasured.any():
         view = _on_the_rods_axis(view, mask, unmeasured, camera, T_world_cam)
@@ -131,6 +155,11 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area) -> RodD
     direction = vt[0]
     check_one_rod(view.points[mask], centroid, direction, view.table_z, view.points_noise,
                   measured)  # fmt: skip
+    if view.cleaned:
+        area = in_area(view.points, pick_area, EDGE_BAND)
+        table = area & ~cv2.dilate(standing.astype(np.uint8), THIN_PART_CLEAR).astype(bool)
+        heights = np.where(area, view.points[..., 2] - view.table_z, np.nan)
+        check_no_thin_part(heights, mask, table, 1.0 / pixel)
     along = (p[:, :2] - centroid) @ direction
     lo, hi = np.percentile(along, [0.02, 99.98])
     if view.cleaned:
@@ -141,11 +170,13 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area) -> RodD
     near_centre = np.abs(along - 0.5 * (lo + hi)) < 0.01
     heights = p[near_centre, 2] - view.table_z if near_centre.any() else p[:, 2] - view.table_z
     handle_height = float(np.median(heights))
-    if view.cleaned and rgb is None and handle_height < END_SNR * view.points_noise:
-        raise ObjectNotFoundError(
+    least = END_SNR if colour_to_come else DETECT_SNR
+    if view.cleaned and rgb is None and handle_height < least * view.points_noise:
+        raise (_LeftToColour if colour_to_come else ObjectNotFoundError)(
             f"the rod stands {1e3 * handle_height:.0f} mm above the table, less than "
-            f"{END_SNR:g} times the filtered depth noise ({1e3 * view.points_noise:.1f} mm): "
-            "its ends cannot be told from the table; view it closer or with a less noisy camera"
+            f"{least:g} times the filtered depth noise ({1e3 * view.points_noise:.1f} mm): "
+            "it cannot be told from the noise's own bumps; view it closer or with a less "
+            "noisy camera"
         )
     yaw = float(np.arctan2(direction[1], direction[0]))
     yaw = (yaw + np.pi / 2) % np.pi - np.pi / 2  # (-pi/2, pi/2]
@@ -239,10 +270,19 @@ def _segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, n
     standing = (z > view.table_z + min_height) & (z < view.table_z + MAX_HEIGHT)
     in_depth = standing
     if view.cleaned and rgb is not None:
-        standing = standing | (differs_in_colour(rgb, inside) & (z < view.table_z + MAX_HEIGHT))
+        colour = differs_in_colour(rgb, inside) & inside & (z < view.table_z + MAX_HEIGHT)
+        if not check_registered(colour, _closed(in_depth) & inside):
+            raise _ColourNoHelp
+        standing = standing | colour
     if view.cleaned:
-        standing = cv2.morphologyEx(standing.astype(np.uint8), cv2.MORPH_CLOSE, CLOSE_KERNEL) > 0
-    mask = largest_component(inside & standing, MIN_PIXELS, "top-down image")
+        standing = _closed(standing)
+    mask = largest_component(inside & standing, MIN_PIXELS, "top-down image", border_ok=True)
+    check_one_object(inside & standing, mask)  # other objects are the reason to refuse first
+    if border_pixels(mask).any():
+        raise ObjectCutByBorderError(
+            "the object runs out of the top-down image (inside the pick area): part of it is "
+            "out of view, so its extent and centre are not known; move it, or the camera"
+        )
     if view.cleaned and rgb is not None:
         height = float(np.median(z[mask])) - view.table_z
         if height < min_height:
@@ -250,9 +290,21 @@ def _segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, n
                 f"what differs from the table in colour stands {1e3 * height:.1f} mm above it "
                 f"(less than {1e3 * min_height:.1f} mm): a mark or a shadow, not an object"
             )
-    check_one_object(inside & standing, mask)
     mask, rod_standing = over_the_edge(view, mask, inside, standing, in_depth, min_height)
     return mask, rod_standing, standing & ~in_depth, bool(border_pixels(mask).any())
+
+
+def _closed(mask: np.ndarray) -> np.ndarray:
+    """``mask`` with gaps of a few pixels closed (CLOSE_KERNEL)."""
+    return cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_CLOSE, CLOSE_KERNEL) > 0
+
+
+class _ColourNoHelp(Exception):
+    """The colour does not mark what the depth sees standing: it cannot help the depth."""
+
+
+class _LeftToColour(ObjectNotFoundError):
+    """A rod lower than END_SNR noise stds, whose ends are left to the colour image."""
 
 
 def _widths(p, centroid, direction, s_rel, yaw) -> np.ndarray:
