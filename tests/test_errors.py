@@ -45,7 +45,8 @@ from comgrasp_pin.planning import retry
 
 INPUT = [InvalidInputError, UnobservableError, EmptyGripperError, SolverError, PerceptionError,
          ObjectNotFoundError, ObjectCutByBorderError, AmbiguousObjectError, ClutterError,
-         UntrustedImageError, ColourDepthMismatchError, InvalidDepthError, HeldRodUnmeasuredError, CameraFileError, IKError, CollisionError,
+         UntrustedImageError, ColourDepthMismatchError, InvalidDepthError,
+         HeldRodUnmeasuredError, CameraFileError, IKError, CollisionError,
          LogError, MotionLogError, NotStaticError]  # fmt: skip
 HARNESS = {
     UnstablePhysicsError: RuntimeError,

@@ -34,7 +34,7 @@ def cover_by_shift(colour_mask: np.ndarray, core: np.ndarray) -> tuple[float, fl
     r0, r1, c0, c1 = rows.min(), rows.max() + 1, cols.min(), cols.max() + 1
     template = core[r0:r1, c0:c1].astype(np.float32)
     padded = np.pad(colour_mask, MAX_SEARCH_PX).astype(np.float32)
-    window = padded[r0:r1 + 2 * MAX_SEARCH_PX, c0:c1 + 2 * MAX_SEARCH_PX]
+    window = padded[r0 : r1 + 2 * MAX_SEARCH_PX, c0 : c1 + 2 * MAX_SEARCH_PX]
     score = cv2.matchTemplate(window, template, cv2.TM_CCORR) / template.sum()
     dv, du = np.unravel_index(int(np.argmax(score)), score.shape)
     at_zero = float(score[MAX_SEARCH_PX, MAX_SEARCH_PX])

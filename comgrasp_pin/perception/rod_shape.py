@@ -41,11 +41,11 @@ _KERNEL3, _KERNEL5 = np.ones((3, 3), np.uint8), np.ones((5, 5), np.uint8)
 
 
 def check_one_object(standing: np.ndarray, blob: np.ndarray, min_pixels: int = 40) -> None:
-    """AmbiguousObjectError when a second object lies in the pick area; ClutterError when
-    CLUTTER_OBJECTS or more do.
+    """AmbiguousObjectError for a second object in the pick area, ClutterError for more.
 
     That is: besides ``blob``, other blobs of ``standing`` (both (H, W) bool) of at least
-    SECOND_OBJECT of its size, each another object (or a pile of them).
+    SECOND_OBJECT of its size, each another object (or a pile of them): ClutterError when
+    CLUTTER_OBJECTS or more lie there.
     """
     mask = cv2.morphologyEx(standing.astype(np.uint8), cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)

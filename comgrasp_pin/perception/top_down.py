@@ -29,46 +29,40 @@ from comgrasp_pin.errors import (
     UntrustedImageError,
 )
 from comgrasp_pin.geometry import GraspPose
-from comgrasp_pin.perception._points import (
-    border_pixels,
-    check_images,
-    largest_component,
-    pixel_slopes,
-)
+from comgrasp_pin.perception._points import check_images, pixel_slopes
 from comgrasp_pin.perception.camera_input import camera_frame
 from comgrasp_pin.perception.grasp_points import (  # noqa: F401 (their home before)
     nearest_graspable,
     nearest_on_handle,
 )
-from comgrasp_pin.perception.registration import check_registered
 from comgrasp_pin.perception.rod_detection import RodDetection
-from comgrasp_pin.perception.rod_shape import check_ends_seen, check_one_object, check_one_rod
-from comgrasp_pin.perception.thin_parts import check_no_thin_part
+from comgrasp_pin.perception.rod_shape import check_ends_seen, check_one_rod
+from comgrasp_pin.perception.standing import (  # noqa: F401 (the thresholds' names here too)
+    EDGE_BAND,
+    HEIGHT_SIGMAS,
+    MAX_HEIGHT,
+    MIN_HEIGHT,
+    MIN_PIXELS,
+    ColourNoHelp,
+    segment,
+)
 from comgrasp_pin.perception.table_view import (
     TableView,
     check_no_dip,
     cut_end_of,
-    differs_in_colour,
     in_area,
-    over_the_edge,
     overhang,
     view_table,
 )
+from comgrasp_pin.perception.thin_parts import check_no_thin_part
 
 PICK_AREA = (0.30, 0.80, -0.35, 0.35)  # x_min, x_max, y_min, y_max of the table (m, world)
-MIN_HEIGHT = 0.003  # a pixel counts as object if it stands this far above the table (m)
-MAX_HEIGHT = 0.15  # ... and no higher than this (the robot above the table is not the rod)
-MIN_PIXELS = 40
-# In a cleaned image (``table_view``): a pixel stands on the table this many camera noise
-# stds above it, gaps of up to 4 px close, and the rod is measured without its 1 px fringe.
-HEIGHT_SIGMAS = 2.5
-CLOSE_KERNEL = np.ones((5, 5), np.uint8)
+# In a cleaned image (``table_view``) the rod is measured without its 1 px fringe
 ERODE_PX = 1  # (2 holds flying pixels better, 35 % dropouts worse)
 KEEP_EXTENT = 0.8  # ... unless the eroded rod is shorter than this share (a thin rod's handle gone)
 DETECT_SNR = 4.0  # a rod lower than this many noise stds (after the median) is not told
 # from the noise's own bumps
 END_SNR = 8.0  # ... and below this many its ends are left to a colour image, if one is given
-EDGE_BAND = 0.01  # the table's height and noise are measured this far inside its edge (m)
 THIN_PART_CLEAR = np.ones((9, 9), np.uint8)  # the table's noise is measured this far from
 # what stands on it (``thin_parts``)
 
@@ -105,7 +99,7 @@ def detect_rod_top_down(
     ends near the noise, its handle broken in two, a thin part too low for the threshold)
     and the colour image ``rgb`` (H, W, 3 uint8) is given, the colour is checked against
     the depth (``registration``) and, where it lines up, marks the object's pixels with the
-    depth (``_segment``). Colour that does not line up is refused
+    depth (``standing.segment``). Colour that does not line up is refused
     (ColourDepthMismatchError) unless the depth alone measures the rod after all (a rod of
     DETECT_SNR to END_SNR noise stds, whose ends the colour was to give). ``rgb`` may be a
     function that takes the colour image: it is then called only when the colour is needed
@@ -124,13 +118,13 @@ def detect_rod_top_down(
             check_images(rgb, depth, camera)
         try:
             return _detect(view, rgb, depth, camera, T_world_cam, pick_area)
-        except (_ColourNoHelp, PerceptionError) as again:
+        except (ColourNoHelp, PerceptionError) as again:
             if isinstance(exc, _LeftToColour):  # the depth alone may measure it after all
                 try:
                     return _detect(view, None, depth, camera, T_world_cam, pick_area)
                 except PerceptionError:
                     pass
-            if isinstance(again, _ColourNoHelp):
+            if isinstance(again, ColourNoHelp):
                 raise exc from None
             raise again from exc
 
@@ -143,7 +137,7 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
     help if it fails: a rod lower than END_SNR noise stds is then left to the colour (its
     ends), rather than measured from the depth down to DETECT_SNR.
     """
-    mask, standing, unmeasured, cut = _segment(view, pick_area, rgb)
+    mask, standing, unmeasured, cut = segment(view, pick_area, rgb)
     if unmeasured.any():
         view = _on_the_rods_axis(view, mask, unmeasured, camera, T_world_cam)
     measured = ~unmeasured[mask]
@@ -246,61 +240,6 @@ def _on_the_rods_axis(view: TableView, mask, unmeasured, camera, T_world_cam) ->
     points = view.points.copy()
     points[lift] = origin + ((z_top - origin[2]) / rays[:, 2])[:, None] * rays
     return replace(view, points=points)
-
-
-def _segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
-    """(the rod's mask, standing pixels, their unmeasured ones, whether it meets the border).
-
-    That is: the rod's mask, the pixels standing on the table, those whose depth does not
-    measure them, and whether the rod reaches the image's border. The first three (H, W)
-    bool; the third are the standing pixels that the colour found or the
-    closing filled in: their depth does not measure their height.
-
-    The threshold follows the camera's own noise (the median's heights beside a tall head
-    are biased by the noise before it); in a cleaned image gaps of a few pixels close (a
-    thin rod broken by holes at its edges is one rod), and with a colour image ``rgb`` the
-    pixels that differ from the table in colour stand too (a lit top may look like the
-    table, a thin rod's ends are lost in the noise), in a blob whose median height stands
-    above the table (a mark or a shadow does not). Raises
-    ObjectNotFoundError, ObjectCutByBorderError, AmbiguousObjectError (a second object).
-    """
-    z = view.points[..., 2]
-    inside = in_area(view.points, pick_area, EDGE_BAND) & np.isfinite(z)
-    min_height = max(MIN_HEIGHT, HEIGHT_SIGMAS * view.noise)
-    standing = (z > view.table_z + min_height) & (z < view.table_z + MAX_HEIGHT)
-    in_depth = standing
-    if view.cleaned and rgb is not None:
-        colour = differs_in_colour(rgb, inside) & inside & (z < view.table_z + MAX_HEIGHT)
-        if not check_registered(colour, _closed(in_depth) & inside):
-            raise _ColourNoHelp
-        standing = standing | colour
-    if view.cleaned:
-        standing = _closed(standing)
-    mask = largest_component(inside & standing, MIN_PIXELS, "top-down image", border_ok=True)
-    check_one_object(inside & standing, mask)  # other objects are the reason to refuse first
-    if border_pixels(mask).any():
-        raise ObjectCutByBorderError(
-            "the object runs out of the top-down image (inside the pick area): part of it is "
-            "out of view, so its extent and centre are not known; move it, or the camera"
-        )
-    if view.cleaned and rgb is not None:
-        height = float(np.median(z[mask])) - view.table_z
-        if height < min_height:
-            raise ObjectNotFoundError(
-                f"what differs from the table in colour stands {1e3 * height:.1f} mm above it "
-                f"(less than {1e3 * min_height:.1f} mm): a mark or a shadow, not an object"
-            )
-    mask, rod_standing = over_the_edge(view, mask, inside, standing, in_depth, min_height)
-    return mask, rod_standing, standing & ~in_depth, bool(border_pixels(mask).any())
-
-
-def _closed(mask: np.ndarray) -> np.ndarray:
-    """``mask`` with gaps of a few pixels closed (CLOSE_KERNEL)."""
-    return cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_CLOSE, CLOSE_KERNEL) > 0
-
-
-class _ColourNoHelp(Exception):
-    """The colour does not mark what the depth sees standing: it cannot help the depth."""
 
 
 class _LeftToColour(ObjectNotFoundError):

@@ -1,0 +1,83 @@
+"""What stands on the table, height first: the object's mask in a top-down view.
+
+The object is what stands above the table's plane in the depth (``table_view``) inside the
+pick area. A colour image, where given, marks more of it only where it lines up with the
+depth (``registration``); other objects are counted before anything else
+(``rod_shape.check_one_object``: several objects, clutter), then whether the object runs
+out of the image, then (colour) whether what the colour adds stands up at all.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from comgrasp_pin.errors import ObjectCutByBorderError, ObjectNotFoundError
+from comgrasp_pin.perception._points import border_pixels, largest_component
+from comgrasp_pin.perception.registration import check_registered
+from comgrasp_pin.perception.rod_shape import check_one_object
+from comgrasp_pin.perception.table_view import TableView, differs_in_colour, in_area, over_the_edge
+
+MIN_HEIGHT = 0.003  # a pixel counts as object if it stands this far above the table (m)
+MAX_HEIGHT = 0.15  # ... and no higher than this (the robot above the table is not the rod)
+MIN_PIXELS = 40
+# In a cleaned image (``table_view``): a pixel stands on the table this many camera noise
+# stds above it, and gaps of up to 4 px close.
+HEIGHT_SIGMAS = 2.5
+CLOSE_KERNEL = np.ones((5, 5), np.uint8)
+EDGE_BAND = 0.01  # the table's height and noise are measured this far inside its edge (m)
+
+
+def segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
+    """(the rod's mask, standing pixels, their unmeasured ones, whether it meets the border).
+
+    That is: the rod's mask, the pixels standing on the table, those whose depth does not
+    measure them, and whether the rod reaches the image's border. The first three (H, W)
+    bool; the third are the standing pixels that the colour found or the
+    closing filled in: their depth does not measure their height.
+
+    The threshold follows the camera's own noise (the median's heights beside a tall head
+    are biased by the noise before it); in a cleaned image gaps of a few pixels close (a
+    thin rod broken by holes at its edges is one rod), and with a colour image ``rgb`` the
+    pixels that differ from the table in colour stand too (a lit top may look like the
+    table, a thin rod's ends are lost in the noise), in a blob whose median height stands
+    above the table (a mark or a shadow does not). Raises
+    ObjectNotFoundError, ObjectCutByBorderError, AmbiguousObjectError (a second object).
+    """
+    z = view.points[..., 2]
+    inside = in_area(view.points, pick_area, EDGE_BAND) & np.isfinite(z)
+    min_height = max(MIN_HEIGHT, HEIGHT_SIGMAS * view.noise)
+    standing = (z > view.table_z + min_height) & (z < view.table_z + MAX_HEIGHT)
+    in_depth = standing
+    if view.cleaned and rgb is not None:
+        colour = differs_in_colour(rgb, inside) & inside & (z < view.table_z + MAX_HEIGHT)
+        if not check_registered(colour, closed(in_depth) & inside):
+            raise ColourNoHelp
+        standing = standing | colour
+    if view.cleaned:
+        standing = closed(standing)
+    mask = largest_component(inside & standing, MIN_PIXELS, "top-down image", border_ok=True)
+    check_one_object(inside & standing, mask)  # other objects are the reason to refuse first
+    if border_pixels(mask).any():
+        raise ObjectCutByBorderError(
+            "the object runs out of the top-down image (inside the pick area): part of it is "
+            "out of view, so its extent and centre are not known; move it, or the camera"
+        )
+    if view.cleaned and rgb is not None:
+        height = float(np.median(z[mask])) - view.table_z
+        if height < min_height:
+            raise ObjectNotFoundError(
+                f"what differs from the table in colour stands {1e3 * height:.1f} mm above it "
+                f"(less than {1e3 * min_height:.1f} mm): a mark or a shadow, not an object"
+            )
+    mask, rod_standing = over_the_edge(view, mask, inside, standing, in_depth, min_height)
+    return mask, rod_standing, standing & ~in_depth, bool(border_pixels(mask).any())
+
+
+def closed(mask: np.ndarray) -> np.ndarray:
+    """``mask`` with gaps of a few pixels closed (CLOSE_KERNEL)."""
+    return cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_CLOSE, CLOSE_KERNEL) > 0
+
+
+class ColourNoHelp(Exception):
+    """The colour does not mark what the depth sees standing: it cannot help the depth."""
