@@ -12,6 +12,7 @@ undoes (``initUndistortRectifyMap``).
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -29,6 +30,8 @@ from comgrasp_pin.simulation.objects import OBJECTS
 ROD = ("obj2", 0.68, -0.2, 0.6)  # off the image's centre, where a lens distorts
 CENTRE_BOUND, YAW_BOUND_DEG = 3e-3, 1.0  # the perception contract
 PLUMB_BOB = np.array([-0.25, 0.08, 0.001, -0.001, 0.0])  # a wide lens's barrel
+FLASHLIGHT = (Path(__file__).resolve().parents[2] / "shared" / "realdata" / "rgbd"
+              / "overhead_primesense_flashlight")  # fmt: skip
 
 
 @pytest.fixture(scope="module")
@@ -148,23 +151,39 @@ def test_intrinsics_in_every_layout_are_the_same_camera(scene):
         camera_model({**fields, "D": [0.1, 0, 0, 0, 0], "distortion_model": "ftheta"})
 
 
-def test_colour_order_bgr_gives_the_rgb_detection_and_a_mix_up_another_mask():
-    """A 1 cm rod in a D415's noise is measured with the colour's help: given as BGR and
-    said so, the detection is the RGB one to the bit; BGR taken for RGB segments another
-    mask (the colour is used)."""
+def test_colour_order_bgr_reads_the_rgb_colour_and_gives_its_detection(tmp_path):
+    """What ``--bgr`` (``color_order="bgr"``) is for: a colour file holding BGR in its RGB
+    channels (a BGR array saved by PIL), read with it, is the RGB file's colour pixel for
+    pixel, and a 1 cm rod in a D415's noise is measured from it as from the RGB colour, to
+    the bit, from the files and from arrays. (A mix-up is not asked to change the mask: the
+    top view uses the colour only where the depth alone fails, and the depth measures this
+    rod.)"""
     x, y, yaw = 0.52, 0.08, -0.4
     sim, rig, truths = table_scene([("obj3", x, y, yaw)])
     depth, camera, T, rgb = top_inputs(sim, rig)
     rig.close()
     corrupt, T_cal = corruptions("top", 7)["realistic"]
     noisy = corrupt(depth)
-    bgr = np.ascontiguousarray(rgb[..., ::-1])
-    right = detect_rod_top_down(rgb, noisy, camera, T @ T_cal)
-    said = detect_rod_top_down(bgr, noisy, camera, T @ T_cal, color_order="bgr")
-    mixed = detect_rod_top_down(bgr, noisy, camera, T @ T_cal)
-    assert said.grasp == right.grasp and (said.mask == right.mask).all()
-    assert not (mixed.mask == right.mask).all()
-    centre, yaw_deg = top_errors(right, truths[0], T, T_cal)
+    units = np.round(np.where(np.isfinite(noisy), noisy, 0) * 1e4).astype(np.uint16)  # 0.1 mm
+    info = {**_calibration_yaml(camera), "depth_scale": 1e-4}
+    rgb_file, depth_file, info_file = _save(tmp_path, units, rgb, info)
+    bgr_file = tmp_path / "bgr_in_rgb.png"
+    cv2.imwrite(str(bgr_file), rgb)  # OpenCV writes the array's channels reversed: BGR in RGB
+    right = read_rgbd(rgb_file, depth_file, info_file)
+    said = read_rgbd(bgr_file, depth_file, info_file, color_order="bgr")
+    np.testing.assert_array_equal(said.rgb, right.rgb)
+    np.testing.assert_array_equal(right.rgb, rgb)
+    mixed = read_rgbd(bgr_file, depth_file, info_file)  # BGR taken for RGB: other colours
+    assert (mixed.rgb != rgb).any(axis=-1).mean() > 0.5
+    dets = [detect_rod_top_down(f.rgb, f.depth, f.camera, T @ T_cal, depth_scale=f.depth_scale)
+            for f in (right, said)]  # fmt: skip
+    bgr = np.ascontiguousarray(said.rgb[..., ::-1])
+    dets.append(detect_rod_top_down(bgr, right.depth, right.camera, T @ T_cal,
+                                    depth_scale=1e-4, color_order="bgr"))  # fmt: skip
+    for det in dets[1:]:
+        assert det.grasp == dets[0].grasp and det.length == dets[0].length
+        assert (det.mask == dets[0].mask).all()
+    centre, yaw_deg = top_errors(dets[0], truths[0], T, T_cal)
     assert centre < CENTRE_BOUND and yaw_deg < YAW_BOUND_DEG
 
 
@@ -255,3 +274,78 @@ def test_camera_info_files_in_ros_layouts(scene, tmp_path):
     path.write_text("a: &x [1, 2]\nb: *x\n")
     with pytest.raises(CameraFileError, match="anchors"):
         read_camera_info(path)
+
+
+def _views(tmp_path, *args) -> int:
+    return main(["views", *map(str, args), "--out", str(tmp_path / "out")])
+
+
+def _palette_index(image: np.ndarray) -> np.ndarray:
+    """(H, W) index of each BGR pixel in OpenCV's TURBO colour map; -1: not one of its."""
+    turbo = cv2.applyColorMap(np.arange(256, dtype=np.uint8)[:, None], cv2.COLORMAP_TURBO)
+    key = lambda a: (a[..., 0].astype(int) << 16) | (a[..., 1].astype(int) << 8) | a[..., 2]  # noqa: E731
+    lookup = {k: i for i, k in reversed(list(enumerate(key(turbo[:, 0]))))}
+    return np.vectorize(lambda k: lookup.get(k, -1))(key(image))
+
+
+def test_depth_alone_top_view_measures_as_with_colour_and_draws_on_the_depth(scene, tmp_path):
+    """``comgrasp views`` without --rgb: the same rod as with it, drawn on the depth in
+    TURBO colours (near warmer), the lost pixels black, the JSON saying no colour."""
+    depth, camera, T, rgb, truth, _ = scene
+    mm = np.round(depth * 1e3).astype(np.uint16)
+    mm[440:452, 600:612] = 0  # a hole in the table, outside the pick area
+    info = {**_calibration_yaml(camera), "depth_scale": 1e-3}
+    rgb_file, depth_file, info_file = _save(tmp_path, mm, rgb, info)
+    pose = tmp_path / "T_world_cam.json"
+    pose.write_text(json.dumps({"T_world_cam": T.tolist()}))
+    where = ["--depth", depth_file, "--camera-info", info_file, "--T-world-cam", pose,
+             "--pick-area", "0.30,0.80,-0.35,0.35"]  # fmt: skip
+    out = tmp_path / "out" / "depth_top_view"
+    assert _views(tmp_path, "--rgb", rgb_file, *where) == 0
+    with_colour = json.loads(out.with_suffix(".json").read_text())
+    drawn_on_colour = cv2.imread(str(out.with_suffix(".png")))
+    assert with_colour["colour"] == str(rgb_file)
+    assert _views(tmp_path, *where) == 0
+    alone = json.loads(out.with_suffix(".json").read_text())
+    assert alone["colour"] is False and alone["camera"]["color_order_in_file"] is None
+    np.testing.assert_allclose(alone["centre_m"], with_colour["centre_m"], atol=2e-4)
+    assert abs(alone["yaw_deg"] - with_colour["yaw_deg"]) < 0.2
+    assert abs(alone["length_m"] - with_colour["length_m"]) < 5e-4
+    assert abs(alone["length_m"] - OBJECTS["obj2"].length) < 3e-3
+    drawn = cv2.imread(str(out.with_suffix(".png")))
+    assert (drawn[440:452, 600:612] == 0).all()  # no depth: black
+    index = _palette_index(drawn)
+    assert (index[60:200, 240:440] >= 0).all()  # the table, away from the marks: TURBO
+    rod = (depth < np.median(depth) - 0.01) & (index >= 0)
+    table = (np.abs(depth - np.median(depth)) < 1e-3) & (index >= 0)
+    assert rod.sum() > 200 and np.median(index[rod]) > np.median(index[table]) + 20
+    assert np.abs(drawn.astype(int) - drawn_on_colour).mean() > 20  # not the colour image
+
+
+def test_the_side_view_without_rgb_is_refused_with_exit_2(scene, tmp_path, capsys):
+    depth, camera, T, rgb, *_ = scene
+    info = {**_calibration_yaml(camera), "depth_scale": 1e-3}
+    _, depth_file, info_file = _save(tmp_path, np.round(depth * 1e3).astype(np.uint16), rgb, info)
+    pose = tmp_path / "T_ee_cam.json"
+    pose.write_text(json.dumps({"T_ee_cam": np.eye(4).tolist()}))
+    assert _views(tmp_path, "--view", "side", "--depth", depth_file, "--camera-info", info_file,
+                  "--T-ee-cam", pose) == 2  # fmt: skip
+    err = capsys.readouterr().err
+    assert "--view side needs --rgb" in err and "Traceback" not in err, err
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.skipif(
+    not FLASHLIGHT.is_dir(), reason=f"the real data is not here: {FLASHLIGHT} (../shared/realdata)"
+)
+def test_a_real_flashlight_is_measured_from_the_depth_alone(tmp_path, capsys):
+    """A structured-light camera's real frame (millimetres), no colour and no pose: the
+    table's plane fitted, the flashlight (about 20 cm; its dataset mask gives 19-21 cm)
+    measured."""
+    assert _views(tmp_path, "--depth", FLASHLIGHT / "depth_0_mm.png", "--camera-info",
+                  FLASHLIGHT / "primesense_camera_info.yaml") == 0  # fmt: skip
+    measured = json.loads((tmp_path / "out" / "depth_0_mm_top_view.json").read_text())
+    assert measured["frame"] == "table" and measured["colour"] is False
+    assert 0.17 < measured["length_m"] < 0.23, measured["length_m"]
+    drawn = cv2.imread(str(tmp_path / "out" / "depth_0_mm_top_view.png"))
+    assert drawn.shape == (480, 640, 3)

@@ -1,6 +1,8 @@
-"""``comgrasp views --rgb --depth --camera-info``: perception on frames from the user's camera.
+"""``comgrasp views [--rgb] --depth --camera-info``: perception on the user's camera's frames.
 
-Reads the files (``perception.rgbd_files``), undistorts them where the camera info's lens
+Reads the files (``perception.rgbd_files``; the depth and camera info alone where no colour
+is given: the top view then finds the object from the depth alone and draws on the depth),
+undistorts them where the camera info's lens
 model says so, measures the rod from above (``--view top``) or held in the jaws (``--view
 side``) and writes the annotated PNG and a JSON of what was measured. The top view needs the
 table's frame: the camera's pose ``--T-world-cam`` (hand-eye or extrinsic calibration), or,
@@ -25,9 +27,12 @@ def add_arguments(views: argparse.ArgumentParser) -> None:
     """The file mode's options of ``comgrasp views``."""
     g = views.add_argument_group(
         "your own camera's frames (instead of a simulated scene)",
-        "an RGBD frame as files; the depth aligned to the colour camera",
+        "an RGBD frame as files: the depth (aligned to the colour camera where a colour "
+        "image is given) and the camera info; the colour is optional for the top view",
     )
-    g.add_argument("--rgb", type=Path, metavar="FILE", help="colour PNG or JPEG")
+    g.add_argument("--rgb", type=Path, metavar="FILE",
+                   help="colour PNG or JPEG; optional for the top view: without it the object "
+                   "is found from the depth alone (and drawn on the depth)")  # fmt: skip
     g.add_argument("--depth", type=Path, metavar="FILE",
                    help="single-channel 16-bit PNG in the camera's depth units")  # fmt: skip
     g.add_argument("--camera-info", type=Path, metavar="FILE",
@@ -103,7 +108,43 @@ def _pick_area(text: str) -> tuple[float, float, float, float]:
     return area
 
 
-def _camera_json(files, color_order: str) -> dict:
+def read_depth(depth_path: Path, info_path: Path, depth_scale: float | None):
+    """(depth in the camera's units, metres per unit, CameraModel) without a colour image.
+
+    The checks of ``rgbd_files.read_rgbd`` on the depth: a single-channel 16-bit PNG of the
+    camera info's size, the depth scale given or in the camera info (never guessed), the
+    two agreeing where both are given.
+    """
+    import cv2
+
+    from comgrasp_pin.perception.rgbd_files import read_camera_info
+
+    camera, in_info = read_camera_info(info_path)
+    if depth_scale is None and in_info is None:
+        raise CameraFileError(f"no depth_scale: pass --depth-scale (metres per unit of the "
+                              f"depth PNG: 0.001 for millimetres, 0.0001 for a D405) or put "
+                              f"it in {info_path}")  # fmt: skip
+    if depth_scale is not None and in_info is not None:
+        if not np.isclose(depth_scale, in_info, rtol=1e-9):
+            raise CameraFileError(f"depth_scale {depth_scale} given, but {info_path} says "
+                                  f"{in_info}")  # fmt: skip
+    if not Path(depth_path).is_file():
+        raise CameraFileError(f"the depth file {depth_path} does not exist")
+    depth = cv2.imread(str(depth_path), cv2.IMREAD_UNCHANGED)
+    if depth is None:
+        raise CameraFileError(f"cannot read the depth file {depth_path} as an image (PNG)")
+    if depth.dtype != np.uint16 or depth.ndim != 2:
+        channels = 1 if depth.ndim == 2 else depth.shape[2]
+        raise CameraFileError(f"the depth file {depth_path} must be a single-channel 16-bit PNG "
+                              f"(the camera's units), got {channels} channel(s) of "
+                              f"{depth.dtype}")  # fmt: skip
+    if depth.shape != (camera.height, camera.width):
+        raise CameraFileError(f"the depth image is {depth.shape[1]} x {depth.shape[0]} px, the "
+                              f"camera info says {camera.width} x {camera.height}")  # fmt: skip
+    return depth, depth_scale if depth_scale is not None else in_info, camera
+
+
+def _camera_json(files, color_order: str | None) -> dict:
     c = files.camera
     return {"width": c.width, "height": c.height, "K": c.K.tolist(),
             "distortion_model": c.distortion_model, "D": c.D.tolist(),
@@ -124,7 +165,7 @@ def _top(args, rgb, depth, camera) -> tuple[np.ndarray, dict]:
         frame, (T, area) = "table", fit_table_plane(depth, camera)
     if args.pick_area is not None:
         area = _pick_area(args.pick_area)
-    det = detect_rod_top_down(rgb, depth, camera, T, area)
+    det = detect_rod_top_down(rgb, depth, camera, T, area)  # rgb None: the depth alone
     g = det.grasp
     measured = {
         "view": "top", "frame": frame, f"T_{frame}_cam": T.tolist(), "pick_area_m": list(area),
@@ -132,7 +173,7 @@ def _top(args, rgb, depth, camera) -> tuple[np.ndarray, dict]:
         "length_m": det.length, "handle_height_m": det.handle_height,
         "table_z_m": det.table_z, "overhang_m": det.overhang,
     }  # fmt: skip
-    return draw_top_view(rgb, det, det.axis_px.mean(axis=0)), measured
+    return draw_top_view(rgb, det, det.axis_px.mean(axis=0), depth=depth), measured
 
 
 def _side(args, rgb, depth, camera) -> tuple[np.ndarray, dict]:
@@ -157,17 +198,27 @@ def run(args: argparse.Namespace) -> int:
     import cv2
 
     from comgrasp_pin.perception.camera_input import camera_frame
-    from comgrasp_pin.perception.rgbd_files import read_rgbd
+    from comgrasp_pin.perception.rgbd_files import RgbdFiles, read_rgbd
 
-    missing = [f"--{k.replace('_', '-')}" for k in ("rgb", "depth", "camera_info")
+    missing = [f"--{k.replace('_', '-')}" for k in ("depth", "camera_info")
                if getattr(args, k) is None]  # fmt: skip
     if missing:
-        raise InvalidInputError(f"your own frames need --rgb, --depth and --camera-info; "
-                                f"missing {', '.join(missing)}")  # fmt: skip
-    order = "bgr" if args.bgr else "rgb"
-    files = read_rgbd(args.rgb, args.depth, args.camera_info, args.depth_scale, order)
+        raise InvalidInputError(f"your own frames need --depth and --camera-info (and --rgb "
+                                f"for the side view); missing {', '.join(missing)}")  # fmt: skip
+    if args.view == "side" and args.rgb is None:
+        raise InvalidInputError("--view side needs --rgb FILE: the side view finds the rod "
+                                "with the colour image; only the top view runs on the depth "
+                                "alone")  # fmt: skip
+    if args.bgr and args.rgb is None:
+        raise InvalidInputError("--bgr tells the colour file's channel order: it needs --rgb")
+    order = ("bgr" if args.bgr else "rgb") if args.rgb is not None else None
+    if args.rgb is not None:
+        files = read_rgbd(args.rgb, args.depth, args.camera_info, args.depth_scale, order)
+    else:  # the depth alone: no colour (rgb None)
+        files = RgbdFiles(None, *read_depth(args.depth, args.camera_info, args.depth_scale))
     rgb, depth, camera = camera_frame(files.rgb, files.depth, files.camera, files.depth_scale)
     image, measured = (_top if args.view == "top" else _side)(args, rgb, depth, camera)
+    measured["colour"] = str(args.rgb) if args.rgb is not None else False
     measured["camera"] = _camera_json(files, order)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

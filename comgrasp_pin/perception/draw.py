@@ -121,8 +121,50 @@ def com_legend(estimate: bool = True, truth: bool = True) -> list:
     return out + ([("true CoM (simulator)", TRUTH, "ring")] if truth else [])
 
 
-def _common(rgb: np.ndarray, mask: np.ndarray, rect: tuple, axis_px: np.ndarray) -> np.ndarray:
-    img = np.ascontiguousarray(rgb[:, :, ::-1]).copy()  # BGR for OpenCV
+def depth_image(depth: np.ndarray) -> tuple[np.ndarray, tuple[float, float]]:
+    """(BGR image of ``depth``, the depth range (m) its colours span) to draw on.
+
+    ``depth``: (H, W) z-depth in m; 0, negative or not finite: no depth (black). OpenCV's
+    TURBO colour map over the 1st to 99th percentile of the valid pixels, near red, far
+    blue (what stands on a table is warmer than the table); beyond the range, the end
+    colours. ``depth_colour_bar`` draws its legend.
+    """
+    z = np.asarray(depth, dtype=float)
+    valid = np.isfinite(z) & (z > 0)
+    if not valid.any():
+        return np.zeros((*z.shape, 3), np.uint8), (0.0, 0.0)
+    lo, hi = (float(v) for v in np.percentile(z[valid], [1, 99]))
+    near = (hi - np.where(valid, z, hi)) / max(hi - lo, 1e-6)  # 1 at lo (near), 0 at hi
+    img = cv2.applyColorMap(np.round(255 * np.clip(near, 0, 1)).astype(np.uint8),
+                            cv2.COLORMAP_TURBO)  # fmt: skip
+    img[~valid] = 0
+    return img, (lo, hi)
+
+
+def depth_colour_bar(img: np.ndarray, depth_range: tuple[float, float], scale: float = 0.45):
+    """The legend of ``depth_image``'s colours in ``img``'s top-right corner (in place)."""
+    lo, hi = depth_range
+    bar_w, bar_h = 120, 10
+    ramp = np.linspace(255, 0, bar_w).round().astype(np.uint8)[None].repeat(bar_h, axis=0)
+    text = f"depth {lo:.3f} m  ...  {hi:.3f} m"
+    note = "black: no depth"
+    w = max(cv2.getTextSize(t, _FONT, scale, 1)[0][0] for t in (text, note)) + 12
+    x0, h = img.shape[1] - w - 6, int(round(34 * scale)) + 2
+    roi = img[4 : 10 + 2 * h + bar_h, x0 : x0 + w]
+    roi[:] = (0.35 * roi).astype(img.dtype)
+    put_text(img, text, (x0 + 6, 4 + h), scale, box=False)
+    bx = x0 + (w - bar_w) // 2
+    img[8 + h : 8 + h + bar_h, bx : bx + bar_w] = cv2.applyColorMap(ramp, cv2.COLORMAP_TURBO)
+    put_text(img, note, (x0 + 6, 6 + 2 * h + bar_h), scale, box=False)
+    return img
+
+
+def _bgr(rgb: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(rgb[:, :, ::-1]).copy()  # BGR for OpenCV
+
+
+def _common(img: np.ndarray, mask: np.ndarray, rect: tuple, axis_px: np.ndarray) -> np.ndarray:
+    """Outline, rectangle and axis drawn on the BGR ``img`` (in place, returned)."""
     contours, _ = cv2.findContours(mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     cv2.drawContours(img, contours, -1, OUTLINE, 1)
     box = cv2.boxPoints(rect).astype(np.int32)
@@ -136,9 +178,24 @@ def _entries(point_label: str) -> list:
             "box"), ("rod axis", AXIS, "line"), (point_label, POINT, "cross")]  # fmt: skip
 
 
-def draw_top_view(rgb: np.ndarray, det: RodDetection, grasp_px: np.ndarray) -> np.ndarray:
-    """BGR image: outline, rectangle, axis, the grasp point ``grasp_px`` (u, v), a legend."""
-    img = _common(rgb, det.mask, det.rect, det.axis_px)
+def draw_top_view(rgb: np.ndarray | None, det: RodDetection, grasp_px: np.ndarray,
+                  depth: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
+    """BGR image: outline, rectangle, axis, the grasp point ``grasp_px`` (u, v), a legend.
+
+    Drawn on the colour image ``rgb`` (RGB); without it (None), on the z-depth ``depth``
+    (m) in colours (``depth_image``), with their legend.
+    """
+    if rgb is None:
+        if depth is None:
+            raise ValueError("draw_top_view needs the colour image or the depth")
+        img, depth_range = depth_image(depth)
+        depth_colour_bar(img, depth_range)
+        contours, _ = cv2.findContours(det.mask.astype(np.uint8), cv2.RETR_EXTERNAL,
+                                       cv2.CHAIN_APPROX_NONE)  # fmt: skip
+        cv2.drawContours(img, contours, -1, (0, 0, 0), 3)  # the outline on dark, in any colour
+    else:
+        img = _bgr(rgb)
+    _common(img, det.mask, det.rect, det.axis_px)
     cv2.drawMarker(img, _px(grasp_px), POINT, cv2.MARKER_CROSS, 14, 2)
     text = f"yaw {np.degrees(det.grasp.yaw):.1f} deg, length {100 * det.length:.1f} cm"
     put_text(img, text, (8, 20))
@@ -152,7 +209,7 @@ def draw_side_view(rgb: np.ndarray, view: SideView, estimate_px=None, interval_p
     ``estimate_px``, ``interval_px``, ``truth_px``: the CoM marks of ``draw_com``
     (pixels), where given (the caller projects them with the camera).
     """
-    img = _common(rgb, view.mask, view.rect, view.axis_px)
+    img = _common(_bgr(rgb), view.mask, view.rect, view.axis_px)
     cv2.drawMarker(img, _px(view.tcp_px), POINT, cv2.MARKER_CROSS, 14, 2)
     text = (f"tilt in the jaws {tilt_from_level_deg(view.theta):.1f} deg from level, held "
             f"{100 * view.grasp_offset:+.1f} cm from centre")  # fmt: skip
