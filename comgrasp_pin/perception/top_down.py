@@ -23,6 +23,7 @@ import numpy as np
 from comgrasp_pin.camera import PinholeCamera
 from comgrasp_pin.errors import (
     AmbiguousObjectError,
+    ColourDepthMismatchError,
     ObjectCutByBorderError,
     ObjectNotFoundError,
     PerceptionError,
@@ -124,7 +125,10 @@ def detect_rod_top_down(
                     return _detect(view, None, depth, camera, T_world_cam, pick_area)
                 except PerceptionError:
                     pass
-            if isinstance(again, ColourNoHelp):
+            if isinstance(again, ColourNoHelp) or (
+                isinstance(exc, AmbiguousObjectError)  # several objects: the scene's reason
+                and not isinstance(again, (AmbiguousObjectError, ColourDepthMismatchError))
+            ):
                 raise exc from None
             raise again from exc
 
