@@ -189,3 +189,28 @@ def test_the_ur_commands_run_as_written_on_the_real_recording(tmp_path, monkeypa
     assert lo < 2.805 < hi  # the gains were weighed with this load: it must hold it
     assert (tmp_path / "fit.png").stat().st_size > 0
     assert "set_target_payload" in (tmp_path / "payload.script").read_text()
+
+
+@pytest.mark.skipif(not (REALDATA / "rgbd" / "overhead_primesense_flashlight").is_dir(),
+                    reason=f"the real PrimeSense frame is not in {REALDATA}")  # fmt: skip
+def test_the_views_command_runs_as_written_on_the_real_frame(tmp_path, monkeypatch):
+    """The README's depth-only `comgrasp views` on the real flashlight frame it names: it
+    measures the length the README states (0.206 m) and writes the view and the JSON."""
+    import shlex
+
+    from comgrasp_pin.cli import main
+
+    text = README.read_text()
+    start = text.index("**Perception on your own camera's frames.**")
+    block = re.search(r"```bash\n(.*?)```", text[start:], flags=re.S).group(1)
+    argv = shlex.split(block.strip())
+    assert argv[:2] == ["comgrasp", "views"] and "--rgb" not in argv
+    folder = REALDATA / "rgbd" / "overhead_primesense_flashlight"
+    for name in ("depth_0_mm.png", "primesense_camera_info.yaml"):
+        (tmp_path / name).symlink_to(folder / name)
+    monkeypatch.chdir(tmp_path)
+    assert main(argv[1:]) == 0
+    measured = json.loads((tmp_path / "views" / "depth_0_mm_top_view.json").read_text())
+    stated = float(re.search(r"measures the flashlight at (\d\.\d+) m", text).group(1))
+    assert abs(measured["length_m"] - stated) < 0.0005
+    assert (tmp_path / "views" / "depth_0_mm_top_view.png").stat().st_size > 0
