@@ -58,7 +58,8 @@ def _calibration_yaml(camera, D=(), model="plumb_bob") -> dict:
 def _save(tmp_path, depth_units, rgb, info: dict, suffix=".yaml", colour=".png"):
     """Files as a camera's user saves them; the colour with OpenCV (a BGR array)."""
     paths = tmp_path / f"rgb{colour}", tmp_path / "depth.png", tmp_path / f"info{suffix}"
-    cv2.imwrite(str(paths[0]), np.ascontiguousarray(rgb[..., ::-1]))
+    if rgb is not None:
+        cv2.imwrite(str(paths[0]), np.ascontiguousarray(rgb[..., ::-1]))
     assert cv2.imwrite(str(paths[1]), depth_units)
     text = yaml.safe_dump(info) if suffix == ".yaml" else json.dumps(info)
     paths[2].write_text(text)
@@ -322,17 +323,46 @@ def test_depth_alone_top_view_measures_as_with_colour_and_draws_on_the_depth(sce
     assert np.abs(drawn.astype(int) - drawn_on_colour).mean() > 20  # not the colour image
 
 
-def test_the_side_view_without_rgb_is_refused_with_exit_2(scene, tmp_path, capsys):
-    depth, camera, T, rgb, *_ = scene
-    info = {**_calibration_yaml(camera), "depth_scale": 1e-3}
-    _, depth_file, info_file = _save(tmp_path, np.round(depth * 1e3).astype(np.uint16), rgb, info)
+def test_the_side_view_runs_on_the_depth_alone(tmp_path, capsys):
+    """A held rod seen by the wrist camera (a MuJoCo render at the measurement pose, saved in
+    0.1 mm units), without a colour image: the command measures the tilt and the grasp
+    offset as the library does on the float depth, within the perception contract of the
+    truth, and draws on the depth. (Given only T_ee_cam, as here, the side view cannot tell
+    the arm from what lies beyond the rod at most poses and refuses: the simulation passes
+    the arm's capsules, which a file does not carry.)"""
+    from test_perception import _held_rod_scene
+
+    from comgrasp_pin.geometry import tilt_from_level_deg
+    from comgrasp_pin.perception import observe_held_rod
+    from comgrasp_pin.robot import RobotModel
+    from comgrasp_pin.simulation.eyes import side_camera_pose
+    from comgrasp_pin.simulation.world import SIDE_CAMERA
+
+    ur5 = RobotModel.ur5()
+    sim, rig, place = _held_rod_scene(ur5, "obj2")
+    T_ee_obj = place(10.0, 0.0)
+    _, T_ee_cam = side_camera_pose(ur5, sim.q)
+    camera = rig.intrinsics(SIDE_CAMERA)
+    depth = rig.depth(sim.data, SIDE_CAMERA)
+    rig.close()
+    library = observe_held_rod(None, depth, camera, T_ee_cam)
+    units = np.where(np.isfinite(depth), np.round(depth * 1e4), 0).astype(np.uint16)
+    info = {**_calibration_yaml(camera), "depth_scale": 1e-4}
+    _, depth_file, info_file = _save(tmp_path, units, None, info)
     pose = tmp_path / "T_ee_cam.json"
-    pose.write_text(json.dumps({"T_ee_cam": np.eye(4).tolist()}))
+    pose.write_text(json.dumps({"T_ee_cam": T_ee_cam.tolist()}))
     assert _views(tmp_path, "--view", "side", "--depth", depth_file, "--camera-info", info_file,
-                  "--T-ee-cam", pose) == 2  # fmt: skip
-    err = capsys.readouterr().err
-    assert "--view side needs --rgb" in err and "Traceback" not in err, err
-    assert not (tmp_path / "out").exists()
+                  "--T-ee-cam", pose) == 0, capsys.readouterr().err  # fmt: skip
+    measured = json.loads((tmp_path / "out" / "depth_side_view.json").read_text())
+    assert measured["colour"] is False
+    true_tilt = tilt_from_level_deg(np.arctan2(-T_ee_obj[2, 0], T_ee_obj[0, 0]))
+    assert abs(measured["tilt_from_level_deg"] - true_tilt) < 1.0
+    assert abs(measured["tilt_from_level_deg"] - tilt_from_level_deg(library.theta)) < 0.2
+    assert abs(measured["grasp_offset_m"] - library.grasp_offset) < 1e-3
+    drawn = cv2.imread(str(tmp_path / "out" / "depth_side_view.png"))
+    assert drawn.shape[:2] == depth.shape
+    lost = units == 0
+    assert (drawn[lost] == 0).all(axis=-1).mean() > 0.9  # no depth: black
 
 
 @pytest.mark.skipif(

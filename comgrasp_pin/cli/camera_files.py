@@ -1,7 +1,7 @@
 """``comgrasp views [--rgb] --depth --camera-info``: perception on the user's camera's frames.
 
 Reads the files (``perception.rgbd_files``; the depth and camera info alone where no colour
-is given: the top view then finds the object from the depth alone and draws on the depth),
+is given: both views find the object from the depth alone and draw on the depth),
 undistorts them where the camera info's lens
 model says so, measures the rod from above (``--view top``) or held in the jaws (``--view
 side``) and writes the annotated PNG and a JSON of what was measured. The top view needs the
@@ -28,11 +28,11 @@ def add_arguments(views: argparse.ArgumentParser) -> None:
     g = views.add_argument_group(
         "your own camera's frames (instead of a simulated scene)",
         "an RGBD frame as files: the depth (aligned to the colour camera where a colour "
-        "image is given) and the camera info; the colour is optional for the top view",
+        "image is given) and the camera info; the colour is optional",
     )
     g.add_argument("--rgb", type=Path, metavar="FILE",
-                   help="colour PNG or JPEG; optional for the top view: without it the object "
-                   "is found from the depth alone (and drawn on the depth)")  # fmt: skip
+                   help="colour PNG or JPEG; optional: without it the object is found from the "
+                   "depth alone (the side view always is) and drawn on the depth")  # fmt: skip
     g.add_argument("--depth", type=Path, metavar="FILE",
                    help="single-channel 16-bit PNG in the camera's depth units")  # fmt: skip
     g.add_argument("--camera-info", type=Path, metavar="FILE",
@@ -190,7 +190,7 @@ def _side(args, rgb, depth, camera) -> tuple[np.ndarray, dict]:
         "tilt_from_level_deg": tilt_from_level_deg(view.theta), "length_m": view.length,
         "grasp_offset_m": view.grasp_offset, "radius_m": view.radius,
     }  # fmt: skip
-    return draw_side_view(rgb, view), measured
+    return draw_side_view(rgb, view, depth=depth), measured
 
 
 def run(args: argparse.Namespace) -> int:
@@ -203,12 +203,8 @@ def run(args: argparse.Namespace) -> int:
     missing = [f"--{k.replace('_', '-')}" for k in ("depth", "camera_info")
                if getattr(args, k) is None]  # fmt: skip
     if missing:
-        raise InvalidInputError(f"your own frames need --depth and --camera-info (and --rgb "
-                                f"for the side view); missing {', '.join(missing)}")  # fmt: skip
-    if args.view == "side" and args.rgb is None:
-        raise InvalidInputError("--view side needs --rgb FILE: the side view finds the rod "
-                                "with the colour image; only the top view runs on the depth "
-                                "alone")  # fmt: skip
+        raise InvalidInputError(f"your own frames need --depth and --camera-info (--rgb is "
+                                f"optional); missing {', '.join(missing)}")  # fmt: skip
     if args.bgr and args.rgb is None:
         raise InvalidInputError("--bgr tells the colour file's channel order: it needs --rgb")
     order = ("bgr" if args.bgr else "rgb") if args.rgb is not None else None

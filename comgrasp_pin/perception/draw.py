@@ -178,6 +178,24 @@ def _entries(point_label: str) -> list:
             "box"), ("rod axis", AXIS, "line"), (point_label, POINT, "cross")]  # fmt: skip
 
 
+def _canvas(rgb: np.ndarray | None, depth: np.ndarray | None, mask: np.ndarray) -> np.ndarray:
+    """The BGR image to draw on: the colour image, else the depth in colours.
+
+    On the depth, its colours' legend is drawn and the object's ``mask`` outlined in black
+    underneath (the outline's colour is then legible on any depth colour).
+    """
+    if rgb is not None:
+        return _bgr(rgb)
+    if depth is None:
+        raise ValueError("a view is drawn on the colour image or on the depth: give one")
+    img, depth_range = depth_image(depth)
+    depth_colour_bar(img, depth_range)
+    contours, _ = cv2.findContours(mask.astype(np.uint8), cv2.RETR_EXTERNAL,
+                                   cv2.CHAIN_APPROX_NONE)  # fmt: skip
+    cv2.drawContours(img, contours, -1, (0, 0, 0), 3)
+    return img
+
+
 def draw_top_view(rgb: np.ndarray | None, det: RodDetection, grasp_px: np.ndarray,
                   depth: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
     """BGR image: outline, rectangle, axis, the grasp point ``grasp_px`` (u, v), a legend.
@@ -185,16 +203,7 @@ def draw_top_view(rgb: np.ndarray | None, det: RodDetection, grasp_px: np.ndarra
     Drawn on the colour image ``rgb`` (RGB); without it (None), on the z-depth ``depth``
     (m) in colours (``depth_image``), with their legend.
     """
-    if rgb is None:
-        if depth is None:
-            raise ValueError("draw_top_view needs the colour image or the depth")
-        img, depth_range = depth_image(depth)
-        depth_colour_bar(img, depth_range)
-        contours, _ = cv2.findContours(det.mask.astype(np.uint8), cv2.RETR_EXTERNAL,
-                                       cv2.CHAIN_APPROX_NONE)  # fmt: skip
-        cv2.drawContours(img, contours, -1, (0, 0, 0), 3)  # the outline on dark, in any colour
-    else:
-        img = _bgr(rgb)
+    img = _canvas(rgb, depth, det.mask)
     _common(img, det.mask, det.rect, det.axis_px)
     cv2.drawMarker(img, _px(grasp_px), POINT, cv2.MARKER_CROSS, 14, 2)
     text = f"yaw {np.degrees(det.grasp.yaw):.1f} deg, length {100 * det.length:.1f} cm"
@@ -202,14 +211,15 @@ def draw_top_view(rgb: np.ndarray | None, det: RodDetection, grasp_px: np.ndarra
     return draw_legend(img, _entries("grasp point (geometric centre)"))
 
 
-def draw_side_view(rgb: np.ndarray, view: SideView, estimate_px=None, interval_px=None,
-                   truth_px=None) -> np.ndarray:  # fmt: skip
+def draw_side_view(rgb: np.ndarray | None, view: SideView, estimate_px=None, interval_px=None,
+                   truth_px=None, depth: np.ndarray | None = None) -> np.ndarray:  # fmt: skip
     """BGR image: outline, rectangle, axis, the TCP, the tilt in the jaws, a legend.
 
     ``estimate_px``, ``interval_px``, ``truth_px``: the CoM marks of ``draw_com``
-    (pixels), where given (the caller projects them with the camera).
+    (pixels), where given (the caller projects them with the camera). Drawn on the colour
+    image ``rgb``, or without it (None) on the z-depth ``depth`` (m), as ``draw_top_view``.
     """
-    img = _common(_bgr(rgb), view.mask, view.rect, view.axis_px)
+    img = _common(_canvas(rgb, depth, view.mask), view.mask, view.rect, view.axis_px)
     cv2.drawMarker(img, _px(view.tcp_px), POINT, cv2.MARKER_CROSS, 14, 2)
     text = (f"tilt in the jaws {tilt_from_level_deg(view.theta):.1f} deg from level, held "
             f"{100 * view.grasp_offset:+.1f} cm from centre")  # fmt: skip
