@@ -9,6 +9,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.geometry import tilt_from_level_deg
 from comgrasp_pin.perception.rod_detection import RodDetection
 from comgrasp_pin.perception.side_view import SideView
@@ -187,7 +188,7 @@ def _canvas(rgb: np.ndarray | None, depth: np.ndarray | None, mask: np.ndarray) 
     if rgb is not None:
         return _bgr(rgb)
     if depth is None:
-        raise ValueError("a view is drawn on the colour image or on the depth: give one")
+        raise InvalidInputError("a view is drawn on the colour image or on the depth: give one")
     img, depth_range = depth_image(depth)
     depth_colour_bar(img, depth_range)
     contours, _ = cv2.findContours(mask.astype(np.uint8), cv2.RETR_EXTERNAL,
