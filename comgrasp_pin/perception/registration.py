@@ -20,6 +20,8 @@ MAX_SHIFT_PX = 2.0  # the outlines may differ by this much (a pixel's rounding e
 MIN_COVER = 0.5  # the colour must mark this share of the depth's object (its core)
 MAX_SEARCH_PX = 40  # shifts of the colour looked at, each way (px)
 GAIN = 0.1  # a shift that marks this much more of the object than none says: not registered
+MIN_MATCH = 0.8  # ... where, moved, the colour marks at least this share of it (a light's
+# patch or a texture that marks some of it anywhere is no sign of a shift)
 _KERNEL3 = np.ones((3, 3), np.uint8)
 
 
@@ -44,6 +46,9 @@ def cover_by_shift(colour_mask: np.ndarray, core: np.ndarray) -> tuple[float, fl
 def check_registered(colour_mask: np.ndarray, depth_mask: np.ndarray) -> bool:
     """Whether the colour may help the depth; ColourDepthMismatchError if they disagree.
 
+    They disagree when the colour, moved by more than MAX_SHIFT_PX, marks GAIN more of what
+    the depth sees than where it is, and at least MIN_MATCH of it.
+
     ``colour_mask``: (H, W) bool, the pixels that differ from the table in colour;
     ``depth_mask``: (H, W) bool, the object the depth sees standing. Returns False (the
     colour is no help, not a contradiction) when the depth sees too little to compare or
@@ -60,7 +65,7 @@ def check_registered(colour_mask: np.ndarray, depth_mask: np.ndarray) -> bool:
     cover, best, shift = cover_by_shift(colour_mask, core)
     if best < MIN_COVER:  # the colour marks the object nowhere (its colour is the table's)
         return False
-    if np.hypot(*shift) > MAX_SHIFT_PX and best > cover + GAIN:
+    if np.hypot(*shift) > MAX_SHIFT_PX and best > max(cover + GAIN, MIN_MATCH):
         raise ColourDepthMismatchError(
             f"colour and depth do not line up: the object's outline in colour sits "
             f"({shift[0]:+.0f}, {shift[1]:+.0f}) px (u, v) from its outline in depth; are they "

@@ -19,7 +19,7 @@ import numpy as np
 from comgrasp_pin.errors import UntrustedImageError
 from comgrasp_pin.perception._points import noise_level
 
-LENGTHS = (0.05, 0.10, 0.16)  # the stretches of each ray looked at beyond the outline (m)
+LENGTHS = (0.08, 0.16)  # the stretches of each ray looked at beyond the outline (m)
 GAP = 0.01  # ... starting this far beyond it (m): the outline's own fringe and smear
 SIGMAS = 4.0  # a stretch this many of its noise stds above the table is a thin part
 MIN_MEAN = 0.003  # ... and at least this high (m): the top view's least height of an object
