@@ -38,9 +38,12 @@ def cover_by_shift(colour_mask: np.ndarray, core: np.ndarray) -> tuple[float, fl
     padded = np.pad(colour_mask, MAX_SEARCH_PX).astype(np.float32)
     window = padded[r0 : r1 + 2 * MAX_SEARCH_PX, c0 : c1 + 2 * MAX_SEARCH_PX]
     score = cv2.matchTemplate(window, template, cv2.TM_CCORR) / template.sum()
-    dv, du = np.unravel_index(int(np.argmax(score)), score.shape)
+    # of the shifts that mark the most (several, where the colour's mask is wider than the
+    # depth's core), the least
+    best = np.argwhere(score >= score.max() - 1e-6) - MAX_SEARCH_PX
+    dv, du = best[np.argmin(np.hypot(best[:, 0], best[:, 1]))]
     at_zero = float(score[MAX_SEARCH_PX, MAX_SEARCH_PX])
-    return at_zero, float(score[dv, du]), np.array([du, dv]) - MAX_SEARCH_PX
+    return at_zero, float(score.max()), np.array([du, dv])
 
 
 def check_registered(colour_mask: np.ndarray, depth_mask: np.ndarray) -> bool:

@@ -1,0 +1,101 @@
+"""The top view's pieces that make it height first, on images built here with NumPy.
+
+A thin part going on from an object (``thin_parts``), colour that does or does not line up
+with the depth (``registration``), the table's clear rectangle (``table_plane``): each on a
+synthetic image whose answer is known by construction, each checked both ways.
+"""
+
+import cv2
+import numpy as np
+import pytest
+
+from comgrasp_pin.camera import PinholeCamera
+from comgrasp_pin.errors import ColourDepthMismatchError, UntrustedImageError
+from comgrasp_pin.perception.registration import check_registered, cover_by_shift
+from comgrasp_pin.perception.table_plane import fit_table_plane
+from comgrasp_pin.perception.thin_parts import check_no_thin_part
+
+PX_PER_M = 500.0  # 2 mm pixels
+H, W = 300, 400
+
+
+def _head_and_handle(handle_height: float, noise: float, seed: int = 0):
+    """(heights (m), the head's mask, the table's pixels): a 4 x 8 cm head 3 cm high and a
+    handle 5 px wide, 20 cm long, ``handle_height`` high, going right from it, on a table
+    with white noise ``noise`` (m)."""
+    heights = np.random.default_rng(seed).normal(0.0, noise, (H, W))
+    head = np.zeros((H, W), bool)
+    head[130:170, 100:120] = True
+    heights[head] += 0.03
+    handle = np.zeros((H, W), bool)
+    handle[148:153, 120:220] = True
+    heights[handle] += handle_height
+    table = ~cv2.dilate((head | handle).astype(np.uint8), np.ones((9, 9), np.uint8)).astype(bool)
+    return heights, head, table
+
+
+def test_a_handle_below_the_threshold_going_on_from_a_head_is_refused():
+    """A 7 mm handle in 4 mm of noise (under 2 stds a pixel, lost to any threshold) stands
+    far above a 16 cm stretch's noise (4 mm / sqrt(80 px) = 0.45 mm): refused, the message
+    giving its direction (about 0 deg: along +u) and its mean height."""
+    heights, head, table = _head_and_handle(0.007, 0.004)
+    with pytest.raises(UntrustedImageError, match=r"at [0-3] deg .* [5-9]\.\d mm high"):
+        check_no_thin_part(heights, head, table, PX_PER_M)
+
+
+@pytest.mark.parametrize("handle_height", [0.0, 0.002])
+def test_no_handle_or_one_lower_than_an_object_is_not_a_thin_part(handle_height):
+    """The same head alone, or with a 2 mm cord (lower than the top view's least object
+    height, 3 mm, however long): nothing goes on from it."""
+    heights, head, table = _head_and_handle(handle_height, 0.004, seed=1)
+    check_no_thin_part(heights, head, table, PX_PER_M)
+
+
+def _rod_mask(du: int = 0, dv: int = 0) -> np.ndarray:
+    mask = np.zeros((H, W), bool)
+    mask[140 + dv : 152 + dv, 80 + du : 300 + du] = True  # a rod 12 px wide along u
+    return mask
+
+
+@pytest.mark.parametrize("shift", [(0, 6), (10, 0), (-7, 9), (0, 25)])
+def test_colour_moved_against_the_depth_is_found_and_refused(shift):
+    """The colour's mask of the rod moved by (du, dv) px: the least of the best shifts is
+    within a pixel of that move (the depth's core, eroded by a pixel, fits a pixel either
+    way), and the pair is refused where the move is across the rod; along its own axis a
+    move of 10 px still covers 95 %, which is why the refusal asks for a gain."""
+    depth_mask, colour_mask = _rod_mask(), _rod_mask(*shift)
+    core = cv2.erode(depth_mask.astype(np.uint8), np.ones((3, 3), np.uint8)).astype(bool)
+    _, best, found = cover_by_shift(colour_mask, core)
+    assert np.abs(found - np.array(shift)).max() <= 1 and best == pytest.approx(1.0)
+    if abs(shift[1]) > 2:  # across the rod: most of it is lost where it is
+        with pytest.raises(ColourDepthMismatchError, match="do not line up"):
+            check_registered(colour_mask, depth_mask)
+
+
+def test_registered_colour_helps_and_a_table_coloured_rod_does_not():
+    """The same mask in colour and depth: registered (True); a colour that marks nothing
+    of the object (a rod of the table's colour): no help (False), not a refusal."""
+    assert check_registered(_rod_mask(), _rod_mask()) is True
+    elsewhere = np.zeros((H, W), bool)
+    elsewhere[20:40, 20:40] = True  # a mark far from the rod
+    assert check_registered(elsewhere, _rod_mask()) is False
+
+
+def test_the_clear_rectangle_leaves_out_what_reaches_into_the_view():
+    """A camera 1 m above a table (z-depth 1 m everywhere), with an arm reaching in from
+    the image's foot (nearer, 0.6 m) over its lower quarter: the pick area, in the table's
+    frame (x to the image's right, y to its top), lies above the arm, within the table in
+    view, and 2 cm inside it."""
+    camera = PinholeCamera(fx=500.0, fy=500.0, cx=W / 2 - 0.5, cy=H / 2 - 0.5, width=W, height=H)
+    depth = np.ones((H, W))
+    depth[int(0.75 * H) :, 100:300] = 0.6  # the arm at the foot of the image
+    T_table_cam, (x0, x1, y0, y1) = fit_table_plane(depth, camera)
+    half_w, half_h = 0.5 * W / 500.0, 0.5 * H / 500.0  # the table in view (m) at 1 m
+    assert abs(T_table_cam[2, 3] - 1.0) < 1e-6  # the camera 1 m above the plane
+    # the largest rectangle is the whole width above the arm (0.8 x 0.45 m), not a side
+    # strip beside it (0.2 x 0.6 m): from the arm's edge (image row 0.75 H: y = -0.15 m) up
+    arm_edge_y = -(0.75 * H - H / 2) / 500.0
+    assert x0 == pytest.approx(-half_w + 0.02, abs=0.012)
+    assert x1 == pytest.approx(half_w - 0.02, abs=0.012)
+    assert y0 == pytest.approx(arm_edge_y + 0.02, abs=0.012)
+    assert y1 == pytest.approx(half_h - 0.02, abs=0.012)
