@@ -74,8 +74,11 @@ def summarise_rows(rows: list[dict]) -> dict:
     for entry in failed.values():
         entry["errors"] = dict(entry["errors"])
     parts = ("estimator", "tilt", "shift", "out_of_plane", "slide", "creep", "calibration")
-    med = {p: float(np.nanmedian([_float(r, f"pos_std_{p}_m") for r in ok]) * 1e3)
-           for p in parts if ok}  # fmt: skip
+    med = {}
+    for part in parts:
+        values = np.array([_float(r, f"pos_std_{part}_m") for r in ok])
+        if np.isfinite(values).any():
+            med[part] = float(np.nanmedian(values) * 1e3)
     return {
         "grasps": len(rows),
         "estimated": len(ok),
@@ -109,6 +112,15 @@ def run_one(code: Path, out: Path, seed: int, preset: str, objects: str, trials:
     start = time.perf_counter()
     subprocess.run(cmd, env=env, check=True, stdout=subprocess.DEVNULL)
     return time.perf_counter() - start
+
+
+def code_commit(code: Path) -> str:
+    """The commit of ``code``: its COMMIT file (an exported tree) or its git HEAD."""
+    if (code / "COMMIT").exists():
+        return (code / "COMMIT").read_text().strip()
+    head = subprocess.run(["git", "-C", str(code), "rev-parse", "HEAD"], capture_output=True,
+                          text=True, check=False)  # fmt: skip
+    return head.stdout.strip() or "unknown"
 
 
 def summarise_label(runs: Path, seeds: list[int], presets: list[str]) -> dict:
@@ -174,7 +186,8 @@ def main() -> None:
                      "(benchmarks/wrist_coverage.py).")  # fmt: skip
     data[opts.label] = {
         "settings": {"seeds": seeds, "presets": presets, "objects": opts.objects.split(","),
-                     "trials": opts.trials, "code": str(opts.code), "wall_s": walls},
+                     "trials": opts.trials, "code": str(opts.code),
+                     "code_commit": code_commit(opts.code), "wall_s": walls},
         "summary": summary,
     }  # fmt: skip
     opts.out.parent.mkdir(parents=True, exist_ok=True)
