@@ -68,12 +68,11 @@ def test_depth_line_std_follows_the_geometry():
 
 def test_presets_carry_the_model_and_the_run_records_it():
     ideal, real = sensor_preset("ideal"), sensor_preset("realistic")
-    assert ideal.side_depth_line == DepthLineErrorConfig(0.017, 1.0)
-    assert real.side_depth_line == DepthLineErrorConfig(0.027, 1.0)
-    assert sensor_preset("ideal+wrist_depth").side_depth_line == real.side_depth_line
+    # one model for every preset: the camera's part is its own depth resolution
+    assert ideal.side_depth_line == real.side_depth_line == DepthLineErrorConfig(0.016, 1.0)
     assert not ideal.side_depth.enabled  # the ideal render stays clean
     tree = asdict(EpisodeConfig(sensors=real))
-    assert tree["sensors"]["side_depth_line"] == {"radius_share": 0.027, "axial_share": 1.0}
+    assert tree["sensors"]["side_depth_line"] == {"radius_share": 0.016, "axial_share": 1.0}
 
 
 def test_position_z_scores_are_unit_with_the_modelled_depth_line_error():

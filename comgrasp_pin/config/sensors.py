@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
-from comgrasp_pin.config.depth_line import REALISTIC_DEPTH_LINE, DepthLineErrorConfig
+from comgrasp_pin.config.depth_line import DepthLineErrorConfig
 from comgrasp_pin.errors import InvalidInputError
 
 TORQUE_KINDS = ("link", "current")
@@ -132,7 +132,8 @@ class SensorConfig:
         torque: the joint-torque sensor's error model.
         top_depth, side_depth: error models of the top-down and the wrist camera's depth.
         side_depth_line: what the wrist camera's depth line's change between two views is
-            known to beyond its slices' scatter (``DepthLineErrorConfig``).
+            known to beyond its slices' scatter (``DepthLineErrorConfig``, the same for
+            every preset: its camera term is ``side_depth``'s depth resolution).
         gripper_mass_error: the simulated gripper is this much heavier than the robot's model
             says (relative): the model's gravity torques are then off, a measured tau_before
             is not.
@@ -238,8 +239,7 @@ def _image_only(depth: DepthNoiseConfig) -> DepthNoiseConfig:
 _IDEAL_TORQUE = TorqueSensorConfig()
 SOURCES = {
     "top_depth": lambda c: replace(c, top_depth=_image_only(_D415)),
-    "wrist_depth": lambda c: replace(c, side_depth=_image_only(_D435),
-                                     side_depth_line=REALISTIC_DEPTH_LINE),
+    "wrist_depth": lambda c: replace(c, side_depth=_image_only(_D435)),
     "calibration": lambda c: replace(c, top_depth=_calibration_only(_D415),
                                      side_depth=_calibration_only(_D435)),
     "torque_offsets": lambda c: replace(c, torque=replace(_IDEAL_TORQUE, offset_std=0.2)),
@@ -274,6 +274,6 @@ def sensor_preset(name: str) -> SensorConfig:
         return replace(SOURCES[name.removeprefix("ideal+")](SensorConfig()), preset=name)
     if name in ("realistic", "realistic_current"):
         torque = _LINK_TORQUE if name == "realistic" else _CURRENT_TORQUE
-        return SensorConfig(name, torque, _D415, _D435, REALISTIC_DEPTH_LINE,
-                            gripper_mass_error=0.03, gripper_com_error=0.002)  # fmt: skip
+        return SensorConfig(name, torque, _D415, _D435, gripper_mass_error=0.03,
+                            gripper_com_error=0.002)  # fmt: skip
     raise InvalidInputError(f"unknown sensor preset {name!r}; presets are {SENSOR_PRESETS}")
