@@ -30,7 +30,9 @@ observers that change nothing the robot does:
   view of a start and an end look, ``rod_motion.mid_window_view``).
 For each later view i (the rolled pose; the extra pose when one was measured) against the
 first:
-- measured shift = views[i].surface_y - views[0].surface_y (as ``rod_motion`` uses it);
+- measured shift = views[i].surface_y - views[0].surface_y, the later view's depth line
+  taken from the slices it shares with the first's (``rod_motion.paired_depth_line``), as
+  ``com_location.locate_com`` stacks it;
 - true shift = the same for the true rod axis: its ee-y where it crosses along = 0 (the plane
   through the TCP normal to the view's axis, where ``surface_line`` reads its y0), averaged
   over the window's start and end looks like the measured view; likewise the slope
@@ -181,7 +183,11 @@ def view_distance(view, T_ee_obj_true: np.ndarray) -> tuple[float, float]:
 def run_grasp(task: dict) -> dict:
     """One accuracy grasp with the observers; its rows (one per later view) or its failure."""
     from comgrasp_pin.experiments.trials import _episode_config, accuracy_grasp
-    from comgrasp_pin.procedures.rod_motion import depth_agrees, depth_change_std
+    from comgrasp_pin.procedures.rod_motion import (
+        depth_agrees,
+        depth_change_std,
+        paired_depth_line,
+    )
     from comgrasp_pin.procedures.trial_grasp import trial_grasp
     from comgrasp_pin.simulation.objects import get_object
     from comgrasp_pin.simulation.scene import Scene, World
@@ -221,6 +227,7 @@ def run_grasp(task: dict) -> dict:
         ti = view_truth(cell.looks, v, x_ref)
         if ti is None:
             continue
+        v = paired_depth_line(v0, v)  # as locate_com stacks it
         sign = 1.0 if v.T_ee_obj[:3, 0] @ x_ref >= 0 else -1.0
         meas_shift = v.surface_y - v0.surface_y
         meas_dslope = sign * v.surface_slope - v0.surface_slope

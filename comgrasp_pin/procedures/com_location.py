@@ -22,7 +22,7 @@ from comgrasp_pin.estimation.drift import difference_covariance
 from comgrasp_pin.perception import SideView
 from comgrasp_pin.procedures import uncertainty
 from comgrasp_pin.procedures.measurement import HeldReadings
-from comgrasp_pin.procedures.rod_motion import depth_agrees, rod_motion
+from comgrasp_pin.procedures.rod_motion import depth_agrees, paired_depth_line, rod_motion
 from comgrasp_pin.robot import RobotModel
 
 
@@ -75,7 +75,9 @@ def locate_com(
     q = np.array([held.after[i].q for i in use])
     tau_a = np.array([held.after[i].tau for i in use])
     tau_b = np.array([held.tau_before[i] for i in use])
-    views = [held.views[i] for i in use]
+    first_view = held.views[use[0]]
+    # each later view's depth line from the slices it shares with the first's
+    views = [first_view, *(paired_depth_line(first_view, held.views[i]) for i in use[1:])]
     side, T_obj = held.side, held.side.T_ee_obj
     prior = axis_prior(side) if estimator == "ipopt" else None
 
