@@ -20,6 +20,7 @@ from comgrasp_pin.config import (
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.perception.side_depth import clean_side_depth, surface_line
 from comgrasp_pin.perception.side_view import SideView
+from comgrasp_pin.procedures.rod_motion import paired_depth_line
 from comgrasp_pin.procedures.uncertainty import depth_line_std, handle_distance, motion_stds
 
 CAMERA_EE = np.array([0.05, -0.30, -0.06])
@@ -69,10 +70,10 @@ def test_depth_line_std_follows_the_geometry():
 def test_presets_carry_the_model_and_the_run_records_it():
     ideal, real = sensor_preset("ideal"), sensor_preset("realistic")
     # one model for every preset: the camera's part is its own depth resolution
-    assert ideal.side_depth_line == real.side_depth_line == DepthLineErrorConfig(0.016, 1.0)
+    assert ideal.side_depth_line == real.side_depth_line == DepthLineErrorConfig(0.003, 1.0)
     assert not ideal.side_depth.enabled  # the ideal render stays clean
     tree = asdict(EpisodeConfig(sensors=real))
-    assert tree["sensors"]["side_depth_line"] == {"radius_share": 0.016, "axial_share": 1.0}
+    assert tree["sensors"]["side_depth_line"] == {"radius_share": 0.003, "axial_share": 1.0}
 
 
 def test_position_z_scores_are_unit_with_the_modelled_depth_line_error():
@@ -131,3 +132,30 @@ def test_filled_outline_is_left_out_of_the_depth_line():
     y_measured = surface_line(pts, pts[:, 0], handle_measured, r)[0]
     assert y_measured == pytest.approx(y_axis - r * np.cos(np.radians(30.0)), abs=0.03 * r)
     assert y_all > y_measured + 0.01 * r  # the filled outline pulls it behind
+
+
+def test_paired_depth_line_cancels_the_handle_profile():
+    """Two views of a handle whose end slice lies 3 mm further back (a rounded end): the
+    second view, shifted 0.5 mm along the jaws, lost that end slice. Each view's own line
+    moves by the profile; the paired slices' difference is the shift."""
+    along = np.arange(-0.10, 0.06, 0.01) + 0.005
+    profile = np.where(along > 0.05, 0.003, 0.0)  # the end slice, behind the rest
+    a = np.column_stack([np.floor(along / 0.01), along, -0.017 + profile])
+    b = a[:-1].copy()
+    b[:, 2] += 0.0005
+    first, second = _view(), _view()
+    line = [np.polyfit(s[:, 1], s[:, 2], 1) for s in (a, b)]
+    first = replace(first, depth_slices=a, surface_y=line[0][1], surface_slope=line[0][0])
+    second = replace(second, depth_slices=b, surface_y=line[1][1], surface_slope=line[1][0])
+    own = second.surface_y - first.surface_y
+    assert abs(own - 0.0005) > 1e-4  # the profile moves each view's own line
+    paired = paired_depth_line(first, second)
+    assert paired.surface_y - first.surface_y == pytest.approx(0.0005, abs=1e-12)
+    assert paired.surface_slope - first.surface_slope == pytest.approx(0.0, abs=1e-9)
+    # too few common slices, or a view pointing the other way: left as it is
+    few = replace(second, depth_slices=b[:3])
+    assert paired_depth_line(first, few) is few
+    flipped = second.T_ee_obj.copy()
+    flipped[:3, :2] *= -1.0
+    other_way = replace(second, T_ee_obj=flipped)
+    assert paired_depth_line(first, other_way) is other_way
