@@ -374,6 +374,27 @@ def candidate_model(rows: list) -> dict:
             "coverage_95_stated_only": float(np.mean(np.abs(d) <= 1.96 * np.sqrt(stated)))}  # fmt: skip
 
 
+def configured_model(rows: list, preset: str) -> dict:
+    """The error model the estimate states (``config.DepthLineErrorConfig`` of the preset,
+    ``procedures.uncertainty.depth_line_std``) on these pairs: sigma^2 = stated^2 +
+    (radius_share r_seen)^2 + (axial_share sigma_z(d))^2, how often |diff| <= 1.96 sigma,
+    rms z."""
+    from comgrasp_pin.config import sensor_preset
+
+    if not rows:
+        return {"n": 0}
+    sensors = sensor_preset(preset)
+    model = sensors.side_depth_line
+    d = np.array([r["diff_mm"] for r in rows])
+    line = np.array([1e3 * model.shift_std(r["radius_seen_m"],
+                     sensors.side_depth.axial_std(r["distance_m"])) for r in rows])  # fmt: skip
+    sigma = np.hypot([r["stated_shift_std_mm"] for r in rows], line)
+    return {"n": len(rows), "radius_share": model.radius_share,
+            "axial_share": model.axial_share, "median_model_mm": float(np.median(line)),
+            "coverage_95": float(np.mean(np.abs(d) <= 1.96 * sigma)),
+            "rms_z": float(np.sqrt(np.mean((d / sigma) ** 2)))}  # fmt: skip
+
+
 def summarise(rows: list, failures: list) -> dict:
     out: dict = {"by_preset": {}, "by_object": {}, "failures": len(failures)}
     for preset in sorted({r["preset"] for r in rows}):
@@ -405,6 +426,7 @@ def summarise(rows: list, failures: list) -> dict:
             "fit_abs_diff": _fit(used),
             "fit_variance": _fit_variance(used),
             "candidate_model": candidate_model(used),
+            "configured_model": configured_model(used, preset),
         }  # fmt: skip
     for obj in sorted({r["object"] for r in rows}):
         for preset in sorted({r["preset"] for r in rows}):
@@ -463,6 +485,11 @@ def print_table(summary: dict, rows: list) -> None:
                   f"({cm['k_r_mm_per_cm']:.3f} r_cm)^2 mm^2: |diff| <= 1.96 sigma "
                   f"{100 * cm['coverage_95']:.0f} % (stated alone "
                   f"{100 * cm['coverage_95_stated_only']:.0f} %), rms z {cm['rms_z']:.2f}")  # fmt: skip
+        cfg = s.get("configured_model", {})
+        if cfg.get("n"):
+            print(f"{preset}: configured model (radius_share {cfg['radius_share']}, axial_share "
+                  f"{cfg['axial_share']}): |diff| <= 1.96 sigma {100 * cfg['coverage_95']:.0f} %, "
+                  f"rms z {cfg['rms_z']:.2f}")  # fmt: skip
         fit = s["fit_abs_diff"]
         if "coef" in fit:
             print(f"{preset}: |diff| fit " + ", ".join(
