@@ -30,7 +30,9 @@ observers that change nothing the robot does:
   view of a start and an end look, ``rod_motion.mid_window_view``).
 For each later view i (the rolled pose; the extra pose when one was measured) against the
 first:
-- measured shift = views[i].surface_y - views[0].surface_y (as ``rod_motion`` uses it);
+- measured shift = views[i].surface_y - views[0].surface_y, the later view's depth line
+  taken from the slices it shares with the first's (``rod_motion.paired_depth_line``), as
+  ``com_location.locate_com`` stacks it;
 - true shift = the same for the true rod axis: its ee-y where it crosses along = 0 (the plane
   through the TCP normal to the view's axis, where ``surface_line`` reads its y0), averaged
   over the window's start and end looks like the measured view; likewise the slope
@@ -181,7 +183,11 @@ def view_distance(view, T_ee_obj_true: np.ndarray) -> tuple[float, float]:
 def run_grasp(task: dict) -> dict:
     """One accuracy grasp with the observers; its rows (one per later view) or its failure."""
     from comgrasp_pin.experiments.trials import _episode_config, accuracy_grasp
-    from comgrasp_pin.procedures.rod_motion import depth_agrees, depth_change_std
+    from comgrasp_pin.procedures.rod_motion import (
+        depth_agrees,
+        depth_change_std,
+        paired_depth_line,
+    )
     from comgrasp_pin.procedures.trial_grasp import trial_grasp
     from comgrasp_pin.simulation.objects import get_object
     from comgrasp_pin.simulation.scene import Scene, World
@@ -221,6 +227,7 @@ def run_grasp(task: dict) -> dict:
         ti = view_truth(cell.looks, v, x_ref)
         if ti is None:
             continue
+        v = paired_depth_line(v0, v)  # as locate_com stacks it
         sign = 1.0 if v.T_ee_obj[:3, 0] @ x_ref >= 0 else -1.0
         meas_shift = v.surface_y - v0.surface_y
         meas_dslope = sign * v.surface_slope - v0.surface_slope
@@ -367,6 +374,27 @@ def candidate_model(rows: list) -> dict:
             "coverage_95_stated_only": float(np.mean(np.abs(d) <= 1.96 * np.sqrt(stated)))}  # fmt: skip
 
 
+def configured_model(rows: list, preset: str) -> dict:
+    """The error model the estimate states (``config.DepthLineErrorConfig`` of the preset,
+    ``procedures.uncertainty.depth_line_std``) on these pairs: sigma^2 = stated^2 +
+    (radius_share r_seen)^2 + (axial_share sigma_z(d))^2, how often |diff| <= 1.96 sigma,
+    rms z."""
+    from comgrasp_pin.config import sensor_preset
+
+    if not rows:
+        return {"n": 0}
+    sensors = sensor_preset(preset)
+    model = sensors.side_depth_line
+    d = np.array([r["diff_mm"] for r in rows])
+    line = np.array([1e3 * model.shift_std(r["radius_seen_m"],
+                     sensors.side_depth.axial_std(r["distance_m"])) for r in rows])  # fmt: skip
+    sigma = np.hypot([r["stated_shift_std_mm"] for r in rows], line)
+    return {"n": len(rows), "radius_share": model.radius_share,
+            "axial_share": model.axial_share, "median_model_mm": float(np.median(line)),
+            "coverage_95": float(np.mean(np.abs(d) <= 1.96 * sigma)),
+            "rms_z": float(np.sqrt(np.mean((d / sigma) ** 2)))}  # fmt: skip
+
+
 def summarise(rows: list, failures: list) -> dict:
     out: dict = {"by_preset": {}, "by_object": {}, "failures": len(failures)}
     for preset in sorted({r["preset"] for r in rows}):
@@ -398,6 +426,7 @@ def summarise(rows: list, failures: list) -> dict:
             "fit_abs_diff": _fit(used),
             "fit_variance": _fit_variance(used),
             "candidate_model": candidate_model(used),
+            "configured_model": configured_model(used, preset),
         }  # fmt: skip
     for obj in sorted({r["object"] for r in rows}):
         for preset in sorted({r["preset"] for r in rows}):
@@ -456,6 +485,11 @@ def print_table(summary: dict, rows: list) -> None:
                   f"({cm['k_r_mm_per_cm']:.3f} r_cm)^2 mm^2: |diff| <= 1.96 sigma "
                   f"{100 * cm['coverage_95']:.0f} % (stated alone "
                   f"{100 * cm['coverage_95_stated_only']:.0f} %), rms z {cm['rms_z']:.2f}")  # fmt: skip
+        cfg = s.get("configured_model", {})
+        if cfg.get("n"):
+            print(f"{preset}: configured model (radius_share {cfg['radius_share']}, axial_share "
+                  f"{cfg['axial_share']}): |diff| <= 1.96 sigma {100 * cfg['coverage_95']:.0f} %, "
+                  f"rms z {cfg['rms_z']:.2f}")  # fmt: skip
         fit = s["fit_abs_diff"]
         if "coef" in fit:
             print(f"{preset}: |diff| fit " + ", ".join(

@@ -2,6 +2,7 @@
 
     tree.py     EpisodeConfig -> trial, regrasp, motion, sensors, world; run.json records it
     sensors.py  the sensors' part (torque sensor, depth cameras' errors) and its presets
+    depth_line.py  the wrist camera's depth-line error model (part of the sensors')
     trial.py    the trial grasp's part, and the procedure a real arm's sensors need
     paths.py    every number of the tree by its dotted path (``motion.grip_force``), for sweeps
 
@@ -10,6 +11,7 @@ package, and every layer above reads its numbers from here. Import the names fro
 ``comgrasp_pin.config``; ``comgrasp_pin.config.paths`` is used as a module.
 """
 
+from comgrasp_pin.config.depth_line import DepthLineErrorConfig
 from comgrasp_pin.config.sensors import (
     SENSOR_PRESETS,
     DepthNoiseConfig,
@@ -22,6 +24,7 @@ from comgrasp_pin.config.trial import ESTIMATORS, TAU_BEFORE, TrialConfig, hardw
 
 __all__ = [
     "SENSOR_PRESETS",
+    "DepthLineErrorConfig",
     "DepthNoiseConfig",
     "EpisodeConfig",
     "MotionConfig",

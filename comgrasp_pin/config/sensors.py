@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 
+from comgrasp_pin.config.depth_line import DepthLineErrorConfig
 from comgrasp_pin.errors import InvalidInputError
 
 TORQUE_KINDS = ("link", "current")
@@ -130,6 +131,9 @@ class SensorConfig:
             or "custom"; recorded with the run.
         torque: the joint-torque sensor's error model.
         top_depth, side_depth: error models of the top-down and the wrist camera's depth.
+        side_depth_line: what the wrist camera's depth line's change between two views is
+            known to beyond its slices' scatter (``DepthLineErrorConfig``, the same for
+            every preset: its camera term is ``side_depth``'s depth resolution).
         gripper_mass_error: the simulated gripper is this much heavier than the robot's model
             says (relative): the model's gravity torques are then off, a measured tau_before
             is not.
@@ -160,6 +164,7 @@ class SensorConfig:
     torque: TorqueSensorConfig = field(default_factory=TorqueSensorConfig)
     top_depth: DepthNoiseConfig = field(default_factory=DepthNoiseConfig)
     side_depth: DepthNoiseConfig = field(default_factory=DepthNoiseConfig)
+    side_depth_line: DepthLineErrorConfig = field(default_factory=DepthLineErrorConfig)
     gripper_mass_error: float = 0.0
     gripper_com_error: float = 0.0
     watch_dt: float = 0.2

@@ -1,10 +1,10 @@
 """The side camera's depth: cleaned, and the held handle's surface as a line along the rod.
 
 ``clean_side_depth`` leaves a clean frame as it is and filters a real camera's (lost pixels,
-flying pixels, noise). ``surface_line`` fits where the handle's visible surface lies along
-the jaw axis (ee y, the camera's depth) as a line along the rod: its change between two
-views is the rod shifting along the jaws and turning out of their plane (the grasp's
-compliance), which the axis cannot show. SI units.
+flying pixels, noise), saying which pixels it measured. ``surface_line`` fits where the
+handle's visible surface lies along the jaw axis (ee y, the camera's depth) as a line along
+the rod: its change between two views is the rod shifting along the jaws and turning out of
+their plane (the grasp's compliance), which the axis cannot show. SI units.
 """
 
 from __future__ import annotations
@@ -25,11 +25,15 @@ DEPTH_MARGIN = 0.003  # the handle's surface lies within its radius (+ this) of 
 DEPTH_SLICE = 0.01  # slices along the rod for its depth line (m)
 
 
-def clean_side_depth(depth: np.ndarray) -> tuple[np.ndarray, float, bool]:
-    """(depth, noise (m), cleaned): ``depth`` itself, 0 and False when it is clean.
+def clean_side_depth(depth: np.ndarray) -> tuple[np.ndarray, float, bool, np.ndarray]:
+    """(depth, noise (m), cleaned, measured): ``depth``, 0, False, its valid pixels if clean.
 
     Else (pixels lost, i.e. 0, or noisier than CLEAN_NOISE against its 5 x 5 median) its
-    flying pixels dropped, its holes (0 or inf) filled, the median taken, its noise, True.
+    flying pixels dropped, its holes (0 or inf) filled, the median taken, its noise, True
+    and ``measured`` (H, W) bool: the pixels the camera measured (neither lost nor flying).
+    A filled pixel takes its nearest valid neighbour's depth: beside a rod seen against
+    nothing (inf) that grows the rod's outline by a few pixels at the depth of its edge,
+    which is no measurement of its surface (``surface_line`` leaves them out).
     """
     smooth = denoise(fill_holes(depth))
     both = np.isfinite(depth) & np.isfinite(smooth)
@@ -37,8 +41,9 @@ def clean_side_depth(depth: np.ndarray) -> tuple[np.ndarray, float, bool]:
     # A camera marks a lost pixel 0; inf is also what a render gives where nothing is seen.
     if np.any(depth <= 0) or noise > CLEAN_NOISE:
         grounded = drop_flying(depth, max(FLYING_MIN, FLYING_SIGMAS * noise))
-        return denoise(fill_holes(grounded)), noise, True
-    return depth, 0.0, False
+        measured = np.isfinite(grounded) & (grounded > 0)
+        return denoise(fill_holes(grounded)), noise, True, measured
+    return depth, 0.0, False, np.isfinite(depth) & (depth > 0)
 
 
 def surface_line(
@@ -49,7 +54,8 @@ def surface_line(
     Returns ``depth_line``'s: y_ee (m) at along = 0, its slope, their std, the slices.
 
     ``points_ee``: (n, 3) the rod's points in the ee frame; ``along``: (n,) their positions
-    along the axis (m); ``handle``: (n,) bool, the handle's. Only the handle's own surface
+    along the axis (m); ``handle``: (n,) bool, the handle's pixels the camera measured
+    (``clean_side_depth``: a filled hole is not the surface). Only the handle's own surface
     (within ``radius`` + DEPTH_MARGIN of the jaws' mid-plane): a head that stands within
     the axis' silhouette but far across the jaws (an axe's blade) is not it.
     """

@@ -160,13 +160,14 @@ def observe_held_rod(
     )
     colour, depth, camera = camera_frame(rgb, depth, camera, depth_scale, color_order)
     rgb = colour() if callable(colour) else colour
-    depth, noise, cleaned = clean_side_depth(check_images(rgb, depth, camera))
+    depth, noise, cleaned, measured = clean_side_depth(check_images(rgb, depth, camera))
     excluded = robot_volume(exclude_capsules)
     p, candidate = held_candidates(depth, camera, T_ee_cam, T_world_ee, table_z, excluded)
     mask, handle, (x_axis, offset_xz), tilt_std = rod_in_jaws(
         p, candidate, handle_radius, noise, cleaned and not tilt_only, T_ee_cam[:3, 3]
     )
-    frame = _Frame(depth, camera, p, candidate, mask, np.linalg.inv(T_ee_cam), excluded)
+    frame = _Frame(depth, camera, p, candidate, mask, np.linalg.inv(T_ee_cam), excluded,
+                   measured)  # fmt: skip
     rod = rod_along_axis(p[mask], handle, x_axis, offset_xz, handle_radius)
     _check_one_rod(frame, rod, rod_length, handle_radius, cleaned)
     lo, hi, mid = _ends(frame, rod, rod_length, centre_hint)
@@ -189,7 +190,8 @@ class _Frame:
 
     ``depth`` (H, W) m, the ``camera``, ``p`` (H, W, 3) its points in the ee frame,
     ``candidate`` (H, W) bool the pixels between the jaws, ``mask`` (H, W) bool the rod's,
-    ``T_cam_ee`` (4, 4) and the robot's own volume ``excluded``.
+    ``T_cam_ee`` (4, 4), the robot's own volume ``excluded`` and ``measured`` (H, W) bool
+    the pixels the camera measured (``clean_side_depth``).
     """
 
     depth: np.ndarray
@@ -199,6 +201,7 @@ class _Frame:
     mask: np.ndarray
     T_cam_ee: np.ndarray
     excluded: Callable[[np.ndarray], np.ndarray]
+    measured: np.ndarray
 
 
 def _check_one_rod(
@@ -261,8 +264,9 @@ def _side_view(
                                    cv2.CHAIN_APPROX_NONE)  # fmt: skip
     rect = cv2.minAreaRect(np.vstack(contours))
     off_axis = float(np.percentile(rod.rho, OFF_AXIS_PERCENTILE))
-    y0, slope, y0_std, slope_std, slices = surface_line(rod.points, rod.along, rod.handle,
-                                                        rod.radius)  # fmt: skip
+    y0, slope, y0_std, slope_std, slices = surface_line(
+        rod.points, rod.along, rod.handle & frame.measured[frame.mask], rod.radius
+    )
     handle, radius = rod.handle, rod.radius
     n_handle = max(int(handle.sum()), 1)
     axis_std = (

@@ -16,13 +16,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from comgrasp_pin.config import DepthNoiseConfig, TorqueSensorConfig
+from comgrasp_pin.config import DepthLineErrorConfig, DepthNoiseConfig, TorqueSensorConfig
 from comgrasp_pin.estimation import AxisPrior, ComEstimate, com_along_axis, estimate_com
 from comgrasp_pin.estimation.drift import difference_covariance
 from comgrasp_pin.perception import SideView
 from comgrasp_pin.procedures import uncertainty
 from comgrasp_pin.procedures.measurement import HeldReadings
-from comgrasp_pin.procedures.rod_motion import depth_agrees, rod_motion
+from comgrasp_pin.procedures.rod_motion import depth_agrees, paired_depth_line, rod_motion
 from comgrasp_pin.robot import RobotModel
 
 
@@ -55,6 +55,7 @@ def locate_com(
     noise: NoiseRule,
     depth_bounds: tuple[float, float],
     calibration: DepthNoiseConfig,
+    depth_line: DepthLineErrorConfig | None = None,
 ) -> ComLocation:
     """The CoM along the rod from the readings.
 
@@ -65,15 +66,18 @@ def locate_com(
     from the first's within ``depth_bounds``, m and rad: ``depth_agrees``), the 3-D CoM
     projected on the axis; the first pose alone when no other view saw it. ``noise``: how
     the torque differences' noise is known (``pair_noise``). ``calibration``: the
-    side camera's stated accuracy (``uncertainty.std_parts``). A payload not measurably
-    above zero: EmptyGripperError.
+    side camera's stated accuracy and its depth resolution, ``depth_line`` its depth
+    line's error model (``uncertainty.std_parts``; None: the slices' scatter alone). A
+    payload not measurably above zero: EmptyGripperError.
     """
     use = [i for i, view in enumerate(held.views) if view is not None]
     pair = pair_noise([held.before[i] for i in use], [held.after[i] for i in use], noise)
     q = np.array([held.after[i].q for i in use])
     tau_a = np.array([held.after[i].tau for i in use])
     tau_b = np.array([held.tau_before[i] for i in use])
-    views = [held.views[i] for i in use]
+    first_view = held.views[use[0]]
+    # each later view's depth line from the slices it shares with the first's
+    views = [first_view, *(paired_depth_line(first_view, held.views[i]) for i in use[1:])]
     side, T_obj = held.side, held.side.T_ee_obj
     prior = axis_prior(side) if estimator == "ipopt" else None
 
@@ -107,7 +111,7 @@ def locate_com(
         # h moves that point by h tan(theta) (the prior's std is the h the view allows)
         off_axis = axis_prior(side).std * abs(np.tan(side.theta))
     parts = uncertainty.std_parts(est, views, depth, depth_bounds, position, calibration,
-                                  off_axis)  # fmt: skip
+                                  off_axis, depth_line)  # fmt: skip
     std = float(np.sqrt(sum(v * v for v in parts.values())))
     return ComLocation(est, est_line, com_along_axis(est, T_obj), x_line, path, std, parts)
 

@@ -37,6 +37,27 @@ def depth_change_std(first: SideView, second: SideView) -> tuple[float, float]:
     return float(np.sqrt(cov[1, 1])), float(np.sqrt(cov[0, 0]))
 
 
+def paired_depth_line(first: SideView, second: SideView) -> SideView:
+    """``second`` with its depth line (``surface_y``, ``surface_slope``) put where ``first``'s
+    lies plus the change their paired slices show: the line through the differences of the
+    1 cm slices both views kept (at least 4; both pointing the same way), the fit whose
+    scatter ``depth_change_std`` states. A piece of surface seen in both cancels from the
+    difference, so the handle's profile does not enter (each view's own line depends on
+    which slices it holds: a capsule's rounded end, a head's side, by up to a share of the
+    radius). ``second`` itself where they cannot be paired.
+    """
+    a, b = first.depth_slices, second.depth_slices
+    if a is None or b is None or second.T_ee_obj[:3, 0] @ first.T_ee_obj[:3, 0] < 0:
+        return second
+    common, ia, ib = np.intersect1d(a[:, 0], b[:, 0], return_indices=True)
+    if len(common) < 4:
+        return second
+    along = 0.5 * (a[ia, 1] + b[ib, 1])
+    dslope, dy = np.polyfit(along, b[ib, 2] - a[ia, 2], 1)
+    return replace(second, surface_y=first.surface_y + float(dy),
+                   surface_slope=first.surface_slope + float(dslope))  # fmt: skip
+
+
 def depth_agrees(first: SideView, second: SideView, max_shift: float, max_turn: float) -> bool:
     """Whether the two views' depth lines differ no more than a grasp's compliance moves a
     rod (``max_shift`` m along the jaw axis, ``max_turn`` rad out of the jaws' plane); more

@@ -90,7 +90,7 @@ def trial_grasp(
         raise HeldRodUnmeasuredError(str(exc), heavy) from exc
     try:
         loc = locate_com(cell.robot, held, trial.estimator, noise, depth_bounds,
-                         sensors.side_depth)  # fmt: skip
+                         sensors.side_depth, sensors.side_depth_line)  # fmt: skip
         if needs_another_pose(loc.std, loc.estimate.mass, motion.grip_force, regrasp):
             q_measured = [m.q for m in held.after]
             q = extra_pose(cell.robot, plan, np.array(q_measured), regrasp.extra_rolls_deg)
@@ -100,7 +100,7 @@ def trial_grasp(
                                                  held.tau_before)  # fmt: skip
                 held = held.with_pose(after, tau_before, view)
                 loc = locate_com(cell.robot, held, trial.estimator, noise, depth_bounds,
-                                 sensors.side_depth)  # fmt: skip
+                                 sensors.side_depth, sensors.side_depth_line)  # fmt: skip
     except EmptyGripperError as exc:
         raise RodDroppedError(str(exc), held.heavy_side) from exc
     return trial_measurement(cell.robot, plan, held, loc)

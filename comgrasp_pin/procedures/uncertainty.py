@@ -9,7 +9,8 @@ the jaws. Its variance is the sum of
   the position recomputed with the view turned by it about the jaw axis;
 - two poses: the rod's motion in the jaws between the poses, measured by the two views
   (``rod_motion``), is known to the views' standard errors: ``tilt`` (its turn
-  in the jaws' plane), ``shift`` (along the jaw axis), ``out of plane``; and ``slide``, along
+  in the jaws' plane), ``shift`` (along the jaw axis: the depth line's change, its slices'
+  scatter and its error model, ``depth_line_std``), ``out of plane``; and ``slide``, along
   the rod's own axis, which the views do not measure well: half their disagreement on where
   the jaws hold the rod;
 - ``off axis`` (one pose, closed form): the CoM's distance from the axis at the seen tilt;
@@ -27,7 +28,7 @@ from dataclasses import replace
 import numpy as np
 import pinocchio as pin
 
-from comgrasp_pin.config import DepthNoiseConfig
+from comgrasp_pin.config import DepthLineErrorConfig, DepthNoiseConfig
 from comgrasp_pin.estimation import ComEstimate, com_along_axis
 from comgrasp_pin.procedures.rod_motion import depth_change_std
 
@@ -99,21 +100,51 @@ def tilt_std_one_view(est: ComEstimate, T_ee_obj: np.ndarray, tilt_std: float) -
     return abs(com_along_axis(est, rotate_about_jaws(T_ee_obj, tilt_std)) - x0)
 
 
+def handle_distance(view) -> float:
+    """Distance (m) from the side camera's optical centre (``view.camera_ee``) to the
+    rod's axis at the middle of the slices its depth line was fitted on (along the view's
+    axis from the TCP; at the axis' point nearest the TCP without slices); nan without a
+    camera pose."""
+    if view.camera_ee is None:
+        return float("nan")
+    x_axis, origin = view.T_ee_obj[:3, 0], view.T_ee_obj[:3, 3]
+    slices = view.depth_slices
+    along = float(np.median(slices[:, 1])) if slices is not None and len(slices) else 0.0
+    point = origin + (along - origin @ x_axis) * x_axis
+    return float(np.linalg.norm(point - view.camera_ee))
+
+
+def depth_line_std(first, camera: DepthNoiseConfig,
+                   model: DepthLineErrorConfig | None) -> float:  # fmt: skip
+    """Std (m) of the depth line's change from the ``first`` view to a later one beyond its
+    slices' scatter (``DepthLineErrorConfig.shift_std``): the handle's radius as the first
+    view fitted it, the ``camera``'s depth resolution at ``handle_distance``; 0 without a
+    ``model``."""
+    if model is None:
+        return 0.0
+    distance = handle_distance(first)
+    axial = camera.axial_std(distance) if np.isfinite(distance) else 0.0
+    return model.shift_std(first.radius, axial)
+
+
 def std_parts(est: ComEstimate, views: list, depth: list, bounds: tuple[float, float],
-              position, calibration: DepthNoiseConfig, off_axis: float | None) -> dict:  # fmt: skip
+              position, calibration: DepthNoiseConfig, off_axis: float | None,
+              depth_line: DepthLineErrorConfig | None = None) -> dict:  # fmt: skip
     """The CoM point's standard deviation along the rod (m) by source.
 
     ``est``: the estimate from the poses of ``views`` (each pose's SideView; the first
     defines the rod's axis). One view: its ``tilt``. Several: the rod's motion between them
-    (``motion_stds``; ``depth``, ``bounds`` and ``position`` as there). Then the
-    ``estimator``'s, the side camera's ``calibration`` (its stated accuracy, where
+    (``motion_stds``; ``depth``, ``bounds`` and ``position`` as there; the depth line's
+    error model ``depth_line`` with the side camera's depth resolution, ``depth_line_std``).
+    Then the ``estimator``'s, the side camera's ``calibration`` (its stated accuracy, where
     ``enabled``: ``calibration_std``) and ``off axis`` (m; None: not a source here).
     """
     first = views[0]
     T_ee_obj = first.T_ee_obj
     if len(views) > 1:
         x0 = com_along_axis(est, T_ee_obj)
-        parts = motion_stds(position, views, depth, bounds, x0)
+        line_std = depth_line_std(first, calibration, depth_line)
+        parts = motion_stds(position, views, depth, bounds, x0, line_std)
     else:
         parts = {"tilt": tilt_std_one_view(est, T_ee_obj, first.tilt_std)}
     parts["estimator"] = estimator_std(est, T_ee_obj)
@@ -129,7 +160,7 @@ def std_parts(est: ComEstimate, views: list, depth: list, bounds: tuple[float, f
 
 
 def motion_stds(position, views: list, depth: list, bounds: tuple[float, float],
-                x0: float) -> dict:  # fmt: skip
+                x0: float, line_std: float = 0.0) -> dict:  # fmt: skip
     """The several-pose position's error sources from the rod's motion between the views (m).
 
     ``position(views, depth, slides)``: the CoM point along the first view's rod axis (m)
@@ -141,7 +172,9 @@ def motion_stds(position, views: list, depth: list, bounds: tuple[float, float],
     disagreement on where the jaws hold it. Each source is summed in quadrature over the
     later views. Where a view's depth line was not used (``depth`` False), the shift and the
     out-of-plane turn are taken as uniform within the compliance's bounds (``bounds``: m,
-    rad), standard error bound / sqrt 3.
+    rad), standard error bound / sqrt 3. Where it was used, its change's standard error is
+    its slices' scatter (``depth_change_std``) and ``line_std`` (m, the depth line's error
+    model, ``depth_line_std``) in quadrature.
     """
     first = views[0]
     no_slide = [0.0] * (len(views) - 1)
@@ -149,6 +182,7 @@ def motion_stds(position, views: list, depth: list, bounds: tuple[float, float],
     for i, view in enumerate(views[1:]):
         if depth[i]:
             dy, dslope = depth_change_std(first, view)
+            dy = float(np.hypot(dy, line_std))
         else:  # the depth lines disagree: the motion is within the compliance's bounds,
             # uniform there (std: bound / sqrt 3)
             dy, dslope = bounds[0] / np.sqrt(3.0), float(np.tan(bounds[1])) / np.sqrt(3.0)
