@@ -38,7 +38,7 @@ import cv2
 import numpy as np
 
 from comgrasp_pin.camera import PinholeCamera
-from comgrasp_pin.errors import AmbiguousObjectError
+from comgrasp_pin.errors import AmbiguousObjectError, UntrustedImageError
 from comgrasp_pin.perception.rod_axis import centre_line
 
 OFF_AXIS_MIN_SHARE = 0.2  # smaller blobs are left as they were: the slice medians ignore them
@@ -134,7 +134,13 @@ def check_no_gap(
 
     Raises:
         AmbiguousObjectError: such a gap (two objects in line).
+        UntrustedImageError: no point near the axis (the fit is not the rod's).
     """
+    if not np.any(near):
+        raise UntrustedImageError(
+            "no point of the held rod lies within its radius of the axis fitted to it: the "
+            "fit is not the rod's (too few or too scattered points in this frame)"
+        )
     _, labels = cv2.connectedComponents(mask.astype(np.uint8), connectivity=8)
     blob = labels[mask][near]
     spans = sorted((along[near][blob == k].min(), along[near][blob == k].max())
