@@ -6,7 +6,7 @@ import cv2
 import numpy as np
 
 from comgrasp_pin.camera import PinholeCamera, transform_points
-from comgrasp_pin.errors import InvalidDepthError, ObjectCutByBorderError, ObjectNotFoundError
+from comgrasp_pin.errors import InvalidDepthError, ObjectNotFoundError
 
 
 def check_images(rgb: np.ndarray | None, depth: np.ndarray, camera: PinholeCamera) -> np.ndarray:
@@ -89,15 +89,14 @@ def border_pixels(blob: np.ndarray) -> np.ndarray:
     return edge
 
 
-def largest_component(mask: np.ndarray, min_pixels: int, what: str,
-                      border_ok: bool = False) -> np.ndarray:  # fmt: skip
+def largest_component(mask: np.ndarray, min_pixels: int, what: str) -> np.ndarray:
     """The largest connected blob of ``mask`` after a small opening, and what it cut off.
 
     The opening removes specks and one-pixel bridges; it can also cut a thin neck, such as
     a 1 cm stick's between its handle and its head. Opened pieces that were one blob of
     ``mask`` before the opening are one object: they are kept with the largest.
-    ObjectNotFoundError if there is none, ObjectCutByBorderError if it touches the border
-    (unless ``border_ok``: the caller says why first, e.g. other objects in view).
+    ObjectNotFoundError if there is none. Whether it touches the image's border is the
+    caller's to judge (the top view counts other objects first: ``standing.segment``).
     """
     raw = mask.astype(np.uint8)
     opened = cv2.morphologyEx(raw, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
@@ -107,10 +106,7 @@ def largest_component(mask: np.ndarray, min_pixels: int, what: str,
     best = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
     _, raw_labels = cv2.connectedComponents(raw, connectivity=8)
     seed = tuple(np.argwhere(labels == best)[0])  # a pixel of the largest opened blob
-    blob = (raw_labels == raw_labels[seed]) & (opened > 0)
-    if not border_ok and border_pixels(blob).any():
-        raise ObjectCutByBorderError(f"the object touches the border of the {what}")
-    return blob
+    return (raw_labels == raw_labels[seed]) & (opened > 0)
 
 
 def blobs(mask: np.ndarray, min_pixels: int, what: str, min_blob: int = 20) -> np.ndarray:

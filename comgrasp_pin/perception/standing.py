@@ -41,8 +41,10 @@ def segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, np
     thin rod broken by holes at its edges is one rod), and with a colour image ``rgb`` the
     pixels that differ from the table in colour stand too (a lit top may look like the
     table, a thin rod's ends are lost in the noise), in a blob whose median height stands
-    above the table (a mark or a shadow does not). Raises
-    ObjectNotFoundError, ObjectCutByBorderError, AmbiguousObjectError (a second object).
+    above the table (a mark or a shadow does not), and only where it lines up with the
+    depth (``registration.check_registered``). Raises ObjectNotFoundError,
+    ObjectCutByBorderError, AmbiguousObjectError (a second object; ClutterError for more),
+    ColourDepthMismatchError, and ColourNoHelp where the colour marks none of the object.
     """
     z = view.points[..., 2]
     inside = in_area(view.points, pick_area, EDGE_BAND) & np.isfinite(z)
@@ -56,7 +58,7 @@ def segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, np
         standing = standing | colour
     if view.cleaned:
         standing = closed(standing)
-    mask = largest_component(inside & standing, MIN_PIXELS, "top-down image", border_ok=True)
+    mask = largest_component(inside & standing, MIN_PIXELS, "top-down image")
     check_one_object(inside & standing, mask)  # other objects are the reason to refuse first
     if border_pixels(mask).any():
         raise ObjectCutByBorderError(
