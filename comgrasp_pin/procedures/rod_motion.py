@@ -18,22 +18,30 @@ def _same_direction(T: np.ndarray, T_ref: np.ndarray) -> np.ndarray:
     return T
 
 
+def _paired_slices(first: SideView, second: SideView):
+    """(position along the rod (m), change of the depth line (m)) of the 1 cm slices both
+    views kept, or None where they cannot be paired (a view without slices, the two pointing
+    opposite ways, fewer than 4 in common)."""
+    a, b = first.depth_slices, second.depth_slices
+    if a is None or b is None or second.T_ee_obj[:3, 0] @ first.T_ee_obj[:3, 0] < 0:
+        return None
+    common, ia, ib = np.intersect1d(a[:, 0], b[:, 0], return_indices=True)
+    if len(common) < 4:
+        return None
+    return 0.5 * (a[ia, 1] + b[ib, 1]), b[ib, 2] - a[ia, 2]
+
+
 def depth_change_std(first: SideView, second: SideView) -> tuple[float, float]:
     """Standard errors (m, and per m along the rod) of the change of the depth line from
     ``first`` to ``second``. Paired slice by slice where both views kept their slices and
     point the same way: a piece of surface seen in both cancels from the difference, so the
     error is the scatter of the slices' differences about a line; the two lines' standard
     errors combined otherwise (as if independent)."""
-    a, b = first.depth_slices, second.depth_slices
-    unpaired = (float(np.hypot(first.surface_y_std, second.surface_y_std)),
+    paired = _paired_slices(first, second)
+    if paired is None:
+        return (float(np.hypot(first.surface_y_std, second.surface_y_std)),
                 float(np.hypot(first.surface_slope_std, second.surface_slope_std)))  # fmt: skip
-    if a is None or b is None or second.T_ee_obj[:3, 0] @ first.T_ee_obj[:3, 0] < 0:
-        return unpaired
-    common, ia, ib = np.intersect1d(a[:, 0], b[:, 0], return_indices=True)
-    if len(common) < 4:
-        return unpaired
-    along = 0.5 * (a[ia, 1] + b[ib, 1])
-    _, cov = np.polyfit(along, b[ib, 2] - a[ia, 2], 1, cov=True)  # scaled by the residuals
+    _, cov = np.polyfit(*paired, 1, cov=True)  # scaled by the residuals
     return float(np.sqrt(cov[1, 1])), float(np.sqrt(cov[0, 0]))
 
 
@@ -46,14 +54,10 @@ def paired_depth_line(first: SideView, second: SideView) -> SideView:
     which slices it holds: a capsule's rounded end, a head's side, by up to a share of the
     radius). ``second`` itself where they cannot be paired.
     """
-    a, b = first.depth_slices, second.depth_slices
-    if a is None or b is None or second.T_ee_obj[:3, 0] @ first.T_ee_obj[:3, 0] < 0:
+    paired = _paired_slices(first, second)
+    if paired is None:
         return second
-    common, ia, ib = np.intersect1d(a[:, 0], b[:, 0], return_indices=True)
-    if len(common) < 4:
-        return second
-    along = 0.5 * (a[ia, 1] + b[ib, 1])
-    dslope, dy = np.polyfit(along, b[ib, 2] - a[ia, 2], 1)
+    dslope, dy = np.polyfit(*paired, 1)
     return replace(second, surface_y=first.surface_y + float(dy),
                    surface_slope=first.surface_slope + float(dslope))  # fmt: skip
 
