@@ -21,9 +21,11 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+from unseen.real_failures import WRONG_CENTRE, WRONG_LENGTH, WRONG_YAW_DEG  # (benchmarks/)
 
 from comgrasp_pin.errors import PerceptionError
 from comgrasp_pin.perception import detect_rod_top_down
+from comgrasp_pin.perception._points import points_in
 from comgrasp_pin.perception.camera_input import camera_frame
 from comgrasp_pin.perception.rgbd_files import read_rgbd
 from comgrasp_pin.perception.table_plane import fit_table_plane
@@ -41,10 +43,7 @@ SHARED = {  # folder: (colour, depth, camera info, depth scale, mask, what it sh
 
 def truth_from_mask(depth, camera, T, mask):
     """(centre xy, length, yaw) of the mask's pixels in the frame of ``T`` (1st-99th pct)."""
-    v, u = np.nonzero(mask & (depth > 0))
-    z = depth[v, u]
-    cam = np.column_stack([(u - camera.cx) * z / camera.fx, (v - camera.cy) * z / camera.fy, z])
-    p = cam @ T[:3, :3].T + T[:3, 3]
+    p = points_in(T, depth, camera)[mask & (depth > 0)]
     c = p[:, :2].mean(axis=0)
     d = np.linalg.svd(p[:, :2] - c, full_matrices=False)[2][0]
     lo, hi = np.percentile((p[:, :2] - c) @ d, [1, 99])
@@ -60,7 +59,8 @@ def judge(found, truth, scene: str) -> dict:
     centre, length, yaw = truth
     dyaw = abs((np.degrees(found.grasp.yaw - yaw) + 90) % 180 - 90)
     dc = float(np.hypot(found.grasp.x - centre[0], found.grasp.y - centre[1]))
-    wrong = abs(found.length - length) > 0.2 * length or dyaw > 10 or dc > 0.03
+    wrong = (abs(found.length - length) > WRONG_LENGTH * length or dyaw > WRONG_YAW_DEG
+             or dc > WRONG_CENTRE)  # fmt: skip
     return {"outcome": "wrong" if wrong else "right", "length_mm": round(1e3 * found.length, 1),
             "mask_length_mm": round(1e3 * length, 1), "yaw_err_deg": round(float(dyaw), 1),
             "centre_err_mm": round(1e3 * dc, 1)}  # fmt: skip
