@@ -108,42 +108,6 @@ def _pick_area(text: str) -> tuple[float, float, float, float]:
     return area
 
 
-def read_depth(depth_path: Path, info_path: Path, depth_scale: float | None):
-    """(depth in the camera's units, metres per unit, CameraModel) without a colour image.
-
-    The checks of ``rgbd_files.read_rgbd`` on the depth: a single-channel 16-bit PNG of the
-    camera info's size, the depth scale given or in the camera info (never guessed), the
-    two agreeing where both are given.
-    """
-    import cv2
-
-    from comgrasp_pin.perception.rgbd_files import read_camera_info
-
-    camera, in_info = read_camera_info(info_path)
-    if depth_scale is None and in_info is None:
-        raise CameraFileError(f"no depth_scale: pass --depth-scale (metres per unit of the "
-                              f"depth PNG: 0.001 for millimetres, 0.0001 for a D405) or put "
-                              f"it in {info_path}")  # fmt: skip
-    if depth_scale is not None and in_info is not None:
-        if not np.isclose(depth_scale, in_info, rtol=1e-9):
-            raise CameraFileError(f"depth_scale {depth_scale} given, but {info_path} says "
-                                  f"{in_info}")  # fmt: skip
-    if not Path(depth_path).is_file():
-        raise CameraFileError(f"the depth file {depth_path} does not exist")
-    depth = cv2.imread(str(depth_path), cv2.IMREAD_UNCHANGED)
-    if depth is None:
-        raise CameraFileError(f"cannot read the depth file {depth_path} as an image (PNG)")
-    if depth.dtype != np.uint16 or depth.ndim != 2:
-        channels = 1 if depth.ndim == 2 else depth.shape[2]
-        raise CameraFileError(f"the depth file {depth_path} must be a single-channel 16-bit PNG "
-                              f"(the camera's units), got {channels} channel(s) of "
-                              f"{depth.dtype}")  # fmt: skip
-    if depth.shape != (camera.height, camera.width):
-        raise CameraFileError(f"the depth image is {depth.shape[1]} x {depth.shape[0]} px, the "
-                              f"camera info says {camera.width} x {camera.height}")  # fmt: skip
-    return depth, depth_scale if depth_scale is not None else in_info, camera
-
-
 def _camera_json(files, color_order: str | None) -> dict:
     c = files.camera
     return {"width": c.width, "height": c.height, "K": c.K.tolist(),
@@ -198,7 +162,7 @@ def run(args: argparse.Namespace) -> int:
     import cv2
 
     from comgrasp_pin.perception.camera_input import camera_frame
-    from comgrasp_pin.perception.rgbd_files import RgbdFiles, read_rgbd
+    from comgrasp_pin.perception.rgbd_files import read_rgbd
 
     missing = [f"--{k.replace('_', '-')}" for k in ("depth", "camera_info")
                if getattr(args, k) is None]  # fmt: skip
@@ -207,15 +171,12 @@ def run(args: argparse.Namespace) -> int:
                                 f"optional); missing {', '.join(missing)}")  # fmt: skip
     if args.bgr and args.rgb is None:
         raise InvalidInputError("--bgr tells the colour file's channel order: it needs --rgb")
-    order = ("bgr" if args.bgr else "rgb") if args.rgb is not None else None
-    if args.rgb is not None:
-        files = read_rgbd(args.rgb, args.depth, args.camera_info, args.depth_scale, order)
-    else:  # the depth alone: no colour (rgb None)
-        files = RgbdFiles(None, *read_depth(args.depth, args.camera_info, args.depth_scale))
+    order = "bgr" if args.bgr else "rgb"
+    files = read_rgbd(args.rgb, args.depth, args.camera_info, args.depth_scale, order)
     rgb, depth, camera = camera_frame(files.rgb, files.depth, files.camera, files.depth_scale)
     image, measured = (_top if args.view == "top" else _side)(args, rgb, depth, camera)
     measured["colour"] = str(args.rgb) if args.rgb is not None else False
-    measured["camera"] = _camera_json(files, order)
+    measured["camera"] = _camera_json(files, order if args.rgb is not None else None)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     stem = out / f"{Path(args.depth).stem}_{args.view}_view"

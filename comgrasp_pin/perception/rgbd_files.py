@@ -32,13 +32,13 @@ class RgbdFiles:
     """An RGBD frame read from files, as the camera gave it.
 
     Attributes:
-        rgb: (H, W, 3) uint8 colour, RGB order.
+        rgb: (H, W, 3) uint8 colour, RGB order; None for a depth read without colour.
         depth: (H, W) uint16 depth in the camera's units (0: no depth).
         depth_scale: metres per unit of ``depth``.
         camera: the intrinsics with their lens model (not yet undistorted).
     """
 
-    rgb: np.ndarray
+    rgb: np.ndarray | None
     depth: np.ndarray
     depth_scale: float
     camera: CameraModel
@@ -109,7 +109,7 @@ def _read_image(path: Path, what: str) -> np.ndarray:
 
 
 def read_rgbd(
-    rgb_path: str | Path,
+    rgb_path: str | Path | None,
     depth_path: str | Path,
     camera_info_path: str | Path,
     depth_scale: float | None = None,
@@ -118,7 +118,8 @@ def read_rgbd(
     """Read a colour image, a 16-bit depth PNG and the camera info (see the module).
 
     Args:
-        rgb_path: 8-bit colour PNG or JPEG (grey or with alpha taken too).
+        rgb_path: 8-bit colour PNG or JPEG (grey or with alpha taken too); None: the depth
+            alone (``RgbdFiles.rgb`` None).
         depth_path: single-channel 16-bit PNG, depth aligned to the colour image.
         camera_info_path: JSON or YAML, one of the three layouts.
         depth_scale: metres per unit of the depth PNG; else the camera info's
@@ -143,12 +144,16 @@ def read_rgbd(
             f"the depth file {depth_path} must be a single-channel 16-bit PNG (the camera's "
             f"units), got {channels} channel(s) of {depth.dtype}"
         )
-    colour = _read_image(Path(rgb_path), "colour")
-    if colour.dtype != np.uint8:
-        raise CameraFileError(f"the colour file {rgb_path} must be 8-bit, got {colour.dtype}")
-    colour = _as_rgb(colour, color_order)
+    colour = None
+    if rgb_path is not None:
+        colour = _read_image(Path(rgb_path), "colour")
+        if colour.dtype != np.uint8:
+            raise CameraFileError(f"the colour file {rgb_path} must be 8-bit, got {colour.dtype}")
+        colour = _as_rgb(colour, color_order)
     shape = (camera.height, camera.width)
     for what, image in (("depth", depth), ("colour", colour)):
+        if image is None:
+            continue
         if image.shape[:2] != shape:
             raise CameraFileError(
                 f"the {what} image is {image.shape[1]} x {image.shape[0]} px, the camera info "
