@@ -55,7 +55,7 @@ def locate_com(
     noise: NoiseRule,
     depth_bounds: tuple[float, float],
     calibration: DepthNoiseConfig,
-    depth_line: DepthLineErrorConfig | None = None,
+    depth_line: DepthLineErrorConfig | None,
 ) -> ComLocation:
     """The CoM along the rod from the readings.
 

@@ -129,7 +129,7 @@ def depth_line_std(first, camera: DepthNoiseConfig,
 
 def std_parts(est: ComEstimate, views: list, depth: list, bounds: tuple[float, float],
               position, calibration: DepthNoiseConfig, off_axis: float | None,
-              depth_line: DepthLineErrorConfig | None = None) -> dict:  # fmt: skip
+              depth_line: DepthLineErrorConfig | None) -> dict:  # fmt: skip
     """The CoM point's standard deviation along the rod (m) by source.
 
     ``est``: the estimate from the poses of ``views`` (each pose's SideView; the first
