@@ -1,0 +1,236 @@
+"""The payload from a wrist force/torque sensor at rest: mass, CoM and the sensor's bias.
+
+The arm stands still in several orientations (``comgrasp plan-poses`` plans them); each still
+window of the log gives one mean wrench and the sensor's orientation. ``estimation.wrench``
+fits the mass, the CoM and the sensor's six offsets together: no empty-arm run is needed.
+
+What the sensor carries: everything beyond it (gripper, camera, payload). The URDF's links
+beyond the sensor frame (``tool_beyond``) are the tool the robot knows; their gravity wrench is
+subtracted at each orientation, so that the estimate is what the URDF does not describe, the
+payload. Give ``subtract_tool=False`` to estimate everything beyond the sensor (a tool's own
+identification, or a URDF without the tool). An error in the URDF's tool goes straight into
+the payload: check the tool once by running with nothing held (the mass's interval must then
+hold zero).
+
+Noise of a window's mean: the spread of its samples over sqrt(n), plus ``wrench_std`` (the
+sensor's repeatability between windows, if known), and the residuals' excess over both
+(``estimation.wrench``: the covariance is scaled by chi-square per degree of freedom above 1).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from comgrasp_pin.errors import InvalidInputError, LogError
+from comgrasp_pin.estimation.wrench import StaticWrenchFit, fit_static_wrench
+from comgrasp_pin.robot import RobotModel
+from comgrasp_pin.robot_io.joint_log import JointLog
+from comgrasp_pin.robot_io.payload import T_flange_ee
+from comgrasp_pin.robot_io.windows import (
+    MAX_SPEED,
+    MIN_STATIC_S,
+    find_static_windows,
+    read_window,
+)
+from comgrasp_pin.robot_io.wrench_log import WrenchLog
+
+MAX_CHI2_DOF = 25.0
+"""Residuals above 5 times the windows' own noise (chi-square per degree of freedom above
+25): the rigid-body model does not explain the readings (a contact, a cable pulling, a
+payload that moves in the gripper); the verdict is then ``unreliable``."""
+IDENTIFIED, NOTHING_HELD, UNRELIABLE = "identified", "nothing held", "unreliable"
+
+
+@dataclass(frozen=True)
+class WrenchStaticEstimate:
+    """A payload from the wrench at rest (ee frame for the CoM, like the joint-torque path).
+
+    Attributes:
+        mass: kg (beyond the URDF's tool where ``tool_mass`` > 0).
+        com_ee: (3,) CoM in the ee frame (m); NaN where nothing is held.
+        cov: (4, 4) covariance of (mass, com_ee) (kg, m).
+        com_sensor: (3,) the CoM in the sensor frame (m).
+        sensor_frame: the URDF frame the wrench is measured in.
+        sensor_bias: (6,) the sensor's offsets, force (N) and torque (N m), sensor frame;
+            sensor_bias_std: (6,) their standard deviations.
+        windows: the still windows used, one per orientation (s from the log's start).
+        q: (k, n) the mean configuration of each window (rad).
+        residual_rms_N, residual_rms_Nm: RMS of the force and torque residuals.
+        fit: the fit in the sensor frame (``estimation.wrench.StaticWrenchFit``).
+        tool_mass: kg subtracted as the URDF's tool beyond the sensor (0 where not).
+        tool_com_sensor: (3,) that tool's CoM (sensor frame, m).
+        noise_from: how each window's noise was set, one line.
+        verdict: ``identified``, ``nothing held`` or ``unreliable``; reasons: why.
+    """
+
+    mass: float
+    com_ee: np.ndarray
+    cov: np.ndarray
+    com_sensor: np.ndarray
+    sensor_frame: str
+    sensor_bias: np.ndarray
+    sensor_bias_std: np.ndarray
+    windows: tuple[tuple[float, float], ...]
+    q: np.ndarray
+    residual_rms_N: float
+    residual_rms_Nm: float
+    fit: StaticWrenchFit
+    tool_mass: float
+    tool_com_sensor: np.ndarray
+    noise_from: str
+    verdict: str
+    reasons: tuple[str, ...]
+
+    @property
+    def n_poses(self) -> int:
+        """The number of orientations."""
+        return len(self.windows)
+
+
+def _parent_frame(robot: RobotModel, f_id: int) -> int:
+    """The frame ``f_id`` hangs from.
+
+    A joint the reduced model locked (a finger) becomes a frame that is its own parent there;
+    the full model still knows its parent link.
+    """
+    model = robot.model
+    up = model.frames[f_id].parentFrame
+    if up != f_id:
+        return up
+    full = robot.full_model
+    name = full.frames[full.frames[full.getFrameId(model.frames[f_id].name)].parentFrame].name
+    return model.getFrameId(name)
+
+
+def tool_beyond(robot: RobotModel, sensor_frame: str) -> pin.Inertia:
+    """The URDF's links beyond ``sensor_frame`` as one body, in the sensor frame.
+
+    A link is beyond the sensor when its chain of parent frames reaches the sensor frame
+    without leaving the sensor's rigid body (the last joint's). The sensor frame's own link
+    counts as before the sensor (a sensor's frame is best a massless link of its own).
+    """
+    model = robot.model
+    s_id = model.getFrameId(sensor_frame)
+    joint = model.frames[s_id].parentJoint
+    total = pin.Inertia.Zero()
+    for f_id, frame in enumerate(model.frames):
+        if frame.parentJoint != joint or frame.inertia.mass <= 0:
+            continue
+        up, seen = f_id, set()
+        while up != s_id and up not in seen and model.frames[up].parentJoint == joint:
+            seen.add(up)
+            up = _parent_frame(robot, up)
+        if up == s_id:
+            total += frame.placement.act(frame.inertia)
+    return model.frames[s_id].placement.actInv(total)
+
+
+def _as_joint_log(log: WrenchLog) -> JointLog:
+    """The wrench in the efforts' place, for the still-window machinery of ``windows``."""
+    return JointLog(log.time, log.joint_names, log.position, log.wrench, log.source)
+
+
+def estimate_wrench_static(
+    robot: RobotModel,
+    log: WrenchLog,
+    windows: list[tuple[float, float]] | None = None,
+    max_speed: float = MAX_SPEED,
+    min_duration: float = MIN_STATIC_S,
+    wrench_std: tuple[float, float] | None = None,
+    subtract_tool: bool = True,
+) -> WrenchStaticEstimate:
+    """Mass, CoM (ee frame) and the sensor's bias from the still windows of ``log``.
+
+    Args:
+        robot: the arm's model; ``log.sensor_frame`` must be a frame of it on the last link.
+        log: the wrench and joint positions.
+        windows: still windows (s), one per orientation; None finds them (``--auto``).
+        max_speed: a window is still while every joint is slower than this (rad/s).
+        min_duration: shortest still window found automatically (s).
+        wrench_std: (force N, torque N m) the sensor's repeatability between windows, added
+            to each window's own noise; None for none.
+        subtract_tool: subtract the URDF's links beyond the sensor (see the module docstring).
+
+    Raises:
+        InvalidInputError: the sensor frame is not in the URDF or not on the ee's link.
+        LogError: no still window, or one outside the log.
+        UnobservableError: the orientations do not determine the payload and the bias (the
+            message names the missing rotation).
+    """
+    if list(log.joint_names) != list(robot.joint_names):
+        raise LogError(
+            f"{log.source}: joints {list(log.joint_names)} do not match the URDF's arm joints "
+            f"{list(robot.joint_names)}"
+        )
+    T_sensor_ee = T_flange_ee(robot, log.sensor_frame)  # checks the frame is on the ee's link
+    jlog = _as_joint_log(log)
+    if windows is None:
+        windows = find_static_windows(jlog, max_speed, min_duration)
+        if not windows:
+            raise LogError(
+                f"{log.source}: no still window (every joint below {max_speed:g} rad/s for "
+                f"{min_duration:g} s); give --windows T0:T1,... or record the arm at rest"
+            )
+    readings = [read_window(jlog, t0, t1, max_speed, "window") for t0, t1 in windows]
+    g_world = robot.model.gravity.linear
+    g_sensor = np.array(
+        [robot.frame_pose(r.q, log.sensor_frame)[:3, :3].T @ g_world for r in readings]
+    )
+    wrench = np.array([r.tau for r in readings])
+    tool = tool_beyond(robot, log.sensor_frame) if subtract_tool else pin.Inertia.Zero()
+    tool_moment = tool.mass * tool.lever
+    wrench -= np.array([np.r_[tool.mass * g, np.cross(tool_moment, g)] for g in g_sensor])
+    std = np.array([r.tau_mean_std for r in readings])
+    noise_from = "each window's sample spread / sqrt(n)"
+    if wrench_std is not None:
+        f_std, t_std = (float(v) for v in wrench_std)
+        if not (f_std >= 0 and t_std >= 0 and np.isfinite(f_std + t_std)):
+            raise InvalidInputError(f"wrench_std must be two numbers >= 0, got {wrench_std}")
+        std = np.sqrt(std**2 + np.r_[[f_std] * 3, [t_std] * 3] ** 2)
+        noise_from += f", plus {f_std:g} N and {t_std:g} N m between windows"
+    std = np.maximum(std, 1e-9)  # a noise-free log (simulation): its residuals decide
+    fit = fit_static_wrench(g_sensor, wrench, std, log.sensor_frame)
+    return _estimate(fit, T_sensor_ee, log, windows, readings, tool, noise_from)
+
+
+def _estimate(fit, T_sensor_ee, log, windows, readings, tool, noise_from):
+    T_ee_sensor = np.linalg.inv(T_sensor_ee)
+    R = T_ee_sensor[:3, :3]
+    G = np.eye(4)
+    G[1:, 1:] = R
+    verdict, reasons = IDENTIFIED, []
+    if not fit.held:
+        verdict = NOTHING_HELD
+        reasons.append(
+            f"the mass {fit.mass:.4g} kg is within 3 standard deviations "
+            f"({np.sqrt(fit.cov[0, 0]):.2g} kg) of zero: no payload beyond the URDF's tool"
+        )
+    if fit.chi2_dof > MAX_CHI2_DOF:
+        verdict = UNRELIABLE
+        reasons.append(
+            f"the residuals are {np.sqrt(fit.chi2_dof):.1f} times the windows' noise: the "
+            "readings do not follow a rigid payload (contact, cable, a part moving)"
+        )
+    res = fit.residuals
+    return WrenchStaticEstimate(
+        mass=fit.mass,
+        com_ee=R @ fit.com_sensor + T_ee_sensor[:3, 3],
+        cov=G @ fit.cov @ G.T,
+        com_sensor=fit.com_sensor,
+        sensor_frame=log.sensor_frame,
+        sensor_bias=fit.bias,
+        sensor_bias_std=fit.bias_std,
+        windows=tuple((float(a), float(b)) for a, b in windows),
+        q=np.array([r.q for r in readings]),
+        residual_rms_N=float(np.sqrt(np.mean(res[:, :3] ** 2))),
+        residual_rms_Nm=float(np.sqrt(np.mean(res[:, 3:] ** 2))),
+        fit=fit,
+        tool_mass=float(tool.mass),
+        tool_com_sensor=np.array(tool.lever),
+        noise_from=noise_from,
+        verdict=verdict,
+        reasons=tuple(reasons),
+    )
