@@ -84,13 +84,8 @@ def read_bag(
     names = tuple(joint_names)
     try:
         with AnyReader([bag]) as reader:
-            conns = [c for c in reader.connections if c.topic == topic]
-            if not conns:
-                topics = sorted({f"{c.topic} ({c.msgtype})" for c in reader.connections})
-                raise LogError(f"bag {bag} has no topic {topic!r}; its topics are {topics}")
-            if any(c.msgtype != JOINT_STATE for c in conns):
-                raise LogError(f"topic {topic!r} is {conns[0].msgtype}, not {JOINT_STATE}")
-            rows = _joint_rows(reader, conns, names, windows)
+            conns = topic_connections(reader, topic, JOINT_STATE, bag)
+            rows = _seconds(_joint_rows(reader, conns, names, windows))
     except LogError:
         raise
     except Exception as exc:  # rosbags raises its own error types for broken bags
@@ -99,10 +94,26 @@ def read_bag(
     return log if gains is None else apply_gains(log, gains)
 
 
+def topic_connections(reader, topic: str, msgtype: str, bag: Path) -> list:
+    """The connections of an open bag's ``topic``, which must carry ``msgtype`` messages.
+
+    Raises:
+        LogError: no such topic (the bag's topics listed), or another message type.
+    """
+    conns = [c for c in reader.connections if c.topic == topic]
+    if not conns:
+        topics = sorted({f"{c.topic} ({c.msgtype})" for c in reader.connections})
+        raise LogError(f"bag {bag} has no topic {topic!r}; its topics are {topics}")
+    if any(c.msgtype != msgtype for c in conns):
+        raise LogError(f"topic {topic!r} is {conns[0].msgtype}, not {msgtype}")
+    return conns
+
+
 def _joint_rows(
-    reader, conns, names: tuple[str, ...], windows=None, margin: float = 1.0
-) -> list[tuple[float, list, list]]:
-    """(t (s), position, effort, velocity or None) per message holding all ``names``.
+    reader, conns, names: tuple[str, ...], windows=None, margin: float = 1.0, need_effort=True
+) -> list[tuple]:
+    """(stamp (ns), receive time (ns), position, effort, velocity) per message holding all
+    ``names`` (``_row``; ``need_effort=False``: effort None where a message has none).
 
     Columns in the names' order.
     With ``windows`` ((t0, t1) in s from the first usable message, by receive time), only
@@ -119,12 +130,12 @@ def _joint_rows(
                 skipped = (conn, t_bag, raw)
                 continue
         skipped = None
-        row = _row(reader, conn, t_bag, raw, names, cache, seen)
+        row = _row(reader, conn, t_bag, raw, names, cache, seen, need_effort)
         if row is not None:
             rows.append(row)
             t_first = row[1] if t_first is None else t_first
     if skipped is not None:  # the log's end: the last message
-        row = _row(reader, *skipped, names, cache, seen)
+        row = _row(reader, *skipped, names, cache, seen, need_effort)
         rows += [] if row is None else [row]
     if not rows:
         missing = sorted(set(names) - seen)
@@ -132,6 +143,14 @@ def _joint_rows(
             f"no JointState message holds all the arm's joints: {missing} never appear "
             f"(joints in the log: {sorted(seen)}; the URDF's arm joints: {list(names)})"
         )
+    return rows
+
+
+def _seconds(rows: list[tuple]) -> list[tuple]:
+    """``_joint_rows``' rows as (t (s) from the first, position, effort, velocity).
+
+    Times are the header stamps, or the receive times where a stamp is zero.
+    """
     # integer ns from the first message: float seconds since 1970 keep only 0.2 us
     stamps = np.array([r[0] for r in rows], dtype=np.int64)
     ns = stamps if np.all(stamps > 0) else np.array([r[1] for r in rows], dtype=np.int64)
@@ -139,11 +158,12 @@ def _joint_rows(
     return [(t, *r[2:]) for t, r in zip(times, rows)]
 
 
-def _row(reader, conn, t_bag, raw, names, cache, seen):
+def _row(reader, conn, t_bag, raw, names, cache, seen, need_effort=True):
     """(stamp (ns), receive time (ns), position, effort, velocity or None) of one message.
 
     The row is None when the message lacks an arm joint; ``cache`` maps a message's name list to the
-    arm joints' indices.
+    arm joints' indices. A message without efforts is refused, or with ``need_effort=False``
+    gives effort None.
     """
     msg = reader.deserialize(raw, conn.msgtype)
     key = tuple(msg.name)
@@ -154,7 +174,8 @@ def _row(reader, conn, t_bag, raw, names, cache, seen):
     idx = cache[key]
     if idx is None:
         return None
-    if len(msg.effort) != len(key):
+    has_effort = len(msg.effort) == len(key)
+    if need_effort and not has_effort:
         raise LogError(
             f"the JointState messages carry {len(msg.effort)} efforts for {len(key)} "
             "joints: the log has no joint efforts (torques); record them (e.g. the "
@@ -162,7 +183,8 @@ def _row(reader, conn, t_bag, raw, names, cache, seen):
         )
     stamp = int(msg.header.stamp.sec) * 10**9 + int(msg.header.stamp.nanosec)
     velocity = msg.velocity[idx] if len(msg.velocity) == len(key) else None
-    return stamp, int(t_bag), msg.position[idx], msg.effort[idx], velocity
+    effort = msg.effort[idx] if has_effort else None
+    return stamp, int(t_bag), msg.position[idx], effort, velocity
 
 
 def read_csv(

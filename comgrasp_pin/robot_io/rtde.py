@@ -102,22 +102,9 @@ def read_rtde(
             number, NaN or inf, fewer than two samples.
     """
     path = Path(path)
-    line = file_checks.first_line(path, "UR log", file_checks.MAX_CSV_BYTES,
-                                  file_checks.MAX_CSV_HEADER_BYTES, LogError)  # fmt: skip
-    header = _columns(line)
-    if not is_rtde_header(line):
-        raise LogError(
-            f"{path} is not a UR RTDE recording: its header lacks {TIME!r} and "
-            f"'{POSITION}_0' (record.py or ur_rtde's startFileRecording write them)"
-        )
     names = tuple(joint_names)
-    n = _n_joints(header)
-    if n != len(names):
-        raise LogError(
-            f"UR log {path} has {n} joints ({POSITION}_0..{POSITION}_{n - 1}); the URDF's "
-            f"arm has {len(names)} ({list(names)}): give the URDF of the arm that recorded "
-            "it, whose chain's joints are the log's 0..n-1"
-        )
+    header, delimiter = recording_header(path, names)
+    n = len(names)
     if gains is not None and gains.joint_names not in (None, names):
         raise LogError(
             f"the drive gains ({gains.source}) belong to the joints {list(gains.joint_names)}, "
@@ -126,7 +113,7 @@ def read_rtde(
     velocity = _vector(header, VELOCITY, n)
     efforts, current_gains = _effort_columns(header, n, gains, path)
     cols = [header.index(TIME), *(_vector(header, POSITION, n) or []), *efforts, *(velocity or [])]
-    data = _load(path, "," if "," in line else None, cols)
+    data = _load(path, delimiter, cols)
     bad = np.argwhere(~np.isfinite(data))
     if len(bad):
         row, col = bad[0]
@@ -140,6 +127,31 @@ def read_rtde(
         effort = effort * current_gains
     qd = data[:, 1 + 2 * n :] if velocity is not None else None
     return assemble_log(t, q, effort, qd, names, str(path), current_gains)
+
+
+def recording_header(path: Path, names: tuple[str, ...]) -> tuple[list[str], str | None]:
+    """(the column names, the delimiter: "," or None for white space) of a UR recording.
+
+    Raises:
+        LogError: the file fails ``file_checks.first_line``, has no RTDE header, or another
+            number of joints than ``names``.
+    """
+    line = file_checks.first_line(path, "UR log", file_checks.MAX_CSV_BYTES,
+                                  file_checks.MAX_CSV_HEADER_BYTES, LogError)  # fmt: skip
+    header = _columns(line)
+    if not is_rtde_header(line):
+        raise LogError(
+            f"{path} is not a UR RTDE recording: its header lacks {TIME!r} and "
+            f"'{POSITION}_0' (record.py or ur_rtde's startFileRecording write them)"
+        )
+    n = _n_joints(header)
+    if n != len(names):
+        raise LogError(
+            f"UR log {path} has {n} joints ({POSITION}_0..{POSITION}_{n - 1}); the URDF's "
+            f"arm has {len(names)} ({list(names)}): give the URDF of the arm that recorded "
+            "it, whose chain's joints are the log's 0..n-1"
+        )
+    return header, "," if "," in line else None
 
 
 def _effort_columns(header: list[str], n: int, gains: Gains | None, path: Path):
@@ -170,11 +182,12 @@ def _effort_columns(header: list[str], n: int, gains: Gains | None, path: Path):
     return currents, gains.values
 
 
-def _load(path: Path, delimiter: str | None, cols: list[int]) -> np.ndarray:
+def _load(path: Path, delimiter: str | None, cols: list[int], what: str = "UR log") -> np.ndarray:
+    """The ``cols`` of a text log below its header row, (N, len(cols)); ``what`` names it."""
     try:
         data = np.loadtxt(path, delimiter=delimiter, skiprows=1, usecols=cols, ndmin=2)
     except ValueError as exc:
-        raise LogError(f"UR log {path} has a value that is not a number: {exc}") from None
+        raise LogError(f"{what} {path} has a value that is not a number: {exc}") from None
     except MemoryError:  # within MAX_CSV_BYTES, yet more than this machine holds
-        raise LogError(f"UR log {path} is too large to load here") from None
+        raise LogError(f"{what} {path} is too large to load here") from None
     return data
