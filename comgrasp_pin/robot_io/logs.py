@@ -112,9 +112,9 @@ def topic_connections(reader, topic: str, msgtype: str, bag: Path) -> list:
 def _joint_rows(
     reader, conns, names: tuple[str, ...], windows=None, margin: float = 1.0, need_effort=True
 ) -> list[tuple]:
-    """(stamp (ns), receive time (ns), position, effort, velocity) per message holding all
-    ``names`` (``_row``; ``need_effort=False``: effort None where a message has none).
+    """(stamp (ns), receive time (ns), position, effort, velocity) per message with all names.
 
+    ``_row`` reads each; ``need_effort=False``: effort None where a message has none.
     Columns in the names' order.
     With ``windows`` ((t0, t1) in s from the first usable message, by receive time), only
     the messages within ``margin`` s of a window and the last one are deserialized.
