@@ -99,16 +99,54 @@ def estimate_com(
     Q, b = q_arr.reshape(-1, n), dtau.ravel()
     chol = check_dtau_cov(dtau_cov, b.size, torque_std)
     g = robot.model.gravity.linear
-    g_norm = math.sqrt(float(g @ g))
     Y, T = stacked_regressor(robot, Q, g)
     if payload_motion_ee is not None:
-        maps = motion_maps(payload_motion_ee, len(Q))
-        Y = np.concatenate([Y[i * n : (i + 1) * n] @ maps[i] for i in range(len(Q))])
-    seen = observe(Y, rcond, lambda: (g @ T[0, :3, :3]) / g_norm)  # gravity in the ee frame
-    data = _Data(Y, b, T, g_norm)
+        Y = carried(Y, payload_motion_ee, len(Q))
     row_std = None if sigma is None else math.sqrt(2.0) * sigma  # of a difference
     if isinstance(row_std, np.ndarray):
         row_std = np.tile(row_std, len(Q))
+    return solve_rows(Y, b, T, g, row_std, chol, method, rcond, loss, huber_delta, com_prior)
+
+
+def carried(Y: np.ndarray, payload_motion_ee: np.ndarray, k: int) -> np.ndarray:
+    """The rows of k poses (pose-major, equal blocks) in theta at the first pose."""
+    maps = motion_maps(payload_motion_ee, k)
+    r = len(Y) // k
+    return np.concatenate([Y[i * r : (i + 1) * r] @ maps[i] for i in range(k)])
+
+
+def solve_rows(
+    Y: np.ndarray,
+    b: np.ndarray,
+    T: np.ndarray,
+    g: np.ndarray,
+    row_std: float | np.ndarray | None,
+    chol: np.ndarray | None,
+    method: str,
+    rcond: float = RCOND,
+    loss: str = "l2",
+    huber_delta: float = 3.0,
+    com_prior: AxisPrior | None = None,
+) -> ComEstimate:
+    """Steps 1-4 of the module docstring on any stacked rows b = Y theta + noise.
+
+    Args:
+        Y: (rows, 4) the rows in theta = (m, m c_ee): joint torques' (``stacked_regressor``),
+            a wrist sensor's (``wrench_com``), or both stacked.
+        b: (rows,) the measured differences (N m, N).
+        T: (k, 4, 4) T_world_ee at the poses.
+        g: (3,) the model's gravity (m/s^2).
+        row_std: each row's std (scalar or (rows,)); None: from the residuals.
+        chol: the lower Cholesky factor of the rows' covariance, in place of ``row_std``.
+        method: as ``estimate_com``.
+        rcond: as ``estimate_com``.
+        loss: as ``estimate_com``.
+        huber_delta: as ``estimate_com``.
+        com_prior: as ``estimate_com``.
+    """
+    g_norm = math.sqrt(float(g @ g))
+    seen = observe(Y, rcond, lambda: (g @ T[0, :3, :3]) / g_norm)  # gravity in the ee frame
+    data = _Data(Y, b, T, g_norm)
     ls = fit(Y, b, seen, row_std, chol)
     if method == "lstsq":
         cov = None
