@@ -39,7 +39,7 @@ from comgrasp_pin.robot_io.logs import JointLog, read_bag, read_csv, read_log
 from comgrasp_pin.robot_io.mount import load_robot
 from comgrasp_pin.robot_io.payload import Payload, T_flange_ee, payload_in_flange
 from comgrasp_pin.robot_io.planning import PosePlan, plan_measurement_poses
-from comgrasp_pin.robot_io.record import write_bag, write_csv
+from comgrasp_pin.robot_io.record import write_bag, write_csv, write_wrench_bag, write_wrench_csv
 from comgrasp_pin.robot_io.rtde import read_rtde
 from comgrasp_pin.robot_io.static_report import result_dict, summary
 from comgrasp_pin.robot_io.windows import (
@@ -48,6 +48,13 @@ from comgrasp_pin.robot_io.windows import (
     pair_by_configuration,
     parse_windows,
     read_window,
+)
+from comgrasp_pin.robot_io.wrench_log import WrenchLog
+from comgrasp_pin.robot_io.wrench_sources import (
+    read_rtde_wrench,
+    read_wrench_bag,
+    read_wrench_csv,
+    read_wrench_log,
 )
 
 __all__ = [
@@ -63,6 +70,7 @@ __all__ = [
     "PosePlan",
     "StaticReading",
     "T_flange_ee",
+    "WrenchLog",
     "calibrate_gains",
     "check_on_log",
     "estimate_from_log",
@@ -83,7 +91,11 @@ __all__ = [
     "read_csv",
     "read_log",
     "read_rtde",
+    "read_rtde_wrench",
     "read_window",
+    "read_wrench_bag",
+    "read_wrench_csv",
+    "read_wrench_log",
     "result_dict",
     "ros2_yaml",
     "summary",
@@ -93,4 +105,6 @@ __all__ = [
     "write_franka",
     "write_ros2",
     "write_urscript",
+    "write_wrench_bag",
+    "write_wrench_csv",
 ]
