@@ -2,6 +2,7 @@
 
     tree.py     EpisodeConfig -> trial, regrasp, motion, sensors, world; run.json records it
     sensors.py  the sensors' part (torque sensor, depth cameras' errors) and its presets
+    wrench.py   the wrist force/torque sensor's part (data-sheet classes, part of the sensors')
     depth_line.py  the wrist camera's depth-line error model (part of the sensors')
     trial.py    the trial grasp's part, and the procedure a real arm's sensors need
     paths.py    every number of the tree by its dotted path (``motion.grip_force``), for sweeps
@@ -21,6 +22,12 @@ from comgrasp_pin.config.sensors import (
 )
 from comgrasp_pin.config.tree import EpisodeConfig, MotionConfig, RegraspConfig, WorldConfig
 from comgrasp_pin.config.trial import ESTIMATORS, TAU_BEFORE, TrialConfig, hardware_trial
+from comgrasp_pin.config.wrench import (
+    WRENCH_MODELS,
+    WRENCH_PRESETS,
+    WrenchSensorConfig,
+    wrench_preset,
+)
 
 __all__ = [
     "SENSOR_PRESETS",
@@ -36,5 +43,9 @@ __all__ = [
     "ESTIMATORS",
     "TAU_BEFORE",
     "WorldConfig",
+    "WRENCH_MODELS",
+    "WRENCH_PRESETS",
+    "WrenchSensorConfig",
     "sensor_preset",
+    "wrench_preset",
 ]

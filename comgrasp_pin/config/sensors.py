@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 from comgrasp_pin.config.depth_line import DepthLineErrorConfig
+from comgrasp_pin.config.wrench import WrenchSensorConfig, wrench_preset
 from comgrasp_pin.errors import InvalidInputError
 
 TORQUE_KINDS = ("link", "current")
@@ -158,6 +159,7 @@ class SensorConfig:
         side_frames_tolerance: a frame's value this far from the pixel's median over the
             frames is left out of its mean (m): 5 mm, the side view's flying-pixel threshold
             (8 noise stds of the D435 at the held rod, 0.15-0.6 mm).
+        wrench: the wrist force/torque sensor's error model (``config.wrench``).
     """
 
     preset: str = "ideal"
@@ -171,6 +173,7 @@ class SensorConfig:
     watch_stride: int = 3
     side_frames: int = 1
     side_frames_tolerance: float = 0.005
+    wrench: WrenchSensorConfig = field(default_factory=WrenchSensorConfig)
 
     def __post_init__(self) -> None:
         frames = self.side_frames
@@ -261,10 +264,12 @@ def sensor_preset(name: str) -> SensorConfig:
     """The sensors of a named preset.
 
     ``"ideal"``: today's defaults exactly (renders as they are, 0.05 N m white torque noise,
-    the robot's model of its gripper exact). ``"realistic"``: RealSense-class depth (D415
-    above the table, D435 on the wrist), link-side torque sensors with offsets and drift,
-    and a gripper 3 % heavier than modelled with its CoM 2 mm off. ``"realistic_current"``:
-    the same with a UR CB3-style current-based torque reading (friction, hysteresis).
+    the wrist sensor's white noise alone, the robot's model of its gripper exact).
+    ``"realistic"``: RealSense-class depth (D415 above the table, D435 on the wrist),
+    link-side torque sensors with offsets and drift, a Robotiq FT 300-S class wrist sensor
+    with its offset and drift (``config.wrench``), and a gripper 3 % heavier than modelled
+    with its CoM 2 mm off. ``"realistic_current"``: the same with a UR CB3-style
+    current-based torque reading (friction, hysteresis).
     ``"ideal+SOURCE"``: the ideal sensors with one of the realistic presets' error sources
     (``SOURCES``), for a sensitivity study.
     """
@@ -275,5 +280,5 @@ def sensor_preset(name: str) -> SensorConfig:
     if name in ("realistic", "realistic_current"):
         torque = _LINK_TORQUE if name == "realistic" else _CURRENT_TORQUE
         return SensorConfig(name, torque, _D415, _D435, gripper_mass_error=0.03,
-                            gripper_com_error=0.002)  # fmt: skip
+                            gripper_com_error=0.002, wrench=wrench_preset("ft300s"))  # fmt: skip
     raise InvalidInputError(f"unknown sensor preset {name!r}; presets are {SENSOR_PRESETS}")

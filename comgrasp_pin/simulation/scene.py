@@ -117,7 +117,7 @@ class World:
             extras.append(lambda spec: misstate_gripper(spec, sensors.gripper_mass_error,
                                                         sensors.gripper_com_error))  # fmt: skip
         model = build_model(config.world, extras=extras)
-        self.sim = Simulation(model, config.world, sensors.torque, seed=seed)
+        self.sim = Simulation(model, config.world, sensors.torque, seed, sensors.wrench)
         self.rig = CameraRig(model, noise=depth_noises(sensors, seed))
         self.sim.reset_arm(Q_PARK)
         self.sim.hold(config.world.settle_time)  # the rod settles on the table

@@ -8,12 +8,25 @@ from contextlib import contextmanager
 import mujoco
 import numpy as np
 
-from comgrasp_pin.config import TorqueSensorConfig, WorldConfig
+from comgrasp_pin.config import TorqueSensorConfig, WorldConfig, WrenchSensorConfig
 from comgrasp_pin.errors import InvalidInputError, UnstablePhysicsError
 from comgrasp_pin.procedures.cell import TorqueMeasurement
 from comgrasp_pin.simulation.servo import ArmServo
 from comgrasp_pin.simulation.torque_sensor import make_torque_sensor
-from comgrasp_pin.simulation.world import ARM_JOINTS, EE_SITE, FINGER_JOINTS, build_model
+from comgrasp_pin.simulation.world import (
+    ARM_JOINTS,
+    EE_SITE,
+    FINGER_JOINTS,
+    FT_SENSORS,
+    build_model,
+)
+from comgrasp_pin.simulation.wrench_sensor import (
+    WrenchMeasurement,
+    WrenchSensor,
+    steps_per_sample,
+    window_measurement,
+    wrench_from_sensors,
+)
 
 _W = mujoco.mjtWarning
 UNSTABLE = slice(int(_W.mjWARN_BADQPOS), int(_W.mjWARN_BADCTRL) + 1)
@@ -36,6 +49,8 @@ class Simulation:
         grip_force: commanded force of each finger (N); positive closes, negative opens.
         tau_measured: (6,) the torque sensor's latest sample (N m), noisy (formed when
             read: samples nobody reads only advance the sensor's noise and drift).
+        wrench_sensor: the wrist force/torque sensor (``wrench_sensor.WrenchSensor``),
+            sampling every ``wrench_steps``-th step; read by ``measure``.
         observers: callables ``f(sim)`` run after every physics step (video recording, slip
             monitoring); each should return at once unless it is its time to act.
     """
@@ -46,6 +61,7 @@ class Simulation:
         config: WorldConfig | None = None,
         sensor: TorqueSensorConfig | None = None,
         seed: int | None = None,
+        wrench: WrenchSensorConfig | None = None,
     ):
         self.config = config or WorldConfig()
         self.model = build_model(config) if model is None else model
@@ -72,6 +88,12 @@ class Simulation:
         self.q_des = np.zeros(len(ARM_JOINTS))
         self.grip_force = 0.0
         self.sensor = make_torque_sensor(len(ARM_JOINTS), sensor or TorqueSensorConfig(), seed)
+        wrench = wrench or WrenchSensorConfig()
+        self.wrench_sensor = WrenchSensor(wrench, seed)
+        self.wrench_steps = steps_per_sample(wrench, m.opt.timestep)
+        adr = m.sensor(FT_SENSORS[0]).adr[0]
+        if m.sensor(FT_SENSORS[1]).adr[0] != adr + 3:
+            raise InvalidInputError("the wrist sensor's force and torque must be adjacent")
         mujoco.mj_forward(m, self.data)
         self._tau = self.joint_torques()
         self._unread = 0  # control steps since the sensor's last formed sample
@@ -80,6 +102,7 @@ class Simulation:
         self._q_arm, self._qd_arm = d.qpos[self._arm_qadr], d.qvel[self._arm_vadr]
         self._bias_arm, self._ctrl_arm = d.qfrc_bias[self._arm_vadr], d.ctrl[self._arm_act]
         self._tau_true = d.sensordata[self._tau_adr]
+        self._ft_true = d.sensordata[adr : adr + 6]  # MuJoCo's convention: the arm's on the tool
         self.observers: list[Callable[[Simulation], None]] = []
         self._unstable_counts = self.data.warning.number[UNSTABLE]  # a live view
 
@@ -121,6 +144,11 @@ class Simulation:
     def joint_torques(self) -> np.ndarray:
         """(6,) torque each arm drive exerts now (N m): the truth behind the sensor."""
         return self.data.sensordata[self._tau_adr].copy()
+
+    def wrench_true(self) -> np.ndarray:
+        """(6,) the true wrench the tool side applies to the wrist sensor now (force N,
+        torque N m, ``ft_sensor`` frame): the truth behind the wrist sensor."""
+        return wrench_from_sensors(self._ft_true)
 
     def ee_pose(self) -> np.ndarray:
         """(4, 4) T_world_ee of the eelink site."""
@@ -197,13 +225,26 @@ class Simulation:
         self.step(int(round(duration / self.model.opt.timestep)))
 
     def measure_torques(self, settle: float, window: float) -> TorqueMeasurement:
-        """Hold still for ``settle`` s, then average the sensor over ``window`` s."""
+        """Hold still for ``settle`` s, then average the torque sensor over ``window`` s."""
+        return self.measure(settle, window, wrench=False)[0]
+
+    def measure_wrench(self, settle: float, window: float) -> WrenchMeasurement:
+        """Hold still for ``settle`` s, then average the wrist sensor over ``window`` s."""
+        return self.measure(settle, window)[1]
+
+    def measure(
+        self, settle: float, window: float, wrench: bool = True
+    ) -> tuple[TorqueMeasurement, WrenchMeasurement | None]:
+        """Hold still for ``settle`` s, then average the joint torques and (``wrench``) the
+        wrist sensor over the same ``window`` s: the torque sensor's samples of every step,
+        the wrist sensor's of every ``wrench_steps``-th; both at the window's mean ``q``."""
         self.hold(settle)
         start = self.time
         dt = self.model.opt.timestep
         n = max(1, int(round(window / dt)))
         taus = np.empty((n, len(ARM_JOINTS)))
         qs = np.empty((n, len(ARM_JOINTS)))
+        wrenches = np.empty((n, 6)) if wrench else None
         # Without observers (which may read the sensor) the window's samples are formed at
         # once from the true torques, as the sensor would have formed them step by step.
         at_once = not (self.sensor.needs_velocity or self.observers)
@@ -211,10 +252,18 @@ class Simulation:
             self.step()
             taus[k] = self._tau_true if at_once else self.tau_measured
             qs[k] = self._q_arm
+            if wrenches is not None:
+                wrenches[k] = self._ft_true
         if at_once:
             taus = self._catch_up(taus)
         std_error = taus.std(axis=0, ddof=1) / np.sqrt(n) if n > 1 else np.full(6, np.inf)
-        return TorqueMeasurement(taus.mean(axis=0), std_error, qs.mean(axis=0), n, n * dt, start)
+        q = qs.mean(axis=0)
+        torques = TorqueMeasurement(taus.mean(axis=0), std_error, q, n, n * dt, start)
+        if wrenches is None:
+            return torques, None
+        first = int(round(start / dt))  # the step count of the first step's state
+        return torques, window_measurement(self.wrench_sensor, wrench_from_sensors(wrenches),
+                                           first, self.wrench_steps, q, dt)  # fmt: skip
 
 
 def _contiguous(index: np.ndarray, what: str) -> slice:

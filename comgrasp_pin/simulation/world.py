@@ -30,6 +30,11 @@ FINGER_JOINTS = ("finger_left_joint", "finger_right_joint")
 GRIPPER_BODIES = ("gripper_base", "finger_left", "finger_right")
 PAD_GEOMS = ("pad_left", "pad_right")
 EE_SITE = "eelink"
+FT_SITE = "ft_sensor"
+"""The wrist force/torque sensor's site, at the origin of the URDF's ``ft_sensor`` frame (on
+the flange, z out of it): MuJoCo's ``force`` and ``torque`` sensors ``FT_SENSORS`` on it
+measure what the gripper's subtree (fingers, and what they hold) exchanges with the arm."""
+FT_SENSORS = ("ft_force", "ft_torque")
 TOP_CAMERA = "top_down"
 SIDE_CAMERA = "side_camera"
 
@@ -168,6 +173,27 @@ def _add_sensors_and_cameras(spec: mujoco.MjSpec, config: WorldConfig) -> None:
             objname=name,
             objtype=mujoco.mjtObj.mjOBJ_JOINT,
         )
+    add_ft_sensor(spec, FT_SITE)
     spec.body("side_camera").add_camera(
         name=SIDE_CAMERA, quat=list(_QUAT_OPTICAL_MUJOCO_WXYZ), fovy=config.side_camera_fovy_deg
     )
+
+
+def add_ft_sensor(spec: mujoco.MjSpec, body: str) -> None:
+    """A site ``FT_SITE`` at the origin of ``body`` (a body welded to its parent: the wrist
+    sensor's tool side) and MuJoCo's ``force`` and ``torque`` sensors ``FT_SENSORS`` on it.
+
+    MuJoCo's convention (XML reference, sensor/force and sensor/torque): the site's body is
+    the child; the sensors give the interaction between its subtree and its parent, in the
+    site's frame, torque about the site: the wrench the parent (the arm) applies to the
+    subtree, i.e. minus the wrench of ``robot_io.wrench_log``'s convention
+    (``wrench_sensor.wrench_from_sensors`` turns one into the other).
+    """
+    spec.body(body).add_site(name=FT_SITE, size=[0.005, 0, 0], group=_COLLISION_GROUP)
+    for name, kind in zip(FT_SENSORS, ("FORCE", "TORQUE"), strict=True):
+        spec.add_sensor(
+            name=name,
+            type=getattr(mujoco.mjtSensor, f"mjSENS_{kind}"),
+            objname=FT_SITE,
+            objtype=mujoco.mjtObj.mjOBJ_SITE,
+        )
