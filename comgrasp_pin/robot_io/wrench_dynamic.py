@@ -1,0 +1,288 @@
+"""The whole payload from a motion seen by a wrist force/torque sensor (and the joint torques).
+
+The wrench the tool side applies to the sensor is linear in its ten inertial parameters given
+the sensor frame's velocity, acceleration and gravity (``wrench_system``): per kept sample six
+rows, with the sensor's bias, its drift over the motion (a cubic per axis, as the joint
+torques' offsets) and the wrench's delay behind the positions unknown alongside. The fit, its
+error bars, the validation and the verdict are the joint-torque path's (``dynamic``): weights
+per axis from the residual noise, a physically consistent fit (``fit_payload``), a
+delete-a-block jackknife for the noise and the model's error, each fifth of the motion
+predicted from the rest, the two halves compared, and nothing held where the mass's 95 %
+interval holds zero.
+
+The sensor carries the tool (gripper, camera) as well as the payload, and the tool's gravity
+wrench turns with the sensor, so no bias absorbs it. Its parameters are subtracted, with
+their covariance, from the best source given:
+- ``empty_log``: a run with the tool and no payload, of any motion: the tool's ten parameters
+  are fitted from it (with its own bias, drift and delay);
+- ``tool_params``: known (ee frame), with ``tool_cov`` if known;
+- the URDF's links beyond the sensor frame (``wrench_static.tool_beyond``): the last resort,
+  never ``identified`` in the verdict (its error on a real tool is not known).
+
+Where the log holds joint torques too (``WrenchLog.effort``) and ``combine_joint_torques``,
+their rows (``payload_system``, the arm's own torques from ``arm_model``, else the empty run
+if it is the same motion, else the URDF's model with friction) are stacked with the wrench's
+and one payload is fitted (``wrench_combined``); ``contributions`` says what share of the
+information about the mass, the CoM and the principal moments came from each, and the two
+sources alone must agree.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from comgrasp_pin import validate
+from comgrasp_pin.errors import InvalidInputError, MotionLogError, UnobservableError
+from comgrasp_pin.estimation import ComEstimate
+from comgrasp_pin.estimation.payload_regressor import condition_number, parameter_scale
+from comgrasp_pin.robot import RobotModel
+from comgrasp_pin.robot_io import dynamic_uncertainty as du
+from comgrasp_pin.robot_io import wrench_combined as wc
+from comgrasp_pin.robot_io.arm_model import ArmModel
+from comgrasp_pin.robot_io.dynamic import _halves
+from comgrasp_pin.robot_io.dynamic_fit import error_sources, fit_payload
+from comgrasp_pin.robot_io.motion_signals import CUTOFF_HZ, MIN_PEAK_SPEED
+from comgrasp_pin.robot_io.motion_system import DRIFT_DEGREE, about_com, prior_of, row_noise
+from comgrasp_pin.robot_io.payload_system import ARM_MODEL, EMPTY_RUN, NOMINAL, payload_system
+from comgrasp_pin.robot_io.verdict import MIN_EXPLAINED, UNRELIABLE, Checks, verdict
+from comgrasp_pin.robot_io.wrench_estimate import JointTorquePart, WrenchDynamicEstimate
+from comgrasp_pin.robot_io.wrench_log import WrenchLog
+from comgrasp_pin.robot_io.wrench_system import (
+    as_joint_log,
+    gravity_in_sensor,
+    nominal_tool,
+    wrench_system,
+)
+
+TOOL_EMPTY_RUN = "empty run (the tool's parameters fitted)"
+TOOL_GIVEN = "given"
+TOOL_NOMINAL = "URDF links beyond the sensor (nominal)"
+
+
+@dataclass(frozen=True)
+class _Tool:
+    params: np.ndarray  # (10,) ee frame
+    cov: np.ndarray  # (10, 10)
+    source: str
+
+
+def estimate_wrench_dynamic(
+    robot: RobotModel,
+    log: WrenchLog,
+    window: tuple[float, float] | None = None,
+    cutoff_hz: float = CUTOFF_HZ,
+    prior: ComEstimate | tuple[np.ndarray, np.ndarray] | None = None,
+    combine_joint_torques: bool = True,
+    arm_model: ArmModel | None = None,
+    empty_log: WrenchLog | None = None,
+    empty_window: tuple[float, float] | None = None,
+    tool_params: np.ndarray | None = None,
+    tool_cov: np.ndarray | None = None,
+) -> WrenchDynamicEstimate:
+    """Identify the held payload's ten inertial parameters (ee frame) from a motion's wrench.
+
+    Args:
+        robot: the arm; its model's gravity is the one the wrench was measured under;
+            ``log.sensor_frame`` must be one of its frames, rigidly joined to the ee frame.
+        log: the motion holding the payload: positions, the wrench (and joint torques).
+        window: (t0, t1) s of ``log`` to use, or None: the whole log.
+        cutoff_hz: the low-pass filter's cutoff (Hz).
+        prior: a static estimate of the same payload in the ee frame (a ComEstimate, or
+            ((4,) mass and CoM, (4, 4) their covariance)), or None.
+        combine_joint_torques: use ``log.effort`` too where the log has it.
+        arm_model: the arm's identified dynamics, for the joint-torque rows.
+        empty_log: the tool without the payload, any motion, the same sensor frame.
+        empty_window: (t0, t1) s of ``empty_log``, or None.
+        tool_params: (10,) the tool's parameters (ee frame, Pinocchio's order), instead of
+            an empty run.
+        tool_cov: (10, 10) their covariance (default zero).
+
+    Raises:
+        InvalidInputError: a sensor frame not rigidly joined to the ee frame; an empty run of
+            another sensor frame; both an empty run and tool parameters; bad tool parameters.
+        MotionLogError: a log too short, still, jerky, at a joint limit, with gaps.
+        UnobservableError: the motion does not determine the parameters (the message names
+            the joints that barely move and how far gravity turns in the sensor frame).
+        SolverError: IPOPT did not converge.
+    """
+    tool = _tool(robot, log, empty_log, empty_window, cutoff_hz, tool_params, tool_cov)
+    J, note = None, None
+    if combine_joint_torques and log.effort is not None:
+        J, note = _joint_system(robot, log, empty_log, window, empty_window, cutoff_hz, arm_model)
+    W = wrench_system(robot, log, window, cutoff_hz, crop=J is not None and J.source == EMPTY_RUN)
+    st = wc.stack(W, W.b - W.A_pi @ tool.params, J)
+    k, r = st.b.shape
+    duration = float(W.S.t[-1] - W.S.t[0])
+    A_pi, A_x, b, w = st.A_pi.reshape(-1, 10), st.A_x.reshape(k * r, -1), st.b.reshape(-1), st.w
+    A = np.column_stack([A_pi, A_x])
+    arm = arm_model if J is not None and J.source == ARM_MODEL else None
+    err = _observable(robot, W, lambda: error_sources(
+        A, b, w, (k, r), duration, np.zeros((k, r)), None, arm, st.arm_jac))  # fmt: skip
+    rows_w = st.rows(wc.WRENCH)
+    D = -err.sensitivity[:, rows_w] @ A_pi[rows_w]  # d pi / d the tool's parameters
+    cov_tool = D @ tool.cov @ D.T
+    fit = fit_payload(A_pi, A_x, b, w, prior_of(prior), replace(err, arm=err.arm + cov_tool))
+    params_cov = fit.data_cov + err.arm + cov_tool
+    mass, com, inertia_c, cov4, inertia_cov = about_com(fit.pi, params_cov)
+    m_std = float(np.sqrt(params_cov[0, 0]))
+    validation = du.held_out(A_pi, A_x, b, w, W.S.t, k, r)
+    halves, halves_std = _halves(A, b, w, k, r, err.factor, np.zeros((k, r)), np.zeros((r, r)))
+    fits = {name: wc.alone(st, name, duration, arm) for name in st.groups}
+    agree = wc.agreement(fits, tool.cov) if J is not None else None
+    word, reasons = verdict(Checks(mass, m_std, "wrench", 1.0, halves, halves_std))
+    reasons += _wrench_reasons(mass, m_std, validation, tool, agree, J and J.source)
+    parts = {"data and model (block jackknife)": float(np.sqrt(fit.data_cov[0, 0]))}
+    if tool.cov.any():
+        parts[f"tool ({tool.source})"] = float(np.sqrt(cov_tool[0, 0]))
+    if arm is not None:
+        parts["arm model"] = float(np.sqrt(err.arm[0, 0]))
+    payload = (b - A_x @ fit.x).reshape(k, r)
+    predicted = (A_pi @ fit.pi).reshape(k, r)
+    bias, bias_std, drift, delay = _bias(A, b, w, k, r, duration, fit.x, rows_w, A_pi, tool.cov)
+    return WrenchDynamicEstimate(
+        mass=mass, com_ee=com, inertia_com_ee=inertia_c, params=fit.pi, params_cov=params_cov,
+        cov=cov4, inertia_std=np.sqrt(np.clip(np.diag(inertia_cov), 0, None)).reshape(3, 3),
+        inertia_cov=inertia_cov,
+        condition_number=condition_number(A_pi * w[:, None], parameter_scale()),
+        sensor_frame=log.sensor_frame, sensor_bias=bias, sensor_bias_std=bias_std,
+        sensor_bias_drift=drift, delay_s=delay, wrench_std=st.noise[:6],
+        residual_rms_wrench=np.sqrt(np.mean((predicted - payload)[:, :6] ** 2, axis=0)),
+        tool=tool.source, tool_params=tool.params, tool_cov=tool.cov,
+        contributions=wc.contributions(st, fit.pi, prior_of(prior)), agreement=agree,
+        alone_refused={name: (f if isinstance(f, str) else None) for name, f in fits.items()},
+        joint_torques=_joint_part(J, fit.x, W.A_x.shape[1], st, predicted, payload, note),
+        n_samples=k, duration_s=duration, cutoff_hz=W.S.cutoff_hz,
+        velocity_from=W.S.velocity_from, solver_status=fit.status,
+        unconstrained_params=fit.pi_ls, t=W.S.t, wrench_payload=payload[:, :6],
+        wrench_payload_fit=predicted[:, :6], std_parts=parts, validation=validation,
+        verdict=UNRELIABLE if reasons else word, reasons=tuple(reasons), halves_mass=halves,
+    )  # fmt: skip
+
+
+def _tool(robot, log, empty_log, empty_window, cutoff_hz, tool_params, tool_cov) -> _Tool:
+    """The tool's parameters beyond the sensor (ee frame) and their covariance."""
+    if empty_log is not None and tool_params is not None:
+        raise InvalidInputError("give an empty run or the tool's parameters, not both")
+    if tool_params is not None:
+        p = validate.real_array(tool_params, "tool_params")
+        c = np.zeros((10, 10)) if tool_cov is None else validate.real_array(tool_cov, "tool_cov")
+        if p.shape != (10,) or c.shape != (10, 10) or not np.all(np.isfinite(c)):
+            raise InvalidInputError(
+                f"tool_params must be (10,) (m, m c, I at the ee origin) and tool_cov (10, 10), "
+                f"finite; got shapes {p.shape} and {c.shape}"
+            )
+        return _Tool(p, 0.5 * (c + c.T), TOOL_GIVEN)
+    if empty_log is None:
+        return _Tool(nominal_tool(robot, log.sensor_frame), np.zeros((10, 10)), TOOL_NOMINAL)
+    if empty_log.sensor_frame != log.sensor_frame:
+        raise InvalidInputError(
+            f"the empty run's sensor frame {empty_log.sensor_frame!r} is not the loaded run's "
+            f"{log.sensor_frame!r}: both must be the same sensor"
+        )
+    E = wrench_system(robot, empty_log, empty_window, cutoff_hz)
+    k = len(E.S.t)
+    A, b = np.column_stack([E.A_pi.reshape(-1, 10), E.A_x]), E.b.reshape(-1)
+    w = np.tile(1 / row_noise(A, b, k, 6), k)
+    err = _observable(robot, E, lambda: error_sources(
+        A, b, w, (k, 6), float(E.S.t[-1] - E.S.t[0]), np.zeros((k, 6)), None, None, None),
+        "the empty run")  # fmt: skip
+    return _Tool(err.sensitivity @ b, err.white * np.outer(err.factor, err.factor),
+                 TOOL_EMPTY_RUN)  # fmt: skip
+
+
+def _joint_system(robot, log, empty_log, window, empty_window, cutoff_hz, arm_model):
+    """The joint torques' system and a note where the empty run could not serve it."""
+    joints = as_joint_log(log, "effort")
+    if arm_model is None and empty_log is not None and empty_log.effort is not None:
+        try:
+            return payload_system(robot, joints, as_joint_log(empty_log, "effort"), window,
+                                  empty_window, cutoff_hz, None), None  # fmt: skip
+        except MotionLogError as exc:
+            note = (f"the empty run does not serve the joint torques ({exc}); the URDF's model "
+                    "stands for the arm")  # fmt: skip
+            return payload_system(robot, joints, None, window, None, cutoff_hz, None), note
+    return payload_system(robot, joints, None, window, None, cutoff_hz, arm_model), None
+
+
+def _observable(robot, W, solve, what="the loaded run"):
+    """``solve()``, its UnobservableError said in the motion's terms: what to move."""
+    try:
+        return solve()
+    except UnobservableError as exc:
+        peak = np.max(np.abs(W.S.qd), axis=0)
+        still = [f"{n} ({p:.2f} rad/s)" for n, p in zip(robot.joint_names, peak)
+                 if p < MIN_PEAK_SPEED]  # fmt: skip
+        sid = robot.model.getFrameId(W.sensor_frame)
+        g = gravity_in_sensor(robot, sid, W.S.q)
+        g /= np.linalg.norm(g, axis=1, keepdims=True)
+        mean = g.mean(axis=0) / np.linalg.norm(g.mean(axis=0))
+        turn = float(np.degrees(np.arccos(np.clip(g @ mean, -1, 1)).max()))
+        raise UnobservableError(
+            f"{what}'s wrench: {exc}. Gravity turns by at most {turn:.0f} deg in the sensor "
+            f"frame (the mass, the CoM and the bias need it turned by tens of degrees about two "
+            f"axes); joints below {MIN_PEAK_SPEED} rad/s: {', '.join(still) or 'none'}. Move "
+            "every joint, tilt and spin the wrist (comgrasp plan-motion plans such a motion)"
+        ) from None
+
+
+def _bias(A, b, w, k, r, duration, x, rows_w, A_pi, tool_cov):
+    """The sensor's bias (mean over the motion), its std, its drift and the wrench's delay."""
+    p = 16  # pi and the six biases
+    blocks = du.contiguous_blocks(k, du.block_count(duration))
+    white = du.white_cov(A, b, w, p)[10:, 10:]
+    jk = du.jackknife_cov(A, b, w, k, r, blocks, p)[10:, 10:]
+    D = -du.sensitivity(A, w, p)[10:, rows_w] @ A_pi[rows_w]
+    var = np.maximum(np.diag(white), np.diag(jk)) + np.diag(D @ tool_cov @ D.T)
+    extras = x[: 6 * (1 + DRIFT_DEGREE)].reshape(1 + DRIFT_DEGREE, 6)
+    drift = 2 * extras[1 : 1 + DRIFT_DEGREE : 2].sum(axis=0)
+    return extras[0], np.sqrt(var), drift, float(x[6 * (1 + DRIFT_DEGREE)])
+
+
+def _wrench_reasons(mass, mass_std, validation, tool, agree, joint_source) -> list[str]:
+    """The wrench path's own rules, beyond ``verdict``'s mass and halves."""
+    from comgrasp_pin.robot_io.verdict import Z95
+
+    reasons = []
+    seen = mass - Z95 * mass_std > 0
+    if seen and validation.explained_total < MIN_EXPLAINED:
+        reasons.append(
+            f"the payload explains {100 * validation.explained_total:.0f} % of the held-out "
+            f"readings (at least {100 * MIN_EXPLAINED:.0f} % expected): they hold more than a "
+            "rigid payload (a cable pulling, a contact, the payload moving in the gripper)"
+        )
+    if tool.source == TOOL_NOMINAL and tool.params[0] > 0:
+        reasons.append(
+            f"the tool's own wrench is the URDF's links beyond the sensor ({tool.params[0]:.3f} "
+            "kg), whose error on this tool is not known: give an empty run of the tool "
+            "without the payload (any motion) or the tool's parameters"
+        )
+    if agree is not None and agree["chi2"] > agree["max_chi2"]:
+        m = agree["mass_kg"]
+        reasons.append(
+            f"the wrench and the joint torques disagree (chi-square {agree['chi2']:.1f} on "
+            f"mass and first moments, at most {agree['max_chi2']:g}; masses {m['wrench']:.3f} "
+            f"and {m['joint_torques']:.3f} kg): "
+            + ("the URDF's model of the arm is the likely cause; give an empty run of the same "
+               "motion or an identified arm model, or leave the joint torques out"
+               if joint_source == NOMINAL else
+               "a sensor's scale, the tool, or the arm model is wrong")
+        )  # fmt: skip
+    return reasons
+
+
+def _joint_part(J, x, e_w, st, predicted, payload, note) -> JointTorquePart | None:
+    """The joint torques' own findings in the combined fit, or None without them."""
+    if J is None:
+        return None
+    cols = st.groups[wc.JOINT_TORQUES][0]
+    n = len(cols)
+    extras = x[e_w : e_w + J.per_joint * n].reshape(J.per_joint, n)
+    res = predicted[:, cols] - payload[:, cols]
+    return JointTorquePart(
+        J.source, st.noise[6:], extras[0], 2 * extras[1 : 1 + DRIFT_DEGREE : 2].sum(axis=0),
+        extras[1 + DRIFT_DEGREE :].T if J.source == NOMINAL else None,
+        np.sqrt(np.mean(res**2, axis=0)), None if J.alignment is not None else float(x[-1]),
+        J.alignment, payload[:, cols], predicted[:, cols], note,
+    )  # fmt: skip
