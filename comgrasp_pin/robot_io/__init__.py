@@ -36,12 +36,21 @@ from comgrasp_pin.robot_io.exports import (
 from comgrasp_pin.robot_io.gain_calibration import GainCalibration, calibrate_gains
 from comgrasp_pin.robot_io.gains import Gains, gains_json, parse_gains
 from comgrasp_pin.robot_io.logs import JointLog, read_bag, read_csv, read_log
+from comgrasp_pin.robot_io.model_exports import mjcf_payload_body, urdf_link_of, urdf_with_payload
 from comgrasp_pin.robot_io.mount import load_robot
 from comgrasp_pin.robot_io.payload import Payload, T_flange_ee, payload_in_flange
 from comgrasp_pin.robot_io.planning import PosePlan, plan_measurement_poses
 from comgrasp_pin.robot_io.record import write_bag, write_csv, write_wrench_bag, write_wrench_csv
 from comgrasp_pin.robot_io.rtde import read_rtde
 from comgrasp_pin.robot_io.static_report import result_dict, summary
+from comgrasp_pin.robot_io.vendor_exports import (
+    franka_desk,
+    krl_load,
+    moveit_yaml,
+    principal_axes,
+    rapid_loaddata,
+    sunrise_load_data,
+)
 from comgrasp_pin.robot_io.windows import (
     StaticReading,
     find_static_windows,
@@ -76,17 +85,23 @@ __all__ = [
     "estimate_from_log",
     "estimate_payload_dynamic",
     "find_static_windows",
+    "franka_desk",
     "franka_load",
     "gains_json",
     "identify_arm",
+    "krl_load",
     "load_arm_model",
     "load_robot",
+    "mjcf_payload_body",
+    "moveit_yaml",
     "pair_by_configuration",
     "parse_gains",
     "parse_windows",
     "payload_in_flange",
     "plan_excitation",
     "plan_measurement_poses",
+    "principal_axes",
+    "rapid_loaddata",
     "read_bag",
     "read_csv",
     "read_log",
@@ -99,6 +114,9 @@ __all__ = [
     "result_dict",
     "ros2_yaml",
     "summary",
+    "sunrise_load_data",
+    "urdf_link_of",
+    "urdf_with_payload",
     "urscript",
     "write_bag",
     "write_csv",
