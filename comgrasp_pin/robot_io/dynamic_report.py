@@ -9,8 +9,12 @@ from comgrasp_pin.robot_io.dynamic import EMPTY_RUN, NOMINAL, DynamicEstimate
 from comgrasp_pin.robot_io.verdict import Z95
 
 
-def dynamic_result_dict(est: DynamicEstimate, frame: str) -> dict:
-    """RESULT.json: the fields of the static estimate's (4b) plus the inertia (4c), SI units."""
+def payload_fields(est, frame: str, covers: str) -> dict:
+    """RESULT.json's fields of any motion's payload estimate (4b, 4c), SI units.
+
+    ``est``: a ``DynamicEstimate`` or a ``wrench_estimate.WrenchDynamicEstimate``;
+    ``covers``: the error sources its std covers, in words.
+    """
     std = np.sqrt(np.clip(np.diag(est.cov), 0, None))
     return {
         "mass_kg": est.mass,
@@ -19,23 +23,12 @@ def dynamic_result_dict(est: DynamicEstimate, frame: str) -> dict:
         "cov": est.cov.tolist(),
         "unobservable": None,
         "n_poses": None,
-        "residual_rms_Nm": est.residual_rms.tolist(),
-        "std": {"mass_kg": float(std[0]), "com_m": std[1:].tolist(),
-                "covers": "noise and the model's error (block jackknife), the drive gains, "
-                "the arm model", "mass_kg_by_source": est.std_parts},
+        "std": {"mass_kg": float(std[0]), "com_m": std[1:].tolist(), "covers": covers,
+                "mass_kg_by_source": est.std_parts},
         "interval95_mass_kg": [est.mass - Z95 * float(std[0]), est.mass + Z95 * float(std[0])],
         "verdict": est.verdict,
         "reasons": list(est.reasons),
-        "validation": est.validation.as_dict(),
-        "validation_log": None if est.second_log is None else {
-            "rms_Nm": est.second_log.rms_Nm.tolist(),
-            "explained": est.second_log.explained.tolist(),
-            "explained_total": est.second_log.explained_total,
-        },
         "halves_mass_kg": list(est.halves_mass),
-        "alignment": est.alignment,
-        "gains": est.gains_source,
-        "effort_delay_s": est.delay_s,
         "inertia_kgm2": est.inertia_com_ee.tolist(),
         "inertia_std_kgm2": est.inertia_std.tolist(),
         "inertia_about": "the CoM, axes of frame",
@@ -45,6 +38,29 @@ def dynamic_result_dict(est: DynamicEstimate, frame: str) -> dict:
         "unconstrained_params": est.unconstrained_params.tolist(),
         "condition_number": est.condition_number,
         "method": "dynamic",
+        "n_samples": est.n_samples,
+        "duration_s": est.duration_s,
+        "cutoff_hz": est.cutoff_hz,
+        "velocity_from": est.velocity_from,
+        "solver_status": est.solver_status,
+    }  # fmt: skip
+
+
+def dynamic_result_dict(est: DynamicEstimate, frame: str) -> dict:
+    """RESULT.json: the fields of the static estimate's (4b) plus the inertia (4c), SI units."""
+    covers = "noise and the model's error (block jackknife), the drive gains, the arm model"
+    return {
+        **payload_fields(est, frame, covers),
+        "residual_rms_Nm": est.residual_rms.tolist(),
+        "validation": est.validation.as_dict(),
+        "validation_log": None if est.second_log is None else {
+            "rms_Nm": est.second_log.rms_Nm.tolist(),
+            "explained": est.second_log.explained.tolist(),
+            "explained_total": est.second_log.explained_total,
+        },
+        "alignment": est.alignment,
+        "gains": est.gains_source,
+        "effort_delay_s": est.delay_s,
         "arm_model": est.arm_model,
         "offsets_Nm": est.offsets.tolist(),
         "friction": None if est.friction is None else {
@@ -52,11 +68,6 @@ def dynamic_result_dict(est: DynamicEstimate, frame: str) -> dict:
             "coulomb_Nm": est.friction[:, 1].tolist(),
         },
         "torque_std_Nm": est.torque_std.tolist(),
-        "n_samples": est.n_samples,
-        "duration_s": est.duration_s,
-        "cutoff_hz": est.cutoff_hz,
-        "velocity_from": est.velocity_from,
-        "solver_status": est.solver_status,
     }  # fmt: skip
 
 
