@@ -169,8 +169,8 @@ def test_urdf_loads_in_mujoco_with_the_payload(inertia, tmp_path):
     qpos = np.zeros(fused.nq)
     for name in robot.joint_names:
         qpos[fused.joint(name).qposadr[0]] = q[m0.joints[m0.getJointId(name)].idx_q]
-    pin_diff = pin.computeGeneralizedGravity(m1, m1.createData(), q) - pin.computeGeneralizedGravity(
-        m0, m0.createData(), q)  # fmt: skip
+    g1 = pin.computeGeneralizedGravity(m1, m1.createData(), q)
+    pin_diff = g1 - pin.computeGeneralizedGravity(m0, m0.createData(), q)
     mj_diff = _qfrc_gravity(fused, qpos) - _qfrc_gravity(base, qpos)
     for name in robot.joint_names:
         assert mj_diff[fused.joint(name).dofadr[0]] == pytest.approx(
@@ -249,11 +249,9 @@ def test_relative_mesh_paths_follow_the_file(tmp_path):
     src.mkdir()
     (src / "meshes").mkdir()
     (src / "meshes" / "box.stl").write_text("solid box\nendsolid box\n")
-    text = _tilted_ur5(tmp_path).read_text().replace(
-        '<link name="tcp_tilted"/>',
-        '<link name="tcp_tilted"><visual><geometry><mesh filename="meshes/box.stl"/></geometry>'
-        "</visual></link>",
-    )
+    mesh = '<visual><geometry><mesh filename="meshes/box.stl"/></geometry></visual>'
+    text = _tilted_ur5(tmp_path).read_text()
+    text = text.replace('<link name="tcp_tilted"/>', f'<link name="tcp_tilted">{mesh}</link>')
     path = src / "robot.urdf"
     path.write_text(text)
     robot = load_robot(path, "tcp_tilted")

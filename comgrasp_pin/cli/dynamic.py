@@ -53,6 +53,7 @@ def add_dynamic_args(est: argparse.ArgumentParser) -> None:
 def run_dynamic(args: argparse.Namespace, robot, write_json) -> int:
     """Read the logs, identify the payload, write RESULT.json and the payload files."""
     from comgrasp_pin import robot_io as rio
+    from comgrasp_pin.cli.exports import wants_exports, write_exports
     from comgrasp_pin.robot_io.dynamic import estimate_payload_dynamic
     from comgrasp_pin.robot_io.dynamic_report import dynamic_result_dict, dynamic_summary
     from comgrasp_pin.robot_io.payload import dynamic_payload_in_flange
@@ -88,17 +89,14 @@ def run_dynamic(args: argparse.Namespace, robot, write_json) -> int:
             )
         second = rio.read_log(args.validate, robot.joint_names, args.topic, None, gains)
         est = check_on_log(robot, est, second, arm, args.cutoff)
-    exports = ((args.export_ur, rio.write_urscript), (args.export_franka, rio.write_franka),
-               (args.export_ros2, rio.write_ros2))  # fmt: skip
-    payload = None
-    if any(path for path, _ in exports):  # the flange checked before anything is written
+    written = []
+    if wants_exports(args):  # every file made and checked before anything is written
         payload = dynamic_payload_in_flange(robot, est, args.flange_frame)
+        written = write_exports(args, robot, payload)
     write_json(args.out, dynamic_result_dict(est, robot.ee_frame))
     print(dynamic_summary(est, robot.ee_frame))
-    if payload is not None:
-        for path, write in exports:
-            if path:
-                print(f"wrote {write(payload, path)}")
+    for path in written:
+        print(f"wrote {path}")
     if args.plot:
         print(f"wrote {plot_validation(est, robot.joint_names, args.plot)}")
     print(f"wrote {args.out}")

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from comgrasp_pin.cli.dynamic import add_dynamic_args, run_dynamic
+from comgrasp_pin.cli.exports import add_export_args, wants_exports, write_exports
 from comgrasp_pin.cli.gains_args import add_gains_args, gains_from_args
 from comgrasp_pin.cli.motion import add_plan_motion, run_plan_motion
 from comgrasp_pin.errors import InvalidInputError, OutputError
@@ -80,21 +81,17 @@ def _cmd_estimate(args: argparse.Namespace) -> int:
     gain_cov = None if gains is None else gains.cov  # the gains' error enters the covariance
     result = rio.estimate_from_log(robot, log, before, after, args.torque_std, args.method,
                                    args.max_speed, args.drift_std, gain_cov)  # fmt: skip
-    exports = ((args.export_ur, rio.write_urscript), (args.export_franka, rio.write_franka),
-               (args.export_ros2, rio.write_ros2))  # fmt: skip
-    payload = None
-    if any(path for path, _ in exports):  # checked before anything is written
+    written, lines = [], [rio.summary(result, robot.ee_frame)]
+    if wants_exports(args):  # every file made and checked before anything is written
         payload = rio.payload_in_flange(robot, result.estimate, args.flange_frame, args.inertia)
-    _write_json(args.out, rio.result_dict(result, robot.ee_frame))
-    print(rio.summary(result, robot.ee_frame))
-    if payload is not None:
+        written = write_exports(args, robot, payload)
         c = 1e3 * payload.com_flange
-        print(f"  CoM in {payload.flange_frame}: ({c[0]:.2f}, {c[1]:.2f}, {c[2]:.2f}) mm, "
-              f"inertia: {payload.inertia_model} (an approximation)")  # fmt: skip
-        for path, write in exports:
-            if path:
-                print(f"wrote {write(payload, path)}")
-    print(f"wrote {args.out}")
+        lines.append(f"  CoM in {payload.flange_frame}: ({c[0]:.2f}, {c[1]:.2f}, {c[2]:.2f}) "
+                     f"mm, inertia: {payload.inertia_model} (an approximation)")  # fmt: skip
+    _write_json(args.out, rio.result_dict(result, robot.ee_frame))
+    print("\n".join(lines))
+    for path in [*written, args.out]:
+        print(f"wrote {path}")
     return 0
 
 
@@ -176,8 +173,9 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
         "--dynamic: the inertia too, from a motion",
         description="Estimate the held payload's mass and centre of mass from a robot log (a "
         "ROS 2 bag or a CSV of joint positions and efforts): static windows before and after "
-        "the grasp, paired per pose; RESULT.json, a summary, and payload files for UR, Franka "
-        "and ROS 2 in the flange frame. With --dynamic: mass, CoM and inertia from a log of a "
+        "the grasp, paired per pose; RESULT.json, a summary, and payload files in the flange "
+        "frame for UR, Franka (libfranka, Desk), ROS 2, KUKA, ABB, MoveIt, the URDF and MJCF. "
+        "With --dynamic: mass, CoM and inertia from a log of a "
         "motion (comgrasp plan-motion) played holding the payload, with their covariance.",
         formatter_class=_DEFAULTS,
     )
@@ -207,14 +205,8 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     est.add_argument("--method", default="lstsq", choices=("lstsq", "ipopt"),
                      help="closed-form least squares or CasADi + IPOPT")  # fmt: skip
     est.add_argument("--out", default="RESULT.json", help="the result JSON")
-    est.add_argument("--flange-frame", default=None,
-                     help="frame of the exported CoM (UR tool0, Franka panda_link8); "
-                     "default: the ee frame")  # fmt: skip
     est.add_argument("--inertia", default="point", help=f"inertia approximation: {INERTIA_HELP}")
-    est.add_argument("--export-ur", default=None, help="URScript set_target_payload file")
-    est.add_argument("--export-franka", default=None, help="JSON for libfranka setLoad")
-    est.add_argument("--export-ros2", default=None,
-                     help="YAML: ur_msgs/SetPayload and franka_msgs/SetLoad requests")  # fmt: skip
+    add_export_args(est)
     add_dynamic_args(est)
     est.set_defaults(func=_cmd_estimate)
 
