@@ -114,13 +114,7 @@ def read_rtde(
     efforts, current_gains = _effort_columns(header, n, gains, path)
     cols = [header.index(TIME), *(_vector(header, POSITION, n) or []), *efforts, *(velocity or [])]
     data = _load(path, delimiter, cols)
-    bad = np.argwhere(~np.isfinite(data))
-    if len(bad):
-        row, col = bad[0]
-        raise LogError(
-            f"UR log {path} has NaN or inf values ({len(bad)}), first on line {row + 2} in "
-            f"{header[cols[col]]!r}; every timestamp, position and effort must be a number"
-        )
+    check_finite(data, [header[c] for c in cols], f"UR log {path}")
     t, q = data[:, 0], data[:, 1 : 1 + n]
     effort = data[:, 1 + n : 1 + 2 * n]
     if current_gains is not None:
@@ -180,6 +174,22 @@ def _effort_columns(header: list[str], n: int, gains: Gains | None, path: Path):
             f"{path}: give {n}, one per joint in chain order"
         )
     return currents, gains.values
+
+
+def check_finite(data: np.ndarray, columns: list[str], source: str) -> None:
+    """Refuse NaN or inf in a text log's (N, k) ``data`` under the k ``columns``.
+
+    Raises:
+        LogError: how many there are, and the first one's line (the header is line 1) and
+            column.
+    """
+    bad = np.argwhere(~np.isfinite(data))
+    if len(bad):
+        row, col = bad[0]
+        raise LogError(
+            f"{source} has NaN or inf values ({len(bad)}), first on line {row + 2} in "
+            f"{columns[col]!r}; every value the log is read for must be a number"
+        )
 
 
 def _load(path: Path, delimiter: str | None, cols: list[int], what: str = "UR log") -> np.ndarray:

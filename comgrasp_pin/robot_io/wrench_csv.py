@@ -37,22 +37,6 @@ def sensor_frame_name(sensor_frame: object) -> str:
     return sensor_frame
 
 
-def check_finite(data: np.ndarray, columns: list[str], source: str) -> None:
-    """Refuse NaN or inf in a log's (N, k) ``data`` under the k ``columns``.
-
-    Raises:
-        LogError: how many there are, and the first one's line (the header is line 1) and
-            column.
-    """
-    bad = np.argwhere(~np.isfinite(data))
-    if len(bad):
-        row, col = bad[0]
-        raise LogError(
-            f"{source} has NaN or inf values ({len(bad)}), first on line {row + 2} in "
-            f"{columns[col]!r}; every time, joint reading and wrench must be a number"
-        )
-
-
 def assemble_wrench_log(
     t: np.ndarray,
     position: np.ndarray,
@@ -75,13 +59,16 @@ def assemble_wrench_log(
         raise LogError(f"{source} has {len(t)} usable sample(s); a wrench log needs at least two")
     t = np.asarray(t, dtype=float)
     order = np.argsort(t, kind="stable")
-    arrays = [np.asarray(a, dtype=float)[order] if a is not None else None
-              for a in (t - t[order[0]], position, wrench, velocity, effort)]  # fmt: skip
-    for a in arrays:
-        if a is not None:
-            a.flags.writeable = False
-    t, position, wrench, velocity, effort = arrays
-    return WrenchLog(t, names, position, wrench, sensor_frame, source, velocity, effort)
+    v, e = (None if a is None else _sorted(a, order) for a in (velocity, effort))
+    return WrenchLog(_sorted(t - t[order[0]], order), names, _sorted(position, order),
+                     _sorted(wrench, order), sensor_frame, source, v, e)  # fmt: skip
+
+
+def _sorted(a: np.ndarray, order: np.ndarray) -> np.ndarray:
+    """A read-only float copy of ``a``'s rows in ``order``."""
+    out = np.asarray(a, dtype=float)[order]
+    out.flags.writeable = False
+    return out
 
 
 def read_wrench_csv(
@@ -126,7 +113,7 @@ def read_wrench_csv(
     fields = [f for f in OPTIONAL_FIELDS if all(f"{n}.{f}" in header for n in names)]
     wanted += [f"{n}.{f}" for f in fields for n in names]
     data = rtde._load(path, ",", [header.index(w) for w in wanted], "CSV wrench log")
-    check_finite(data, wanted, f"CSV {path}")
+    rtde.check_finite(data, wanted, f"CSV {path}")
     n = len(names)
     extra = {f: data[:, 7 + n * (i + 1) : 7 + n * (i + 2)] for i, f in enumerate(fields)}
     q, wrench = data[:, 1 : 1 + n], data[:, 1 + n : 7 + n]

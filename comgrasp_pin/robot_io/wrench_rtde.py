@@ -54,11 +54,7 @@ import pinocchio as pin
 from comgrasp_pin.errors import LogError
 from comgrasp_pin.robot import RobotModel, _check_frame
 from comgrasp_pin.robot_io import rtde
-from comgrasp_pin.robot_io.wrench_csv import (
-    assemble_wrench_log,
-    check_finite,
-    sensor_frame_name,
-)
+from comgrasp_pin.robot_io.wrench_csv import assemble_wrench_log, sensor_frame_name
 from comgrasp_pin.robot_io.wrench_log import WrenchLog
 
 FORCE = "actual_TCP_force"
@@ -118,7 +114,7 @@ def read_rtde_wrench(
     cols = [header.index(rtde.TIME), *(rtde._vector(header, rtde.POSITION, n) or []), *force]
     cols += [c for field in present for c in optional[field] or []]
     data = rtde._load(path, delimiter, cols)
-    check_finite(data, [header[c] for c in cols], f"UR log {path}")
+    rtde.check_finite(data, [header[c] for c in cols], f"UR log {path}")
     if len(data) < 2:
         raise LogError(f"UR log {path} has {len(data)} sample(s); a wrench log needs two")
     q = data[:, 1 : 1 + n]

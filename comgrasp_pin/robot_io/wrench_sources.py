@@ -63,8 +63,11 @@ def read_wrench_log(
         LogError: a UR recording without the robot model; what each reader raises.
     """
     path = Path(path)
-    robot = robot_or_joint_names if isinstance(robot_or_joint_names, RobotModel) else None
-    names = tuple(robot.joint_names if robot is not None else robot_or_joint_names)
+    robot: RobotModel | None = None
+    if isinstance(robot_or_joint_names, RobotModel):
+        robot, names = robot_or_joint_names, tuple(robot_or_joint_names.joint_names)
+    else:
+        names = tuple(robot_or_joint_names)
     if path.is_dir() or path.suffix.lower() in BAG_SUFFIXES:
         log = read_wrench_bag(path, names, wrench_topic, joint_topic, sensor_frame)
     elif rtde.is_rtde_header(_first_line(path)):
