@@ -3,8 +3,10 @@
 - The wrench: ``geometry_msgs/msg/WrenchStamped`` on one topic, found by its type where the
   bag has exactly one such topic (else it must be named). The messages' ``header.frame_id``
   is the sensor frame; all of them must name the same one. The force (N) and torque (N m)
-  are read as the wrench the tool side applies to the sensor (``wrench_log``): the
-  convention of ATI's, Robotiq's and UR's ROS drivers (a hanging mass reads its weight).
+  are taken as the wrench the tool side applies to the sensor (``wrench_log``: a hanging
+  mass reads its weight), as ATI's and Robotiq's sensors report it; ROS does not fix the
+  sign of a WrenchStamped, and a driver that publishes the opposite shows as a negative
+  mass.
 - The joints: ``sensor_msgs/msg/JointState`` (``logs``: matched by name, messages lacking an
   arm joint skipped), positions and, where every message has them, velocities and efforts.
 - Times: header stamps, or the bag's receive times where any stamp of the two topics is zero
