@@ -5,7 +5,8 @@ rows of the same sample (``payload_system``), so that the stacked system keeps t
 layout the fit, the jackknife and the validation expect (k samples of r = 6 + n rows). The
 payload's ten parameters (ee frame) are shared; each source keeps its own extra unknowns (the
 sensor's bias, drift and delay; the joints' offsets, drift, friction and delay) and its own
-row weights (1 / its noise per row, from a first plain fit of that source alone).
+row weights: 1 / its noise per row (from a first plain fit of that source alone) times its
+own block jackknife's widening (``reweighted``).
 
 What each source contributed (``contributions``): with F_s the information about the ten
 parameters that source s's rows carry once its own extras are fitted (the Schur complement of
@@ -21,7 +22,7 @@ squares, its covariance widened by its own block jackknife), and the mass and fi
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -161,9 +162,11 @@ def contributions(st: Stacked, pi: np.ndarray, prior=None) -> dict:
 
 
 def alone(st: Stacked, name: str, duration_s: float, arm_model: ArmModel | None = None):
-    """Source ``name``'s rows alone: ((10,) pi, (10, 10) its covariance).
+    """Source ``name``'s rows alone: ((10,) pi, (10, 10) its covariance, its widening).
 
-    Where they do not determine pi, the reason (a string) instead.
+    The widening is the rms over the ten parameters of its block jackknife's widening of
+    their white-noise std (``dynamic_fit.ErrorSources.factor``). Where the rows do not
+    determine pi, the reason (a string) instead.
     """
     cols, x_cols = st.groups[name]
     k = st.b.shape[0]
@@ -178,7 +181,32 @@ def alone(st: Stacked, name: str, duration_s: float, arm_model: ArmModel | None 
     except UnobservableError as exc:
         return f"{name} alone: {exc}"
     cov = err.white * np.outer(err.factor, err.factor) + err.arm
-    return err.sensitivity @ b, cov
+    return err.sensitivity @ b, cov, float(np.sqrt(np.mean(err.factor**2)))
+
+
+def reweighted(st: Stacked, fits: dict) -> Stacked:
+    """``st`` with each source's rows weighted by 1 / (noise x its own jackknife widening).
+
+    A source whose errors are correlated over seconds (a friction the model lacks, an arm
+    model's error) carries less information than its white noise says; weighted by its white
+    noise alone it would pull the joint fit by more than it knows. The weights are then
+    scaled together so that the weighted residuals of a plain fit have unit variance, as the
+    fit's covariance (``fit_payload``: the inverse Hessian, widened by the jackknife over the
+    white-noise covariance) expects. One source alone: unchanged.
+    """
+    usable = {n: f for n, f in fits.items() if not isinstance(f, str)}
+    if len(st.groups) < 2 or len(usable) < 2:
+        return st
+    k, r = st.b.shape
+    scale = np.ones(r)
+    for name, fit in usable.items():
+        scale[st.groups[name][0]] = fit[2]
+    w = np.tile(1 / (st.noise * scale), k)
+    A = np.column_stack([st.A_pi.reshape(k * r, -1), st.A_x.reshape(k * r, -1)])
+    beta = np.linalg.lstsq(A * w[:, None], st.b.reshape(-1) * w, rcond=None)[0]
+    res = (A @ beta - st.b.reshape(-1)) * w
+    s2 = float(res @ res) / max(len(res) - A.shape[1], 1)
+    return replace(st, w=w / np.sqrt(s2))
 
 
 def agreement(fits: dict, tool_cov: np.ndarray) -> dict | None:
@@ -190,7 +218,7 @@ def agreement(fits: dict, tool_cov: np.ndarray) -> dict | None:
     usable = {k: v for k, v in fits.items() if not isinstance(v, str)}
     if len(usable) < 2:
         return None
-    (pw, cw), (pj, cj) = usable[WRENCH], usable[JOINT_TORQUES]
+    (pw, cw, _), (pj, cj, _) = usable[WRENCH], usable[JOINT_TORQUES]
     d = pw[:4] - pj[:4]
     chi2 = float(d @ np.linalg.solve((cw + tool_cov + cj)[:4, :4], d))
     return {"chi2": chi2, "dof": 4, "max_chi2": MAX_SOURCES_CHI2,

@@ -112,12 +112,14 @@ def estimate_wrench_dynamic(
     if combine_joint_torques and log.effort is not None:
         J, note = _joint_system(robot, log, empty_log, window, empty_window, cutoff_hz, arm_model)
     W = wrench_system(robot, log, window, cutoff_hz, crop=J is not None and J.source == EMPTY_RUN)
-    st = wc.stack(W, W.b - W.A_pi @ tool.params, J)
-    k, r = st.b.shape
     duration = float(W.S.t[-1] - W.S.t[0])
+    arm = arm_model if J is not None and J.source == ARM_MODEL else None
+    st = wc.stack(W, W.b - W.A_pi @ tool.params, J)
+    fits = {name: wc.alone(st, name, duration, arm) for name in st.groups}
+    st = wc.reweighted(st, fits)
+    k, r = st.b.shape
     A_pi, A_x, b, w = st.A_pi.reshape(-1, 10), st.A_x.reshape(k * r, -1), st.b.reshape(-1), st.w
     A = np.column_stack([A_pi, A_x])
-    arm = arm_model if J is not None and J.source == ARM_MODEL else None
     err = _observable(robot, W, lambda: error_sources(
         A, b, w, (k, r), duration, np.zeros((k, r)), None, arm, st.arm_jac))  # fmt: skip
     rows_w = st.rows(wc.WRENCH)
@@ -129,7 +131,6 @@ def estimate_wrench_dynamic(
     m_std = float(np.sqrt(params_cov[0, 0]))
     validation = du.held_out(A_pi, A_x, b, w, W.S.t, k, r)
     halves, halves_std = _halves(A, b, w, k, r, err.factor, np.zeros((k, r)), np.zeros((r, r)))
-    fits = {name: wc.alone(st, name, duration, arm) for name in st.groups}
     agree = wc.agreement(fits, tool.cov) if J is not None else None
     word, reasons = verdict(Checks(mass, m_std, "wrench", 1.0, halves, halves_std))
     reasons += _wrench_reasons(mass, m_std, validation, tool, agree, J and J.source)
