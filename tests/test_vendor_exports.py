@@ -17,6 +17,7 @@ from _logs import mujoco_torques, session
 from ruamel.yaml import YAML
 from scipy.spatial.transform import Rotation
 from test_model_exports import _tilted_ur5, physical_inertia
+from test_robot_io_cli import _bad
 from test_robot_io_payload import urdf_T
 
 from comgrasp_pin._paths import example_robot_urdf
@@ -246,14 +247,6 @@ def _estimate_args(run, tmp_path):
     return [*run["base"], "--out", str(tmp_path / "R.json")]
 
 
-def _exits_2(args, capsys, *words):
-    assert main(args) == 2
-    err = capsys.readouterr().err
-    assert "Traceback" not in err
-    for word in words:
-        assert word in err, err
-
-
 def test_unwritable_paths_exit_2_and_write_nothing(run, tmp_path, capsys):
     base = _estimate_args(run, tmp_path)
     ok = tmp_path / "load.krl"
@@ -262,7 +255,7 @@ def test_unwritable_paths_exit_2_and_write_nothing(run, tmp_path, capsys):
         (tmp_path, ("--export-abb", "a folder")),
         (ok, ("same file",)),
     ):
-        _exits_2([*base, "--export-kuka", str(ok), "--export-abb", str(bad)], capsys, *words)
+        _bad([*base, "--export-kuka", str(ok), "--export-abb", str(bad)], capsys, *words)
         assert not ok.exists() and not (tmp_path / "R.json").exists()
     with pytest.raises(OutputError, match="not a folder"):
         args = Namespace(**{o.removeprefix("--").replace("-", "_"): None for o, _ in EXPORTS})
@@ -276,7 +269,7 @@ def test_a_urdf_that_has_a_payload_exits_2(run, tmp_path, capsys):
     args = _estimate_args(run, tmp_path)
     args[2] = str(with_payload)
     out = tmp_path / "again.urdf"
-    _exits_2([*args, "--export-urdf", str(out)], capsys, "already has a link 'payload'")
+    _bad([*args, "--export-urdf", str(out)], capsys, "already has a link 'payload'")
     assert not out.exists()
 
 
@@ -289,11 +282,12 @@ def test_dynamic_estimate_writes_through_the_same_exports(tmp_path):
 
     robot = RobotModel.ur5()
     motion = fourier_motion(robot, seed=5)
-    loaded = write_csv(rnea_log(robot, PAYLOAD, motion, seed=6), tmp_path / "loaded.csv")
-    empty = write_csv(rnea_log(robot, None, motion, seed=7), tmp_path / "empty.csv")
+    logs = {option: str(write_csv(rnea_log(robot, held, motion, seed=seed), tmp_path / name))
+            for option, held, seed, name in (("--csv", PAYLOAD, 6, "loaded.csv"),
+                                             ("--empty-csv", None, 7, "empty.csv"))}  # fmt: skip
     krl, abb = tmp_path / "load.dat", tmp_path / "load.mod"
     args = ["estimate", "--dynamic", "--urdf", str(urdf_path("ur5_gripper.urdf")),
-            "--ee-frame", "eelink", "--csv", str(loaded), "--empty-csv", str(empty),
+            "--ee-frame", "eelink", *[w for item in logs.items() for w in item],
             "--out", str(tmp_path / "R.json"), "--export-kuka", str(krl),
             "--export-abb", str(abb)]  # fmt: skip
     assert main(args) == 0

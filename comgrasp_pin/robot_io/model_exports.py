@@ -42,7 +42,7 @@ def _vec(values) -> str:
     return " ".join(_g(v) for v in values)
 
 
-def _comment(p: Payload) -> ET.Element:
+def _comment(p: Payload):
     return ET.Comment(" " + " | ".join(_note(p)).replace("--", "- -") + " ")
 
 
@@ -65,7 +65,7 @@ def urdf_link_of(robot: RobotModel, frame: str, root: ET.Element) -> tuple[str, 
     Raises:
         InvalidInputError: ``frame`` is neither a link nor a joint of the URDF.
     """
-    links = {link.get("name") for link in root.findall("link")}
+    links = {str(link.get("name")) for link in root.findall("link")}
     children = {j.get("name"): child.get("link") for j in root.findall("joint")
                 if (child := j.find("child")) is not None}  # fmt: skip
     link = frame if frame in links else children.get(frame)
