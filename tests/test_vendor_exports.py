@@ -23,7 +23,7 @@ from test_robot_io_payload import urdf_T
 from comgrasp_pin._paths import example_robot_urdf
 from comgrasp_pin.cli import main
 from comgrasp_pin.cli.exports import EXPORTS, write_exports
-from comgrasp_pin.errors import OutputError
+from comgrasp_pin.errors import InvalidInputError, OutputError
 from comgrasp_pin.robot_io import (
     Payload,
     franka_desk,
@@ -158,6 +158,17 @@ def test_moveit_yaml_with_a_cylinder():
     assert abs(z @ axis) == pytest.approx(1.0)  # the cylinder's axis along the rod
     point = YAML(typ="safe").load(moveit_yaml(_payload(1)))
     assert "primitives" not in point["object"] and point["link_name"] == "tool0"
+
+
+def test_a_transform_that_is_not_a_pose_is_refused():
+    p = _payload(0)
+    mirror = np.diag([1.0, 1.0, -1.0, 1.0])
+    for T, words in ((np.eye(3), "shape"), (np.full((4, 4), np.nan), "finite"),
+                     (mirror, "rigid transform")):  # fmt: skip
+        with pytest.raises(InvalidInputError, match=words):
+            franka_desk(p, T)
+        with pytest.raises(InvalidInputError, match=words):
+            moveit_yaml(p, "tool0", T)
 
 
 # --- end to end: `comgrasp estimate` with every file ---------------------------------------

@@ -34,6 +34,8 @@ import numpy as np
 import pinocchio as pin
 import yaml
 
+from comgrasp_pin import validate
+from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.robot_io.exports import _note
 from comgrasp_pin.robot_io.payload import Payload
 
@@ -121,13 +123,25 @@ def franka_desk(p: Payload, T_flange_ee: np.ndarray | None = None) -> dict:
         p: the payload, in the flange frame F (``panda_link8`` / ``fr3_link8``).
         T_flange_ee: (4, 4) the end effector frame (TCP) in F, m; default the identity.
     """
-    T = np.eye(4) if T_flange_ee is None else np.asarray(T_flange_ee, float)
+    T = np.eye(4) if T_flange_ee is None else _pose_matrix(T_flange_ee, "T_flange_ee")
     return {
         "mass": float(p.mass),
         "centerOfMass": [float(v) for v in p.com_flange],
         "transformation": [float(v) for v in T.ravel(order="F")],
         "inertia": [float(v) for v in p.inertia_flange.ravel(order="F")],
     }
+
+
+def _pose_matrix(T: object, name: str) -> np.ndarray:
+    """``T`` as a finite (4, 4) rigid transform, or InvalidInputError."""
+    T = validate.finite_array(T, name, (4, 4))
+    R = T[:3, :3]
+    if not (np.allclose(R.T @ R, np.eye(3), atol=1e-6) and np.linalg.det(R) > 0):
+        raise InvalidInputError(f"{name} must be a rigid transform (a rotation and a "
+                                f"translation, last row 0 0 0 1); got\n{T}")  # fmt: skip
+    if not np.allclose(T[3], [0, 0, 0, 1]):
+        raise InvalidInputError(f"{name}: its last row must be 0 0 0 1; got {T[3]}")
+    return T
 
 
 def _pose(position: np.ndarray, R: np.ndarray) -> dict:
@@ -143,7 +157,10 @@ def _cylinder(p: Payload) -> tuple[float, float, np.ndarray] | None:
     kind, _, rest = p.inertia_model.partition(":")
     if kind != "cylinder":
         return None
-    length, radius = (float(v) for v in rest.split(",")[:2])
+    try:
+        length, radius = (float(v) for v in rest.split(",")[:2])
+    except ValueError:  # not the spec payload_in_flange writes: no geometry, only the mass
+        return None
     w, V = np.linalg.eigh(p.inertia_flange)  # the axis: the moment m R^2 / 2
     return length, radius, V[:, int(np.argmin(np.abs(w - p.mass * radius**2 / 2)))]
 
@@ -168,7 +185,7 @@ def moveit_yaml(
     world object of that id, which must exist in the planning scene.
     """
     link = link_name or p.flange_frame
-    T = np.eye(4) if T_link_flange is None else np.asarray(T_link_flange, float)
+    T = np.eye(4) if T_link_flange is None else _pose_matrix(T_link_flange, "T_link_flange")
     obj: dict = {
         "header": {"frame_id": link},
         "pose": _pose(T[:3, :3] @ p.com_flange + T[:3, 3], T[:3, :3]),
