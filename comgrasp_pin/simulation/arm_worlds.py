@@ -18,6 +18,10 @@ What a URDF does not say, added here:
   (``payload_motion``), so it is not modelled.
 - No armature: a motor's rotor inertia is on the drive side of a link-side sensor too.
 - Contacts off (the arm moves through free space; self-collision is the planner's job).
+- A wrist force/torque sensor (``world.add_ft_sensor``: a site and MuJoCo's force and torque
+  sensors) at the origin of ``SENSOR_FRAME[arm]``, a frame of the same URDF (Pinocchio's
+  too): the UR5's ``ft_sensor`` between flange and gripper, the Panda's ``panda_hand`` (the
+  hand's mount on the flange). It measures the hand, its fingers and the payload.
 
 Frames: the payload's numbers are in the ee frame of DESIGN section 3, the tool centre
 point between the fingers: ``eelink`` on the UR5, ``panda_hand_tcp`` on the Panda (10.34 cm
@@ -36,11 +40,14 @@ from comgrasp_pin._paths import example_robot_urdf, urdf_path
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.robot import UR5_URDF, RobotModel
 from comgrasp_pin.simulation.payloads import Payload
+from comgrasp_pin.simulation.world import add_ft_sensor
 
 ARMS = ("ur5", "panda")
 PANDA_URDF = "panda_description/urdf/panda.urdf"  # in example-robot-data
 EE_FRAME = {"ur5": "eelink", "panda": "panda_hand_tcp"}
 PAYLOAD_BODY = "payload"
+SENSOR_FRAME = {"ur5": "ft_sensor", "panda": "panda_hand"}
+"""The wrist sensor's frame on each arm (a URDF link welded between flange and hand)."""
 SIM_DT = 1e-3  # s
 
 # (Coulomb (N m), viscous (N m s/rad)) per joint, link side of the sensor. Panda: about the
@@ -81,7 +88,8 @@ def arm_world(
         (model, joint_names, ee_body): the MuJoCo model (time step ``SIM_DT``, joint
         friction ``JOINT_FRICTION[arm]``, gravity -9.81 m/s^2 along world z), the arm's
         joint names in the order of its ``qpos`` (the order of ``arm_robot(arm)``), and the
-        ee body the payload body ``"payload"`` is welded to.
+        ee body the payload body ``"payload"`` is welded to. The model carries the wrist
+        sensor ``world.FT_SENSORS`` at ``SENSOR_FRAME[arm]``.
     """
     _check_arm(arm)
     spec = mujoco.MjSpec.from_string(_kinematics_only(arm_urdf(arm)))
@@ -105,6 +113,7 @@ def arm_world(
         I = payload.I_com_ee  # noqa: E741
         body.fullinertia = [I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]]
         body.explicitinertial = True
+    add_ft_sensor(spec, SENSOR_FRAME[arm])
     spec.option.timestep = SIM_DT
     spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
     spec.option.disableflags |= mujoco.mjtDisableBit.mjDSBL_CONTACT

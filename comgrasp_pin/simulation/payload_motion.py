@@ -21,6 +21,12 @@ velocities and joint torques with the sensors' errors, at ``rate_hz``. The same 
 
 Two runs of one session (empty, then holding the payload) share the torque sensor's offsets
 when given the same ``offsets_seed``; give them different ``seed``s for independent noise.
+
+With ``wrench`` (a ``WrenchSensorConfig``) the run also returns what the wrist sensor at
+``arm_worlds.SENSOR_FRAME[arm]`` read, as a ``WrenchLog``: MuJoCo's force and torque at that
+site over the same motion, with the sensor's errors (``wrench_sensor``, its own random
+streams: the joint log is the same with or without it), at the sensor's rate, beside the
+joint log's positions, velocities and efforts at those times.
 """
 
 from __future__ import annotations
@@ -32,12 +38,15 @@ import numpy as np
 import pinocchio as pin
 from scipy.interpolate import CubicHermiteSpline
 
-from comgrasp_pin.config import TorqueSensorConfig, sensor_preset
+from comgrasp_pin.config import TorqueSensorConfig, WrenchSensorConfig, sensor_preset
 from comgrasp_pin.errors import InvalidInputError, UnstablePhysicsError
 from comgrasp_pin.robot_io.logs import JointLog
-from comgrasp_pin.simulation.arm_worlds import arm_robot, arm_world
+from comgrasp_pin.robot_io.wrench_log import WrenchLog
+from comgrasp_pin.simulation.arm_worlds import SENSOR_FRAME, arm_robot, arm_world
 from comgrasp_pin.simulation.payloads import Payload
 from comgrasp_pin.simulation.torque_sensor import make_torque_sensor
+from comgrasp_pin.simulation.world import FT_SENSORS
+from comgrasp_pin.simulation.wrench_sensor import WrenchSensor, wrench_from_sensors
 
 
 @dataclass(frozen=True)
@@ -75,7 +84,8 @@ def simulate_motion(
     seed: int = 0,
     offsets_seed: int | None = None,
     config: MotionSimConfig | None = None,
-) -> JointLog:
+    wrench: WrenchSensorConfig | None = None,
+) -> JointLog | tuple[JointLog, WrenchLog]:
     """Play the trajectory (t, q, qd, qdd) on ``arm`` holding ``payload`` (None: empty).
 
     Args:
@@ -92,10 +102,15 @@ def simulate_motion(
         offsets_seed: the torque sensor's per-joint offsets are those of
             ``make_torque_sensor(n, sensor, offsets_seed)`` (default: ``seed``).
         config: servo, rest and encoder settings.
+        wrench: the wrist sensor's error model, or None for no wrench log. Its rate must
+            divide ``rate_hz``; its noise and drift are seeded by ``seed``.
 
     Returns:
         The log: time (s, from 0; the motion starts at ``config.rest_s``), the arm's joint
-        names, position, effort (the torque sensor's readings, N m) and velocity.
+        names, position, effort (the torque sensor's readings, N m) and velocity. With
+        ``wrench``, (that log, the wrench log): every k-th of its samples (k = rate_hz /
+        wrench.rate_hz; the same positions, velocities and efforts) with the wrist sensor's
+        readings (sensor frame ``SENSOR_FRAME[arm]``, the tool's wrench on the sensor).
 
     Raises:
         InvalidInputError: unknown arm, shapes, a trajectory outside the joint limits or
@@ -109,14 +124,12 @@ def simulate_motion(
     robot = arm_robot(arm)
     t, q, qd, qdd = _check_trajectory(t, q, qd, qdd, robot)
     dt = model.opt.timestep
-    every = round(1.0 / (rate_hz * dt)) if rate_hz > 0 else 0
-    if every < 1 or abs(every * rate_hz * dt - 1.0) > 1e-9:
-        raise InvalidInputError(
-            f"rate_hz must divide the simulation's {1 / dt:g} Hz; got {rate_hz}"
-        )
+    every = _stride(rate_hz, 1.0 / dt, "rate_hz", "the simulation's")
+    if wrench is not None:
+        _stride(wrench.rate_hz, rate_hz, "the wrist sensor's rate_hz", "the log's")
     times = np.arange(round((t[-1] - t[0] + 2 * config.rest_s) / dt) + 1) * dt
     q_d, qd_d, qdd_d = motion_reference(times, t, q, qd, qdd, config.rest_s)
-    q_log, qd_log, tau_log = _servo(model, robot, q_d, qd_d, qdd_d, every, config)
+    q_log, qd_log, tau_log, ft_log = _servo(model, robot, q_d, qd_d, qdd_d, every, config)
 
     error = np.abs(q_log - q_d[::every]).max(axis=0)
     if not np.all(np.isfinite(q_log)) or error.max() > config.max_tracking_error:
@@ -133,7 +146,34 @@ def simulate_motion(
     position = q_log + config.position_std * rng.standard_normal(q_log.shape)
     velocity = qd_log + config.velocity_std * rng.standard_normal(qd_log.shape)
     source = f"mujoco:{arm}:{'empty' if payload is None else payload.name}"
-    return JointLog(times[::every], names, position, effort, source, velocity)
+    log = JointLog(times[::every], names, position, effort, source, velocity)
+    if wrench is None:
+        return log
+    return log, _wrench_log(log, ft_log, wrench, rate_hz, SENSOR_FRAME[arm], seed)
+
+
+def _wrench_log(log: JointLog, ft_log: np.ndarray, wrench: WrenchSensorConfig,
+                rate_hz: float, sensor_frame: str, seed: int) -> WrenchLog:  # fmt: skip
+    """The wrist sensor's log beside ``log`` (sampled at ``rate_hz``): its every k-th sample
+    (k = rate_hz / wrench.rate_hz), the readings formed from MuJoCo's ``ft_log`` (N, 6)."""
+    rows = slice(None, None, _stride(wrench.rate_hz, rate_hz, "rate_hz", "the log's"))
+    truth = wrench_from_sensors(ft_log[rows])
+    readings = WrenchSensor(wrench, seed).read(np.arange(len(truth)), truth)
+    velocity = None if log.velocity is None else log.velocity[rows]
+    return WrenchLog(log.time[rows], log.joint_names, log.position[rows], readings,
+                     sensor_frame, log.source, velocity, log.effort[rows])  # fmt: skip
+
+
+def _stride(rate: float, base_hz: float, what: str, base: str) -> int:
+    """How many samples at ``base_hz`` one sample at ``rate`` (Hz) spans.
+
+    Raises:
+        InvalidInputError: ``rate`` does not divide ``base_hz``.
+    """
+    k = round(base_hz / rate) if rate > 0 else 0
+    if k < 1 or abs(k * rate - base_hz) > 1e-9 * base_hz:
+        raise InvalidInputError(f"{what} must divide {base} {base_hz:g} Hz; got {rate}")
+    return k
 
 
 def motion_reference(
@@ -151,8 +191,9 @@ def motion_reference(
 
 
 def _servo(model, robot, q_d, qd_d, qdd_d, every: int, config: MotionSimConfig):
-    """Step the arm along the set points; (q, qd, tau) at every ``every``-th step, each
-    (steps // every + 1, n): the state before the step and the torque applied over it.
+    """Step the arm along the set points; (q, qd, tau, ft) at every ``every``-th step, each
+    (steps // every + 1, n): the state before the step, the torque applied over it, and
+    the wrist sensor's MuJoCo readings (6: force, torque) in that state.
     The model's qpos and qvel are the arm's joints in ``robot``'s order (``arm_world``)."""
     data = mujoco.MjData(model)
     data.qpos[:] = q_d[0]
@@ -160,6 +201,9 @@ def _servo(model, robot, q_d, qd_d, qdd_d, every: int, config: MotionSimConfig):
     kp, kd = omega**2, 2 * config.damping_ratio * omega
     n_samples = (len(q_d) - 1) // every + 1
     q_log, qd_log, tau_log = (np.empty((n_samples, robot.nq)) for _ in range(3))
+    ft_log = np.empty((n_samples, 6))
+    adr = model.sensor(FT_SENSORS[0]).adr[0]
+    ft = data.sensordata[adr : adr + 6]  # force then torque (added one after the other)
     for k in range(len(q_d)):
         qk, vk = data.qpos.copy(), data.qvel.copy()
         a_servo = qdd_d[k] + kp * (q_d[k] - qk) + kd * (qd_d[k] - vk)
@@ -169,7 +213,9 @@ def _servo(model, robot, q_d, qd_d, qdd_d, every: int, config: MotionSimConfig):
             i = k // every
             q_log[i], qd_log[i], tau_log[i] = qk, vk, tau
         mujoco.mj_step(model, data)
-    return q_log, qd_log, tau_log
+        if k % every == 0:
+            ft_log[k // every] = ft  # computed in the step's forward pass, before integrating
+    return q_log, qd_log, tau_log, ft_log
 
 
 def _check_trajectory(t, q, qd, qdd, robot):

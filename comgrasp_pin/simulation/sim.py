@@ -263,7 +263,7 @@ class Simulation:
             return torques, None
         first = int(round(start / dt))  # the step count of the first step's state
         return torques, window_measurement(self.wrench_sensor, wrench_from_sensors(wrenches),
-                                           first, self.wrench_steps, q, dt)  # fmt: skip
+                                           first, self.wrench_steps, q, dt, start)  # fmt: skip
 
 
 def _contiguous(index: np.ndarray, what: str) -> slice:

@@ -31,9 +31,11 @@ GRIPPER_BODIES = ("gripper_base", "finger_left", "finger_right")
 PAD_GEOMS = ("pad_left", "pad_right")
 EE_SITE = "eelink"
 FT_SITE = "ft_sensor"
-"""The wrist force/torque sensor's site, at the origin of the URDF's ``ft_sensor`` frame (on
-the flange, z out of it): MuJoCo's ``force`` and ``torque`` sensors ``FT_SENSORS`` on it
-measure what the gripper's subtree (fingers, and what they hold) exchanges with the arm."""
+"""The wrist force/torque sensor's site, at the origin of the body ``FT_BODY`` (the URDF's
+``ft_sensor`` link: on the flange, z out of it, the gripper mounted on it): MuJoCo's
+``force`` and ``torque`` sensors ``FT_SENSORS`` on it measure what the gripper's subtree
+(fingers, and what they hold) exchanges with the arm."""
+FT_BODY = "ft_sensor"
 FT_SENSORS = ("ft_force", "ft_torque")
 TOP_CAMERA = "top_down"
 SIDE_CAMERA = "side_camera"
@@ -173,7 +175,7 @@ def _add_sensors_and_cameras(spec: mujoco.MjSpec, config: WorldConfig) -> None:
             objname=name,
             objtype=mujoco.mjtObj.mjOBJ_JOINT,
         )
-    add_ft_sensor(spec, FT_SITE)
+    add_ft_sensor(spec, FT_BODY)
     spec.body("side_camera").add_camera(
         name=SIDE_CAMERA, quat=list(_QUAT_OPTICAL_MUJOCO_WXYZ), fovy=config.side_camera_fovy_deg
     )

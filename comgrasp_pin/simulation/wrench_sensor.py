@@ -164,6 +164,7 @@ def window_measurement(
     k: int,
     q: np.ndarray,
     dt: float,
+    time: float,
 ) -> WrenchMeasurement:
     """The sensor's mean over a window of simulation steps.
 
@@ -176,6 +177,7 @@ def window_measurement(
             s % k == 0 (a window without one takes its last step as a sample).
         q: (n_joints,) the mean configuration over the window (rad).
         dt: the simulation's step (s).
+        time: the simulation's clock when the window began (s).
     """
     steps = first_step + np.arange(len(wrench_true))
     rows = np.flatnonzero(steps % k == 0)
@@ -185,5 +187,4 @@ def window_measurement(
     readings = sensor.read(indices, wrench_true[rows])
     n = len(readings)
     std_error = readings.std(axis=0, ddof=1) / np.sqrt(n) if n > 1 else np.full(6, np.inf)
-    return WrenchMeasurement(readings.mean(axis=0), std_error, q, n, len(wrench_true) * dt,
-                             first_step * dt)  # fmt: skip
+    return WrenchMeasurement(readings.mean(axis=0), std_error, q, n, len(wrench_true) * dt, time)
