@@ -20,7 +20,8 @@ from comgrasp_pin.estimation.wrench import fit_static_wrench
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.planning import plan_measurement_poses
 from comgrasp_pin.robot_io.wrench_log import WrenchLog
-from comgrasp_pin.robot_io.wrench_static import estimate_wrench_static, tool_beyond
+from comgrasp_pin.estimation.wrench_com import tool_beyond
+from comgrasp_pin.robot_io.wrench_static import estimate_wrench_static
 
 G = np.array([0.0, 0.0, -9.81])
 TILTS = Rotation.from_rotvec(np.radians([[0, 0, 0], [60, 0, 0], [0, 60, 0], [-45, -45, 0]]))
@@ -191,5 +192,5 @@ def test_a_sensor_frame_off_the_last_link_is_refused():
     robot = RobotModel.ur5()
     log = _log(robot, "tool0", 1.0, np.zeros(3), 0, 0.01, np.random.default_rng(0))
     bad = WrenchLog(log.time, log.joint_names, log.position, log.wrench, "forearm_link")
-    with pytest.raises(InvalidInputError, match="not on the same link chain"):
+    with pytest.raises(InvalidInputError, match="not on the ee frame.s link"):
         estimate_wrench_static(robot, bad)

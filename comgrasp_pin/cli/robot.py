@@ -17,6 +17,8 @@ from comgrasp_pin.cli.dynamic import add_dynamic_args, run_dynamic
 from comgrasp_pin.cli.exports import add_export_args, wants_exports, write_exports
 from comgrasp_pin.cli.gains_args import add_gains_args, gains_from_args
 from comgrasp_pin.cli.motion import add_plan_motion, run_plan_motion
+from comgrasp_pin.cli.wrench import add_wrench_args, run_wrench
+from comgrasp_pin.cli.wrench_dynamic import run_wrench_dynamic
 from comgrasp_pin.errors import InvalidInputError, OutputError
 
 _DEFAULTS = argparse.ArgumentDefaultsHelpFormatter
@@ -75,6 +77,9 @@ def _cmd_estimate(args: argparse.Namespace) -> int:
     from comgrasp_pin import robot_io as rio
 
     robot = _robot(args)
+    if args.wrench:
+        run = run_wrench_dynamic if args.dynamic else run_wrench
+        return run(args, robot, _write_json)
     if args.dynamic:
         return run_dynamic(args, robot, _write_json)
     log, before, after, gains = _log_and_windows(args, robot)
@@ -208,6 +213,7 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     est.add_argument("--inertia", default="point", help=f"inertia approximation: {INERTIA_HELP}")
     add_export_args(est)
     add_dynamic_args(est)
+    add_wrench_args(est)
     est.set_defaults(func=_cmd_estimate)
 
 

@@ -33,7 +33,7 @@ def difference_covariance(
     windows: list[tuple[float, float]],
     white_std: np.ndarray,
     weights: np.ndarray,
-    drift_std: float,
+    drift_std: float | np.ndarray,
 ) -> np.ndarray:
     """(k n, k n) covariance of k torque differences, pose-major (pose 0's n joints first).
 
@@ -42,7 +42,8 @@ def difference_covariance(
         white_std: (w, n) each window's standard error from white noise (N m).
         weights: (k, w) each difference as a weighted sum of the windows' averages (e.g.
             +1 on its held window and -1 on its empty one).
-        drift_std: the random walk's std after one second (N m / sqrt(s)); 0: white noise
+        drift_std: the random walk's std after one second (N m / sqrt(s)), one for every
+            channel or (n,) one each (a wrist sensor's force and torque); 0: white noise
             only.
     """
     white = validate.real_array(white_std, "white_std")
@@ -53,12 +54,13 @@ def difference_covariance(
             f"white_std must be (windows, joints) and weights (differences, windows) for "
             f"{len(spans)} windows, got {white.shape} and {W.shape}"
         )
-    if not (drift_std >= 0 and np.all(np.isfinite(white)) and np.all(np.isfinite(spans))):
+    k, n = W.shape[0], white.shape[1]
+    drift = np.broadcast_to(np.asarray(drift_std, dtype=float), (n,))
+    if not (np.all(drift >= 0) and np.all(np.isfinite(white)) and np.all(np.isfinite(spans))):
         raise InvalidInputError("drift_std must be >= 0 and the windows and stds finite")
     M = np.array([[mean_min(u, v) for v in spans] for u in spans])
-    k, n = W.shape[0], white.shape[1]
     blocks = np.zeros((k, n, k, n))
     for j in range(n):
-        blocks[:, j, :, j] = W @ (drift_std**2 * M + np.diag(white[:, j] ** 2)) @ W.T
+        blocks[:, j, :, j] = W @ (drift[j] ** 2 * M + np.diag(white[:, j] ** 2)) @ W.T
     cov = blocks.reshape(k * n, k * n)
     return 0.5 * (cov + cov.T)

@@ -16,6 +16,10 @@ belongs in the rows' noise.
 Given joint torques of the same windows too, both sets of rows are stacked, each weighed by
 its own noise; ``source_shares`` says how much of the information on each unknown came
 from each.
+
+What the sensor carries beyond the payload, the tool, is the URDF's links beyond the sensor
+frame (``tool_beyond``): a difference before/after the grasp cancels it, an estimate from
+orientations alone (``robot_io.wrench_static``) subtracts it.
 """
 
 from __future__ import annotations
@@ -48,6 +52,44 @@ def T_sensor_ee(robot: RobotModel, sensor_frame: str) -> np.ndarray:
         )
     q = pin.neutral(model)
     return np.linalg.solve(robot.frame_pose(q, sensor_frame), robot.ee_pose(q))
+
+
+def _parent_frame(robot: RobotModel, f_id: int) -> int:
+    """The frame ``f_id`` hangs from.
+
+    A joint the reduced model locked (a finger) becomes a frame that is its own parent there;
+    the full model still knows its parent link.
+    """
+    model = robot.model
+    up = model.frames[f_id].parentFrame
+    if up != f_id:
+        return up
+    full = robot.full_model
+    name = full.frames[full.frames[full.getFrameId(model.frames[f_id].name)].parentFrame].name
+    return model.getFrameId(name)
+
+
+def tool_beyond(robot: RobotModel, sensor_frame: str) -> pin.Inertia:
+    """The URDF's links beyond ``sensor_frame`` as one body, in the sensor frame.
+
+    A link is beyond the sensor when its chain of parent frames reaches the sensor frame
+    without leaving the sensor's rigid body (the last joint's). The sensor frame's own link
+    counts as before the sensor (a sensor's frame is best a massless link of its own).
+    """
+    model = robot.model
+    s_id = model.getFrameId(sensor_frame)
+    joint = model.frames[s_id].parentJoint
+    total = pin.Inertia.Zero()
+    for f_id, frame in enumerate(model.frames):
+        if frame.parentJoint != joint or frame.inertia.mass <= 0:
+            continue
+        up, seen = f_id, set()
+        while up != s_id and up not in seen and model.frames[up].parentJoint == joint:
+            seen.add(up)
+            up = _parent_frame(robot, up)
+        if up == s_id:
+            total += frame.placement.act(frame.inertia)
+    return model.frames[s_id].placement.actInv(total)
 
 
 def wrench_regressor(
@@ -169,20 +211,30 @@ def _with_torques(robot, Q, Y_w, b_w, std_w, chol_w, torques):
     return Y, b, None, np.linalg.cholesky(cov[np.ix_(order, order)])
 
 
-def source_shares(blocks: dict[str, tuple[np.ndarray, np.ndarray]]) -> dict[str, dict]:
+def source_shares(
+    blocks: dict[str, tuple[np.ndarray, np.ndarray]], directions: dict | None = None
+) -> dict[str, dict]:
     """How much of the information on each unknown each source gave (shares sum to 1).
 
     Args:
         blocks: per source, (Y (rows, 4) its rows in theta, cov (rows, rows) their noise).
+        directions: {name: (4,) a} the combinations a . theta to share out; None: each of
+            ``UNKNOWNS``.
 
     Returns:
-        per source, {unknown: share} for ``UNKNOWNS``: diag(C F_s), F_s = Y^T cov^-1 Y the
-        source's Fisher information and C the inverse of their sum (the pseudo-inverse where
-        one pose leaves a direction unseen: that direction's shares are 0).
+        per source, {name: a^T C F_s C a / a^T C a}: F_s = Y^T cov^-1 Y is the source's
+        Fisher information and C the inverse of their sum, so that a^T C a, the combined
+        variance, splits into one non-negative part per source (the pseudo-inverse where
+        one pose leaves a direction unseen; a combination with no information shares 0).
     """
+    if directions is None:
+        directions = dict(zip(UNKNOWNS, np.eye(4), strict=True))
     F = {name: Y.T @ np.linalg.solve(cov, Y) for name, (Y, cov) in blocks.items()}
     C = np.linalg.pinv(sum(F.values()), rcond=1e-10, hermitian=True)
-    return {
-        name: {u: float(v) for u, v in zip(UNKNOWNS, np.diag(C @ Fs), strict=True)}
-        for name, Fs in F.items()
-    }
+    out: dict[str, dict] = {name: {} for name in F}
+    for label, a in directions.items():
+        Ca = C @ np.asarray(a, dtype=float)
+        total = float(a @ Ca)
+        for name, Fs in F.items():
+            out[name][label] = float(Ca @ Fs @ Ca) / total if total > 0 else 0.0
+    return out

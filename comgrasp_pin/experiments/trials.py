@@ -24,8 +24,16 @@ ACCURACY_COLUMNS = [
     *(f"pos_std_{part}_m" for part in
       ("estimator", "tilt", "shift", "out_of_plane", "slide", "creep", "off_axis",
        "calibration")),
+    *(f"{c}_{source}{unit}" for source in ("wrench", "both") for c, unit in
+      (("pos_esti", "_m"), ("pos_std", "_m"), ("accuracy", ""), ("mass_esti", "_kg"))),
+    "wrench_share_mass", "wrench_share_com", "wrench_error", "both_error",
     "sim_s", "wall_s",
 ]  # fmt: skip
+"""The columns of accuracy.csv. The ``_wrench`` and ``_both`` ones: the same grasp's CoM from
+the wrist sensor's readings of the same windows, and from both sensors stacked (recorded
+beside the joint torques' estimate, which the robot used); ``wrench_share_*``: the wrench's
+share of the information on the mass and on the CoM along the rod with both;
+``*_error``: why that source gave no estimate (empty: it gave one)."""
 REGRASP_COLUMNS = [
     "object", "trial", "method", "seed", "success", "regrasped", "reason", "length_m",
     "pos_real_m", "pos_esti_m", "theta_deg", "accuracy", "mass_real_kg", "mass_esti_kg",
@@ -147,9 +155,28 @@ def accuracy_trial(task: dict) -> dict:
         "extra_pose": int(t.extra_pose),
         "estimator": config.trial.estimator,
         **{f"pos_std_{k.replace(' ', '_')}_m": v for k, v in t.std_parts.items()},
+        **_by_source(t, score),
         "sim_s": sim_s,
         "wall_s": wall,
     }
+
+
+def _by_source(t, score) -> dict:
+    """The accuracy row's columns of the other sources (``ACCURACY_COLUMNS``' docstring)."""
+    row: dict = {}
+    for source in ("wrench", "both"):
+        loc = t.by_source.get(source, "no wrist sensor")
+        ok = not isinstance(loc, str)
+        row[f"pos_esti_{source}_m"] = score.pos_esti_by_source.get(source, float("nan"))
+        row[f"pos_std_{source}_m"] = loc.std if ok else float("nan")
+        row[f"accuracy_{source}"] = score.accuracy_of(source) if ok else float("nan")
+        row[f"mass_esti_{source}_kg"] = loc.estimate.mass if ok else float("nan")
+        row[f"{source}_error"] = "" if ok else loc
+    both = t.by_source.get("both")
+    shares = None if both is None or isinstance(both, str) else both.shares["wrench"]
+    row["wrench_share_mass"] = float("nan") if shares is None else shares["mass"]
+    row["wrench_share_com"] = float("nan") if shares is None else shares["com_along_rod"]
+    return row
 
 
 def regrasp_trial(task: dict) -> dict:

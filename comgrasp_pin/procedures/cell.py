@@ -30,6 +30,11 @@ class TorqueMeasurement:
         n_samples: number of samples averaged.
         duration: length of the window (s).
         time: the robot's clock when the window began (s; NaN: not known).
+        wrench: (6,) the wrist force/torque sensor's mean over the same window: force (N)
+            and torque (N m) the tool side applies to it, in its frame
+            (``robot_io.wrench_log``'s convention); None: no wrist sensor.
+        wrench_std_error: (6,) its standard error from the samples' spread; None without.
+        wrench_n_samples: the wrist sensor's samples averaged (0 without one).
     """
 
     tau: np.ndarray
@@ -38,6 +43,9 @@ class TorqueMeasurement:
     n_samples: int
     duration: float
     time: float = float("nan")
+    wrench: np.ndarray | None = None
+    wrench_std_error: np.ndarray | None = None
+    wrench_n_samples: int = 0
 
 
 class SlipWatch(Protocol):

@@ -16,13 +16,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from comgrasp_pin.config import DepthLineErrorConfig, DepthNoiseConfig, TorqueSensorConfig
+from comgrasp_pin.config import (
+    DepthLineErrorConfig,
+    DepthNoiseConfig,
+    TorqueSensorConfig,
+    WrenchSensorConfig,
+)
 from comgrasp_pin.estimation import AxisPrior, ComEstimate, com_along_axis, estimate_com
 from comgrasp_pin.estimation.drift import difference_covariance
 from comgrasp_pin.perception import SideView
 from comgrasp_pin.procedures import uncertainty
 from comgrasp_pin.procedures.measurement import HeldReadings
 from comgrasp_pin.procedures.rod_motion import depth_agrees, paired_depth_line, rod_motion
+from comgrasp_pin.procedures.wrench_readings import JOINT_TORQUES, WrenchRows
 from comgrasp_pin.robot import RobotModel
 
 
@@ -37,6 +43,8 @@ class ComLocation:
         path: "one pose", or "k poses" with k their number (see ``locate_com``).
         std: the standard deviation of the CoM point along the rod (m), from every source
             in ``std_parts`` (``procedures.uncertainty``): estimator, slip, tilt, views.
+        shares: with both sources, each one's share of the information on the mass and on
+            the CoM along the rod ({source: {"mass": s, "com_along_rod": s}}); else None.
     """
 
     estimate: ComEstimate
@@ -46,6 +54,7 @@ class ComLocation:
     path: str
     std: float
     std_parts: dict
+    shares: dict | None = None
 
 
 def locate_com(
@@ -56,6 +65,8 @@ def locate_com(
     depth_bounds: tuple[float, float],
     calibration: DepthNoiseConfig,
     depth_line: DepthLineErrorConfig | None,
+    source: str = JOINT_TORQUES,
+    wrench: WrenchSensorConfig | None = None,
 ) -> ComLocation:
     """The CoM along the rod from the readings.
 
@@ -68,7 +79,8 @@ def locate_com(
     the torque differences' noise is known (``pair_noise``). ``calibration``: the
     side camera's stated accuracy and its depth resolution, ``depth_line`` its depth
     line's error model (``uncertainty.std_parts``; None: the slices' scatter alone). A
-    payload not measurably above zero: EmptyGripperError.
+    payload not measurably above zero: EmptyGripperError. ``source``: the joint torques,
+    the wrist sensor's wrench or both (``wrench_readings``; ``wrench``: its data sheet).
     """
     use = [i for i, view in enumerate(held.views) if view is not None]
     pair = pair_noise([held.before[i] for i in use], [held.after[i] for i in use], noise)
@@ -81,8 +93,13 @@ def locate_com(
     side, T_obj = held.side, held.side.T_ee_obj
     prior = axis_prior(side) if estimator == "ipopt" else None
 
+    rows = None if source == JOINT_TORQUES else WrenchRows.of(robot, held, use, wrench, source)
+
     def estimate(k: int, method: str, prior: AxisPrior | None, motion=None) -> ComEstimate:
         first = pair.first(k, robot.nq)
+        if rows is not None:
+            torques = (tau_b[:k], tau_a[:k], first.covariance(k, robot.nq)) if rows.both else None
+            return rows.estimate(robot, q[:k], method, prior, motion, torques)
         return estimate_com(robot, q[:k], tau_b[:k], tau_a[:k], method=method,
                             torque_std=first.std, com_prior=prior, payload_motion_ee=motion,
                             dtau_cov=first.cov)  # fmt: skip
@@ -113,7 +130,12 @@ def locate_com(
     parts = uncertainty.std_parts(est, views, depth, depth_bounds, position, calibration,
                                   off_axis, depth_line)  # fmt: skip
     std = float(np.sqrt(sum(v * v for v in parts.values())))
-    return ComLocation(est, est_line, com_along_axis(est, T_obj), x_line, path, std, parts)
+    shares = None
+    if rows is not None and rows.both:
+        k = est.n_poses
+        shares = rows.shares(robot, q[:k], pair.first(k, robot.nq).covariance(k, robot.nq), T_obj)
+    return ComLocation(est, est_line, com_along_axis(est, T_obj), x_line, path, std, parts,
+                       shares)  # fmt: skip
 
 
 def axis_prior(side: SideView) -> AxisPrior:
@@ -149,6 +171,13 @@ class PairNoise:
 
     std: float | None
     cov: np.ndarray | None
+
+    def covariance(self, k: int, n: int) -> np.ndarray:
+        """(k n, k n) the first ``k`` poses' differences' covariance (a difference of two
+        readings of ``std`` each where no full covariance is known)."""
+        if self.cov is not None:
+            return self.cov[: k * n, : k * n]
+        return 2.0 * float(self.std) ** 2 * np.eye(k * n)
 
     def first(self, k: int, n: int) -> PairNoise:
         """The noise of the first ``k`` poses' differences (``n`` joints)."""

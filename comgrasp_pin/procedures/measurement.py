@@ -7,7 +7,7 @@ estimates; ``TrialMeasurement`` is the trial grasp's result. No ground truth her
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -42,6 +42,10 @@ class TrialMeasurement:
         com_path: how the CoM was located: "one pose" or "k poses".
         extra_pose: the CoM was known too poorly after the planned poses
             (``planning.regrasp.needs_another_pose``), so one more was measured.
+        by_source: the CoM located from the same readings' other sources, recorded beside
+            the one the robot used: {"wrench": the wrist sensor's, "both": the wrench and the
+            joint torques stacked}, each a ``ComLocation`` or the message of why it failed;
+            empty without a wrist sensor.
     """
 
     theta: float
@@ -66,6 +70,7 @@ class TrialMeasurement:
     std_parts: dict
     com_path: str
     extra_pose: bool
+    by_source: dict = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

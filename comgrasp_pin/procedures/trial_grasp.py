@@ -23,6 +23,7 @@ import numpy as np
 
 from comgrasp_pin.config import EpisodeConfig
 from comgrasp_pin.errors import (
+    ComGraspError,
     EmptyGripperError,
     HeldRodUnmeasuredError,
     RodDroppedError,
@@ -49,6 +50,7 @@ from comgrasp_pin.procedures.trial_steps import (
     measure_held,
     measure_pose,
 )
+from comgrasp_pin.procedures.wrench_readings import BOTH, WRENCH, has_wrench
 from comgrasp_pin.robot import RobotModel
 
 __all__ = ["MEASURED", "trial_grasp", "trial_measurement"]
@@ -103,15 +105,30 @@ def trial_grasp(
                                  sensors.side_depth, sensors.side_depth_line)  # fmt: skip
     except EmptyGripperError as exc:
         raise RodDroppedError(str(exc), held.heavy_side) from exc
-    return trial_measurement(cell.robot, plan, held, loc)
+    others = {}
+    if has_wrench(held):  # the same poses from the wrist sensor, and from both: recorded
+        for source in (WRENCH, BOTH):
+            try:
+                others[source] = locate_com(
+                    cell.robot, held, trial.estimator, noise, depth_bounds, sensors.side_depth,
+                    sensors.side_depth_line, source, sensors.wrench
+                )  # fmt: skip
+            except ComGraspError as exc:
+                others[source] = str(exc)
+    return trial_measurement(cell.robot, plan, held, loc, others)
 
 
 def trial_measurement(
-    robot: RobotModel, plan: TrialPlan, held: HeldReadings, loc: ComLocation
+    robot: RobotModel,
+    plan: TrialPlan,
+    held: HeldReadings,
+    loc: ComLocation,
+    others: dict | None = None,
 ) -> TrialMeasurement:
     """The trial grasp's result from its plan, readings and CoM location. ``extra_pose`` is
     true only when the readings hold a pose beyond the plan's: one more pose was asked for
-    and measured, not merely asked for."""
+    and measured, not merely asked for. ``others``: the CoM located from the other sources
+    of the same readings ({source: ComLocation, or why it failed}), recorded only."""
     return TrialMeasurement(
         theta=held.side.theta,
         slip_seen=held.slip_seen,
@@ -135,4 +152,5 @@ def trial_measurement(
         std_parts=loc.std_parts,
         com_path=loc.path,
         extra_pose=len(held.after) > len(plan.poses),
+        by_source=others or {},
     )

@@ -28,6 +28,8 @@ unless named ``_deg``.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from comgrasp_pin.config import TrialConfig
@@ -75,12 +77,22 @@ def arrive(cell: Cell, q: np.ndarray, approach_deg: float, approach_time: float,
 
 def combine(a: TorqueMeasurement, b: TorqueMeasurement) -> TorqueMeasurement:
     """One measurement of the samples of two windows at the same configuration, back to
-    back: means and variances weighted by their sample counts."""
-    n = a.n_samples + b.n_samples
-    wa, wb = a.n_samples / n, b.n_samples / n
-    var = (a.n_samples**2 * a.std_error**2 + b.n_samples**2 * b.std_error**2) / n**2
-    return TorqueMeasurement(wa * a.tau + wb * b.tau, np.sqrt(var), wa * a.q + wb * b.q, n,
-                             a.duration + b.duration, a.time)  # fmt: skip
+    back: means and variances weighted by their sample counts (the wrist sensor's too)."""
+    tau, std, n = _pooled(a.tau, a.std_error, a.n_samples, b.tau, b.std_error, b.n_samples)
+    q = (a.n_samples * a.q + b.n_samples * b.q) / n
+    both = replace(a, tau=tau, std_error=std, q=q, n_samples=n, duration=a.duration + b.duration)
+    if a.wrench is None or b.wrench is None:
+        return replace(both, wrench=None, wrench_std_error=None, wrench_n_samples=0)
+    w, w_std, w_n = _pooled(a.wrench, a.wrench_std_error, a.wrench_n_samples, b.wrench,
+                            b.wrench_std_error, b.wrench_n_samples)  # fmt: skip
+    return replace(both, wrench=w, wrench_std_error=w_std, wrench_n_samples=w_n)
+
+
+def _pooled(mean_a, sem_a, n_a: int, mean_b, sem_b, n_b: int):
+    """The mean, standard error and count of two back-to-back windows' samples."""
+    n = n_a + n_b
+    var = (n_a**2 * sem_a**2 + n_b**2 * sem_b**2) / n**2
+    return (n_a * mean_a + n_b * mean_b) / n, np.sqrt(var), n
 
 
 def extra_window(measured: TorqueMeasurement, sem: float, window_max: float) -> float:

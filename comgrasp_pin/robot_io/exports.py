@@ -33,15 +33,14 @@ def _note(p: Payload) -> list[str]:
     std = p.std
     if p.inertia_std_flange is None:
         lines = [
-            f"payload estimated by comgrasp_pin from static joint torques; frame {p.flange_frame}",
-            f"inertia: {p.inertia_model} approximation about the CoM, flange axes (static "
-            "torques do not see inertia)",
+            f"payload estimated by comgrasp_pin from {p.source}; frame {p.flange_frame}",
+            f"inertia: {p.inertia_model} approximation about the CoM, flange axes (readings "
+            "at rest do not see inertia)",
         ]
     else:
         s = _six(p.inertia_std_flange)
         lines = [
-            f"payload identified by comgrasp_pin from a motion's joint torques; frame "
-            f"{p.flange_frame}",
+            f"payload identified by comgrasp_pin from {p.source}; frame {p.flange_frame}",
             "inertia: identified, about the CoM, flange axes; 1-sigma [Ixx, Iyy, Izz, Ixy, "
             f"Ixz, Iyz] {_list(s)} kg m^2",
         ]

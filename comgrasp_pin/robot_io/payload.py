@@ -15,6 +15,7 @@ approximation, always symmetric and positive semi-definite, about the CoM in fla
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
@@ -24,7 +25,11 @@ from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.estimation import ComEstimate
 from comgrasp_pin.robot import RobotModel
 
+if TYPE_CHECKING:
+    from comgrasp_pin.robot_io.wrench_static import WrenchStaticEstimate
+
 _AXES = {"x": 0, "y": 1, "z": 2}
+WRENCH_AT_REST = "a wrist sensor's wrench at rest"
 INERTIA_HELP = "point | cylinder:L,R,AXIS (L, R in m; AXIS x, y or z of the ee frame)"
 
 
@@ -43,6 +48,9 @@ class Payload:
             (its component there is 0 in the ee frame), or None.
         inertia_std_flange: (3, 3) std of each entry of ``inertia_flange`` where the inertia
             was identified from a motion, or None where it is an approximation.
+        source: what it was estimated from, for the files' notes ("static joint torques",
+            "a wrist sensor's wrench at rest", "a motion's joint torques", "a motion's
+            wrench").
     """
 
     mass: float
@@ -53,6 +61,7 @@ class Payload:
     inertia_model: str
     unobservable_flange: np.ndarray | None = None
     inertia_std_flange: np.ndarray | None = None
+    source: str = "static joint torques"
 
     def __post_init__(self) -> None:
         """Refuse complex, boolean, string and object arrays (validate.real_array)."""
@@ -110,9 +119,15 @@ def inertia_about_com(mass: float, spec: str) -> tuple[np.ndarray, str, int | No
 
 
 def payload_in_flange(
-    robot: RobotModel, est: ComEstimate, flange_frame: str | None = None, inertia: str = "point"
+    robot: RobotModel,
+    est: ComEstimate | WrenchStaticEstimate,
+    flange_frame: str | None = None,
+    inertia: str = "point",
 ) -> Payload:
-    """``est`` (CoM in the ee frame) expressed in ``flange_frame`` (default: the ee frame)."""
+    """``est`` (CoM in the ee frame) expressed in ``flange_frame`` (default: the ee frame).
+
+    ``est``: a joint-torque estimate, or a wrist sensor's static one.
+    """
     flange = flange_frame or robot.ee_frame
     T = T_flange_ee(robot, flange)
     R = T[:3, :3]
@@ -126,7 +141,8 @@ def payload_in_flange(
         G[1:, 1:] = R
         cov = G @ est.cov @ G.T
     u = None if est.unobservable_ee is None else R @ est.unobservable_ee
-    return Payload(float(est.mass), com_flange, I_flange, flange, cov, model, u)
+    source = "static joint torques" if isinstance(est, ComEstimate) else WRENCH_AT_REST
+    return Payload(float(est.mass), com_flange, I_flange, flange, cov, model, u, None, source)
 
 
 def dynamic_payload_in_flange(robot: RobotModel, est, flange_frame: str | None = None) -> Payload:
@@ -142,5 +158,7 @@ def dynamic_payload_in_flange(robot: RobotModel, est, flange_frame: str | None =
     std = np.sqrt(np.clip(np.diag(K @ est.inertia_cov @ K.T), 0, None)).reshape(3, 3)
     G = np.eye(4)
     G[1:, 1:] = R
+    source = "a motion's wrench" if hasattr(est, "sensor_bias") else "a motion's joint torques"
     return Payload(float(est.mass), R @ est.com_ee + T[:3, 3], 0.5 * (I_flange + I_flange.T),
-                   flange, G @ est.cov @ G.T, "identified from a motion", None, std)  # fmt: skip
+                   flange, G @ est.cov @ G.T, "identified from a motion", None, std,
+                   source)  # fmt: skip

@@ -26,9 +26,9 @@ import pinocchio as pin
 
 from comgrasp_pin.errors import InvalidInputError, LogError
 from comgrasp_pin.estimation.wrench import StaticWrenchFit, fit_static_wrench
+from comgrasp_pin.estimation.wrench_com import T_sensor_ee, tool_beyond
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.joint_log import JointLog
-from comgrasp_pin.robot_io.payload import T_flange_ee
 from comgrasp_pin.robot_io.windows import (
     MAX_SPEED,
     MIN_STATIC_S,
@@ -85,47 +85,14 @@ class WrenchStaticEstimate:
     reasons: tuple[str, ...]
 
     @property
+    def unobservable_ee(self) -> None:
+        """None: three orientations see the whole CoM (as ``ComEstimate``'s field)."""
+        return None
+
+    @property
     def n_poses(self) -> int:
         """The number of orientations."""
         return len(self.windows)
-
-
-def _parent_frame(robot: RobotModel, f_id: int) -> int:
-    """The frame ``f_id`` hangs from.
-
-    A joint the reduced model locked (a finger) becomes a frame that is its own parent there;
-    the full model still knows its parent link.
-    """
-    model = robot.model
-    up = model.frames[f_id].parentFrame
-    if up != f_id:
-        return up
-    full = robot.full_model
-    name = full.frames[full.frames[full.getFrameId(model.frames[f_id].name)].parentFrame].name
-    return model.getFrameId(name)
-
-
-def tool_beyond(robot: RobotModel, sensor_frame: str) -> pin.Inertia:
-    """The URDF's links beyond ``sensor_frame`` as one body, in the sensor frame.
-
-    A link is beyond the sensor when its chain of parent frames reaches the sensor frame
-    without leaving the sensor's rigid body (the last joint's). The sensor frame's own link
-    counts as before the sensor (a sensor's frame is best a massless link of its own).
-    """
-    model = robot.model
-    s_id = model.getFrameId(sensor_frame)
-    joint = model.frames[s_id].parentJoint
-    total = pin.Inertia.Zero()
-    for f_id, frame in enumerate(model.frames):
-        if frame.parentJoint != joint or frame.inertia.mass <= 0:
-            continue
-        up, seen = f_id, set()
-        while up != s_id and up not in seen and model.frames[up].parentJoint == joint:
-            seen.add(up)
-            up = _parent_frame(robot, up)
-        if up == s_id:
-            total += frame.placement.act(frame.inertia)
-    return model.frames[s_id].placement.actInv(total)
 
 
 def _as_joint_log(log: WrenchLog) -> JointLog:
@@ -165,7 +132,7 @@ def estimate_wrench_static(
             f"{log.source}: joints {list(log.joint_names)} do not match the URDF's arm joints "
             f"{list(robot.joint_names)}"
         )
-    T_sensor_ee = T_flange_ee(robot, log.sensor_frame)  # checks the frame is on the ee's link
+    T_se = T_sensor_ee(robot, log.sensor_frame)  # checks the frame is on the ee's link
     jlog = _as_joint_log(log)
     if windows is None:
         windows = find_static_windows(jlog, max_speed, min_duration)
@@ -193,7 +160,17 @@ def estimate_wrench_static(
         noise_from += f", plus {f_std:g} N and {t_std:g} N m between windows"
     std = np.maximum(std, 1e-9)  # a noise-free log (simulation): its residuals decide
     fit = fit_static_wrench(g_sensor, wrench, std, log.sensor_frame)
-    return _estimate(fit, T_sensor_ee, log, windows, readings, tool, noise_from)
+    return _estimate(fit, T_se, log, windows, readings, tool, noise_from)
+
+
+def _rotated_cov(fit: StaticWrenchFit, G: np.ndarray) -> np.ndarray:
+    """(4, 4) the covariance of (mass, CoM) in the ee axes; the CoM's rows NaN where
+    nothing is held (the mass's variance kept)."""
+    cov = G @ np.nan_to_num(fit.cov) @ G.T
+    if not fit.held:
+        cov[1:, :] = cov[:, 1:] = np.nan
+        cov[0, 0] = fit.cov[0, 0]
+    return cov
 
 
 def _estimate(fit, T_sensor_ee, log, windows, readings, tool, noise_from):
@@ -218,7 +195,7 @@ def _estimate(fit, T_sensor_ee, log, windows, readings, tool, noise_from):
     return WrenchStaticEstimate(
         mass=fit.mass,
         com_ee=R @ fit.com_sensor + T_ee_sensor[:3, 3],
-        cov=G @ fit.cov @ G.T,
+        cov=_rotated_cov(fit, G),
         com_sensor=fit.com_sensor,
         sensor_frame=log.sensor_frame,
         sensor_bias=fit.bias,

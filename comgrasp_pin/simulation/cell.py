@@ -9,7 +9,7 @@ announce is written on the video (when one is recorded) and logged with its time
 from __future__ import annotations
 
 from contextlib import AbstractContextManager
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -86,7 +86,9 @@ class SimCell:
         skills.carry_to_drop_box(self._sim, self.robot, self._motion)
 
     def measure_torques(self, settle: float, window: float) -> TorqueMeasurement:
-        return self._sim.measure_torques(settle, window)
+        torques, wrench = self._sim.measure(settle, window)  # the same window for both
+        return replace(torques, wrench=wrench.wrench, wrench_std_error=wrench.std_error,
+                       wrench_n_samples=wrench.n_samples)  # fmt: skip
 
     def look_from_above(self) -> RodDetection:
         return eyes.look_from_above(self._rig, self._sim.data)

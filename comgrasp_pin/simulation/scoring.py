@@ -5,7 +5,7 @@ The procedures never see any of this; the experiments and the tests do.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -30,6 +30,8 @@ class TrialScore:
         pos_esti_line: the same for the paper's single-pose estimate.
         theta_true: the rod's true tilt in the jaws (rad).
         mass_real: kg. grasp_offset: where the jaws held the rod (true, m). length: m.
+        pos_esti_by_source: {source: pos_esti} of the locations from the readings' other
+            sources (``TrialMeasurement.by_source``; NaN where that source failed).
     """
 
     pos_real: float
@@ -39,6 +41,7 @@ class TrialScore:
     mass_real: float
     grasp_offset: float
     length: float
+    pos_esti_by_source: dict = field(default_factory=dict)
 
     @property
     def accuracy(self) -> float:
@@ -49,6 +52,10 @@ class TrialScore:
     def accuracy_line(self) -> float:
         """The paper's metric for the paper's single-pose estimate."""
         return 1.0 - 5.0 * abs(self.pos_esti_line - self.pos_real) / self.length
+
+    def accuracy_of(self, source: str) -> float:
+        """The paper's metric for the estimate from ``source`` (NaN where it failed)."""
+        return 1.0 - 5.0 * abs(self.pos_esti_by_source[source] - self.pos_real) / self.length
 
 
 def score_trial(
@@ -70,6 +77,10 @@ def score_trial(
         mass_real=truth.mass,
         grasp_offset=grasp_offset_true,
         length=length,
+        pos_esti_by_source={
+            source: along_true_rod(loc.x_com) if not isinstance(loc, str) else float("nan")
+            for source, loc in trial.by_source.items()
+        },
     )
 
 

@@ -1,0 +1,103 @@
+"""`comgrasp estimate --wrench`: the payload from a wrist force/torque sensor (DESIGN.md 4e).
+
+The options are added to `comgrasp estimate` (``add_wrench_args``); ``cli.robot`` hands the
+parsed arguments here when ``--wrench`` is given. Without ``--dynamic``: mass, CoM and the
+sensor's six offsets from the arm at rest in three or more orientations
+(``robot_io.wrench_static``). With ``--dynamic``: the ten inertial parameters from a motion
+(``robot_io.wrench_dynamic``), the log's joint torques used as well where it has them.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from comgrasp_pin.errors import InvalidInputError
+
+
+def add_wrench_args(est: argparse.ArgumentParser) -> None:
+    """The options of the wrench path, on the `estimate` parser."""
+    g = est.add_argument_group(
+        "from a wrist force/torque sensor (--wrench)",
+        "the payload from the wrench a wrist sensor measured: at rest in three or more "
+        "orientations (mass, CoM and the sensor's bias; no empty-arm run needed), or along a "
+        "motion with --dynamic (the inertia too). --before/--after are not used",
+    )
+    g.add_argument("--wrench", action="store_true",
+                   help="estimate from the wrench: a bag's geometry_msgs/msg/WrenchStamped, a "
+                   "CSV's force_x..torque_z, or a UR recording's actual_TCP_force")  # fmt: skip
+    g.add_argument("--sensor-frame", default=None,
+                   help="the URDF frame the wrench is measured in (a CSV's or a UR "
+                   "recording's; a bag's comes from its frame_id)")  # fmt: skip
+    g.add_argument("--wrench-topic", default=None,
+                   help="the WrenchStamped topic (default: the bag's only one)")  # fmt: skip
+    g.add_argument("--tcp-frame", default=None,
+                   help="UR recording: the URDF frame of the controller's TCP, where "
+                   "actual_TCP_force is given (default tool0)")  # fmt: skip
+    g.add_argument("--windows", default=None,
+                   help="still windows T0:T1[,T0:T1...] (s), one per orientation (default: "
+                   "found in the log, as --auto does)")  # fmt: skip
+    g.add_argument("--wrench-std", default=None, metavar="F,T",
+                   help="the sensor's repeatability between windows: force N, torque N m "
+                   "(drift, hysteresis; its data sheet), added to each window's own "
+                   "noise")  # fmt: skip
+    g.add_argument("--keep-tool", action="store_true",
+                   help="do not subtract the URDF's links beyond the sensor: estimate "
+                   "everything the sensor carries")  # fmt: skip
+
+
+def _wrench_std(text: str | None) -> tuple[float, float] | None:
+    if text is None:
+        return None
+    try:
+        f, t = (float(v) for v in text.split(","))
+    except ValueError:
+        raise InvalidInputError(
+            f"--wrench-std {text!r}: two numbers F,T expected (N, N m)"
+        ) from None
+    return f, t
+
+
+def read_wrench(args: argparse.Namespace, robot):
+    """The WrenchLog of ``--bag`` or ``--csv`` (a project CSV or a UR recording)."""
+    from comgrasp_pin.robot_io.wrench_sources import read_wrench_log
+
+    if args.before or args.after or args.auto:
+        raise InvalidInputError(
+            "--wrench finds its still windows itself (or takes --windows): leave out "
+            "--before, --after and --auto"
+        )
+    if (args.bag is None) == (args.csv is None):
+        raise InvalidInputError("give exactly one log: --bag PATH or --csv PATH")
+    path = args.bag if args.bag is not None else args.csv
+    return read_wrench_log(path, robot, args.sensor_frame, args.wrench_topic, args.topic,
+                           args.tcp_frame)  # fmt: skip
+
+
+def run_wrench(args: argparse.Namespace, robot, write_json) -> int:
+    """Read the log, estimate at rest, write RESULT.json and the payload files (``--dynamic``
+    is ``cli.wrench_dynamic``'s)."""
+    from comgrasp_pin.cli.exports import wants_exports, write_exports
+    from comgrasp_pin.robot_io import parse_windows
+    from comgrasp_pin.robot_io.payload import payload_in_flange
+    from comgrasp_pin.robot_io.wrench_report import wrench_result_dict, wrench_summary
+    from comgrasp_pin.robot_io.wrench_static import IDENTIFIED, estimate_wrench_static
+
+    log = read_wrench(args, robot)
+    windows = None if args.windows is None else parse_windows(args.windows, "--windows")
+    est = estimate_wrench_static(robot, log, windows, args.max_speed,
+                                 wrench_std=_wrench_std(args.wrench_std),
+                                 subtract_tool=not args.keep_tool)  # fmt: skip
+    written = []
+    if wants_exports(args):
+        if est.verdict != IDENTIFIED:
+            raise InvalidInputError(
+                f"no payload file written: the verdict is {est.verdict!r} "
+                f"({'; '.join(est.reasons)})"
+            )
+        payload = payload_in_flange(robot, est, args.flange_frame, args.inertia)
+        written = write_exports(args, robot, payload)
+    write_json(args.out, wrench_result_dict(est, robot.ee_frame))
+    print(wrench_summary(est, robot.ee_frame))
+    for path in [*written, args.out]:
+        print(f"wrote {path}")
+    return 0

@@ -1,0 +1,109 @@
+"""`comgrasp estimate --wrench` (static) end to end: a wrist sensor's log as a real ROS 2 bag
+(rosbags) and as a CSV, the RESULT.json against the payload the log was made from, the payload
+files read back, and bad input refused with exit status 2 and a message."""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from test_wrench_static import _log
+
+from comgrasp_pin._paths import urdf_path
+from comgrasp_pin.cli import main
+from comgrasp_pin.robot import RobotModel
+from comgrasp_pin.robot_io import write_wrench_bag, write_wrench_csv
+
+URDF = str(urdf_path("ur5_gripper.urdf"))
+MASS, COM_SENSOR = 1.2, np.array([0.01, -0.005, 0.15])
+STD = np.r_[[0.1] * 3, [0.005] * 3]
+
+
+@pytest.fixture(scope="module")
+def wrench_log():
+    robot = RobotModel.ur5()
+    rng = np.random.default_rng(21)
+    return _log(robot, "ft_sensor", MASS, COM_SENSOR, rng.normal(size=6), STD, rng)
+
+
+def _com_ee(robot, c_sensor):
+    T = np.linalg.solve(robot.ee_pose(np.zeros(6)), robot.frame_pose(np.zeros(6), "ft_sensor"))
+    return T[:3, :3] @ c_sensor + T[:3, 3]
+
+
+def _args(log_args, out, *more):
+    return ["estimate", "--wrench", "--urdf", URDF, "--ee-frame", "eelink", *log_args,
+            "--out", str(out), *more]  # fmt: skip
+
+
+@pytest.mark.parametrize("storage", ["sqlite3", "mcap"])
+def test_a_bag_gives_the_payload_and_the_files(wrench_log, tmp_path, storage, capsys):
+    bag = write_wrench_bag(tmp_path / "bag", wrench_log, storage=storage)
+    out, rapid, urdf = tmp_path / "R.json", tmp_path / "load.mod", tmp_path / "robot.urdf"
+    args = _args(["--bag", str(bag)], out, "--flange-frame", "tool0", "--export-abb",
+                 str(rapid), "--export-urdf", str(urdf))  # fmt: skip
+    assert main(args) == 0
+    r = json.loads(out.read_text())
+    std = np.sqrt(np.diag(r["cov"]))
+    assert r["sensor_frame"] == "ft_sensor" and r["n_poses"] == 4
+    assert r["verdict"] == "identified" and r["frame"] == "eelink"
+    assert abs(r["mass_kg"] - MASS) < 4 * std[0]
+    assert np.all(
+        np.abs(np.array(r["com_m"]) - _com_ee(RobotModel.ur5(), COM_SENSOR)) < 4 * std[1:]
+    )
+    assert len(r["sensor_bias"]) == 6 and len(r["sensor_bias_std"]) == 6
+    assert "verdict: identified" in capsys.readouterr().out
+    # RAPID loaddata: mass and the CoG in mm of tool0 (ft_sensor sits at tool0)
+    m = re.search(r"loaddata\s+\w+\s*:=\s*\[\s*([-\d.eE+]+)\s*,\s*\[([^\]]*)\]", rapid.read_text())
+    assert float(m.group(1)) == pytest.approx(r["mass_kg"], rel=1e-6)
+    cog_mm = [float(v) for v in m.group(2).split(",")]
+    np.testing.assert_allclose(cog_mm, 1e3 * np.array(r["com_sensor_m"]), atol=1e-3)
+    assert urdf.exists()
+
+
+def test_a_csv_needs_its_sensor_frame_named(wrench_log, tmp_path):
+    csv = write_wrench_csv(tmp_path / "w.csv", wrench_log)
+    out = tmp_path / "R.json"
+    assert main(_args(["--csv", str(csv), "--sensor-frame", "ft_sensor"], out)) == 0
+    assert json.loads(out.read_text())["n_poses"] == 4
+    cmd = [sys.executable, "-m", "comgrasp_pin.cli", *_args(["--csv", str(csv)], out)]
+    res = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    assert res.returncode == 2 and "Traceback" not in res.stderr
+    assert "sensor" in res.stderr and "frame" in res.stderr
+
+
+def test_too_few_orientations_exit_2_naming_what_is_missing(wrench_log, tmp_path):
+    csv = write_wrench_csv(tmp_path / "w.csv", wrench_log)
+    out = tmp_path / "R.json"
+    log_args = ["--csv", str(csv), "--sensor-frame", "ft_sensor", "--windows", "0.1:1.8,3.1:4.7"]
+    cmd = [sys.executable, "-m", "comgrasp_pin.cli", *_args(log_args, out)]
+    res = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    assert res.returncode == 2 and "Traceback" not in res.stderr
+    assert "at least 3" in res.stderr and not out.exists()
+
+
+def test_nothing_held_writes_no_payload_file(tmp_path):
+    robot = RobotModel.ur5()
+    rng = np.random.default_rng(4)
+    log = _log(robot, "ft_sensor", 0.0, np.zeros(3), rng.normal(size=6), STD, rng)
+    csv = write_wrench_csv(tmp_path / "w.csv", log)
+    out, script = tmp_path / "R.json", tmp_path / "p.script"
+    assert main(_args(["--csv", str(csv), "--sensor-frame", "ft_sensor"], out)) == 0
+    r = json.loads(out.read_text())
+    assert r["verdict"] == "nothing held" and r["com_m"] is None
+    assert abs(r["mass_kg"]) < 3 * r["std"]["mass_kg"]
+    args = _args(
+        ["--csv", str(csv), "--sensor-frame", "ft_sensor"], out, "--export-ur", str(script)
+    )
+    assert main(args) == 2 and not script.exists()
+
+
+def test_before_and_after_windows_are_refused_with_wrench(wrench_log, tmp_path):
+    csv = write_wrench_csv(tmp_path / "w.csv", wrench_log)
+    args = _args(["--csv", str(csv), "--sensor-frame", "ft_sensor"], tmp_path / "R.json",
+                 "--before", "0:1", "--after", "3:4")  # fmt: skip
+    assert main(args) == 2
