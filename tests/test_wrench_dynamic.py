@@ -225,6 +225,21 @@ def test_both_sources_used_their_shares_follow_their_noise(robot):
     assert abs(est.mass - PAYLOAD.mass) < 5 * np.sqrt(est.cov[0, 0])
 
 
+def test_a_static_prior_is_a_source_of_its_own(robot):
+    """A static estimate of the mass to 1 g (and the CoM to 1 mm) beside a noisy sensor: the
+    prior carries most of the mass, and the shares still sum to one."""
+    log = wrench_log(robot, PAYLOAD, fourier_motion(robot), noise=(2.0, 0.1), seed=8)
+    prior = (np.r_[PAYLOAD.mass, PAYLOAD.lever], np.diag([1e-3, 1e-3, 1e-3, 1e-3]) ** 2)
+    est = estimate_wrench_dynamic(robot, log, combine_joint_torques=False, prior=prior,
+                                  tool_params=nominal_tool(robot, SENSOR))  # fmt: skip
+    assert set(est.contributions) == {"wrench", "prior"}
+    assert est.contributions["prior"]["mass_kg"] > 0.5
+    for quantity in ("mass_kg", "com_m"):
+        total = np.add(est.contributions["wrench"][quantity], est.contributions["prior"][quantity])
+        np.testing.assert_allclose(total, 1.0, atol=1e-9)
+    assert abs(est.mass - PAYLOAD.mass) < 4 * np.sqrt(est.cov[0, 0])
+
+
 def test_sources_that_disagree_make_the_verdict_unreliable(robot):
     """Joint torques as if the arm held 0.3 kg more than the sensor sees: the URDF's arm
     model is wrong by that much."""
@@ -291,3 +306,45 @@ def test_result_json_carries_the_sensor_and_each_source(robot):
     assert set(out["contributions"]) == {"wrench", "joint_torques"}
     assert len(out["validation"]["joint_torques"]["rms_Nm"]) == robot.nq
     assert out["frame"] == robot.ee_frame and out["source"] == "wrench and joint torques"
+
+
+@pytest.mark.slow
+def test_mujoco_wrench_against_the_truth_and_the_joint_torques_on_one_motion():
+    """A 1 kg box on the simulated UR5 along one planned excitation (12 s): MuJoCo's
+    force/torque sensor at ft_sensor (the realistic FT 300-S class: noise, an episode offset,
+    drift) and its link-side joint torques, an empty run of the same motion for each path."""
+    from comgrasp_pin.config import sensor_preset, wrench_preset
+    from comgrasp_pin.robot_io.dynamic import estimate_payload_dynamic
+    from comgrasp_pin.robot_io.excitation import ExcitationSettings, plan_excitation
+    from comgrasp_pin.simulation.arm_worlds import arm_robot
+    from comgrasp_pin.simulation.payload_motion import MotionSimConfig, simulate_motion
+    from comgrasp_pin.simulation.payloads import box
+
+    robot, payload = arm_robot("ur5"), box()
+    settings = ExcitationSettings(acceleration_limit=12.0, n_random=200, n_starts=1)
+    m = plan_excitation(robot, 12.0, settings=settings, seed=0)
+    motion = (m.t, m.q, m.qd, m.qdd)
+    kw = dict(sensor=sensor_preset("realistic").torque, wrench=wrench_preset("ft300s"),
+              config=MotionSimConfig(rest_s=1.5), offsets_seed=0)  # fmt: skip
+    empty_j, empty_w = simulate_motion("ur5", None, *motion, seed=11, **kw)
+    log_j, log_w = simulate_motion("ur5", payload, *motion, seed=12, **kw)
+    joint = estimate_payload_dynamic(robot, log_j, empty_j)
+    wrench = estimate_wrench_dynamic(robot, log_w, empty_log=empty_w, combine_joint_torques=False)
+    both = estimate_wrench_dynamic(robot, log_w, empty_log=empty_w)
+    truth = np.r_[payload.mass, payload.p_com_ee]
+    true_moments, axes = np.linalg.eigh(payload.I_com_ee)
+    for est in (joint, wrench, both):
+        assert abs(est.mass / payload.mass - 1) < 0.01
+        assert np.linalg.norm(est.com_ee - payload.p_com_ee) < 2e-3
+        z = (np.r_[est.mass, est.com_ee] - truth) / np.sqrt(np.diag(est.cov))
+        assert np.all(np.abs(z) < 4), z
+        for moment, u in zip(true_moments, axes.T):
+            std = np.sqrt(np.kron(u, u) @ est.inertia_cov @ np.kron(u, u))
+            assert abs(u @ est.inertia_com_ee @ u - moment) < 4 * std
+            assert abs(u @ est.inertia_com_ee @ u / moment - 1) < 0.1
+        assert est.verdict == "identified", est.reasons
+    # the two paths see one payload: they agree within their stated uncertainties
+    d = np.r_[wrench.mass, wrench.com_ee] - np.r_[joint.mass, joint.com_ee]
+    assert np.all(np.abs(d) < 4 * np.sqrt(np.diag(wrench.cov) + np.diag(joint.cov))), d
+    assert both.joint_torques.arm_model == "empty run"
+    assert both.agreement["chi2"] < both.agreement["max_chi2"]
