@@ -107,3 +107,36 @@ def test_before_and_after_windows_are_refused_with_wrench(wrench_log, tmp_path):
     args = _args(["--csv", str(csv), "--sensor-frame", "ft_sensor"], tmp_path / "R.json",
                  "--before", "0:1", "--after", "3:4")  # fmt: skip
     assert main(args) == 2
+
+
+def test_a_tool_identified_before_replaces_a_misstated_urdf_tool(tmp_path):
+    """The real gripper is 3 % heavier than the URDF says: the URDF's tool leaves that in the
+    payload; the tool identified with nothing held (--keep-tool, then --tool) takes it out."""
+    from comgrasp_pin.estimation.wrench_com import tool_beyond
+
+    robot = RobotModel.ur5()
+    urdf_tool = tool_beyond(robot, "ft_sensor")
+    extra_m, extra_c = 0.03 * urdf_tool.mass, np.array(urdf_tool.lever)
+    m = MASS + extra_m
+    c = (MASS * COM_SENSOR + extra_m * extra_c) / m
+    rng = np.random.default_rng(8)
+    empty = _log(robot, "ft_sensor", extra_m, extra_c, rng.normal(size=6), STD, rng)
+    loaded = _log(robot, "ft_sensor", m, c, rng.normal(size=6), STD, rng)
+    e_csv = write_wrench_csv(tmp_path / "empty.csv", empty)
+    l_csv = write_wrench_csv(tmp_path / "loaded.csv", loaded)
+    tool, out = tmp_path / "TOOL.json", tmp_path / "R.json"
+    frame = ["--sensor-frame", "ft_sensor"]
+    assert main(_args(["--csv", str(e_csv), *frame], tool, "--keep-tool")) == 0
+    t = json.loads(tool.read_text())
+    assert t["mass_kg"] == pytest.approx(urdf_tool.mass + extra_m, abs=4 * t["std"]["mass_kg"])
+    assert main(_args(["--csv", str(l_csv), *frame], out)) == 0
+    urdf_way = json.loads(out.read_text())
+    assert urdf_way["mass_kg"] - MASS > 10 * urdf_way["std"]["mass_kg"]  # the 27 g show
+    assert main(_args(["--csv", str(l_csv), *frame], out, "--tool", str(tool))) == 0
+    r = json.loads(out.read_text())
+    assert abs(r["mass_kg"] - MASS) < 4 * r["std"]["mass_kg"]
+    com_ee = _com_ee(robot, COM_SENSOR)
+    assert np.all(np.abs(np.array(r["com_m"]) - com_ee) < 4 * np.array(r["std"]["com_m"]))
+    assert r["std"]["mass_kg"] > urdf_way["std"]["mass_kg"]  # the tool's own error added
+    bad = _args(["--csv", str(l_csv), *frame], out, "--tool", str(out))  # not a --keep-tool run
+    assert main(bad) == 2

@@ -42,7 +42,11 @@ def add_wrench_args(est: argparse.ArgumentParser) -> None:
                    "noise")  # fmt: skip
     g.add_argument("--keep-tool", action="store_true",
                    help="do not subtract the URDF's links beyond the sensor: estimate "
-                   "everything the sensor carries")  # fmt: skip
+                   "everything the sensor carries (with nothing held: the tool itself, "
+                   "for --tool)")  # fmt: skip
+    g.add_argument("--tool", default=None, metavar="TOOL.json",
+                   help="the RESULT.json of a --keep-tool run with nothing held: that tool, "
+                   "with its covariance, is subtracted instead of the URDF's")  # fmt: skip
 
 
 def _wrench_std(text: str | None) -> tuple[float, float] | None:
@@ -55,6 +59,32 @@ def _wrench_std(text: str | None) -> tuple[float, float] | None:
             f"--wrench-std {text!r}: two numbers F,T expected (N, N m)"
         ) from None
     return f, t
+
+
+def _tool(path: str | None, sensor_frame: str):
+    """((4,) m, m c; (4, 4) cov) of a --keep-tool run's RESULT.json, or None."""
+    if path is None:
+        return None
+    import json
+    from pathlib import Path
+
+    import numpy as np
+
+    try:
+        data = json.loads(Path(path).read_text())
+        theta = np.array(data["theta_sensor"], dtype=float)
+        cov = np.array(data["theta_sensor_cov"], dtype=float)
+        frame, tool_mass = data["sensor_frame"], float(data["tool_subtracted"]["mass_kg"])
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise InvalidInputError(
+            f"--tool {path}: not the RESULT.json of a --wrench --keep-tool run ({exc})"
+        ) from None
+    if frame != sensor_frame or tool_mass != 0 or theta.shape != (4,) or cov.shape != (4, 4):
+        raise InvalidInputError(
+            f"--tool {path}: needs a --keep-tool run (nothing subtracted) in the sensor frame "
+            f"{sensor_frame!r}; it has {frame!r} and {tool_mass:g} kg subtracted"
+        )
+    return theta, cov
 
 
 def read_wrench(args: argparse.Namespace, robot):
@@ -86,7 +116,8 @@ def run_wrench(args: argparse.Namespace, robot, write_json) -> int:
     windows = None if args.windows is None else parse_windows(args.windows, "--windows")
     est = estimate_wrench_static(robot, log, windows, args.max_speed,
                                  wrench_std=_wrench_std(args.wrench_std),
-                                 subtract_tool=not args.keep_tool)  # fmt: skip
+                                 subtract_tool=not args.keep_tool,
+                                 tool=_tool(args.tool, log.sensor_frame))  # fmt: skip
     written = []
     if wants_exports(args):
         if est.verdict != IDENTIFIED:

@@ -161,7 +161,11 @@ def check_orientations(g_sensor: np.ndarray, sensor_frame: str = "sensor") -> np
 
 
 def fit_static_wrench(
-    g_sensor: np.ndarray, wrench: np.ndarray, wrench_std: np.ndarray, sensor_frame: str = "sensor"
+    g_sensor: np.ndarray,
+    wrench: np.ndarray,
+    wrench_std: np.ndarray,
+    sensor_frame: str = "sensor",
+    known_cov: np.ndarray | None = None,
 ) -> StaticWrenchFit:
     """Mass, CoM (sensor frame) and the sensor's bias from k orientations at rest.
 
@@ -170,6 +174,8 @@ def fit_static_wrench(
         wrench: (k, 6) the mean reading there: force (N), torque (N m), sensor frame.
         wrench_std: (k, 6) or (6,) standard deviation of each mean reading (N, N m), > 0.
         sensor_frame: the frame's name, for messages.
+        known_cov: (4, 4) covariance (kg, kg m) of a body's (m, m c) already taken out of
+            ``wrench`` (a tool identified before), added to the fit's; None for none.
 
     Raises:
         InvalidInputError: shapes, NaN or a std that is not > 0.
@@ -198,6 +204,8 @@ def fit_static_wrench(
     chi2_dof = float(np.sum((residuals.ravel() * w) ** 2) / dof) if dof > 0 else float("nan")
     scale = max(1.0, chi2_dof) if dof > 0 else 1.0
     theta_cov = scale * np.linalg.inv(info)
+    if known_cov is not None:
+        theta_cov[:4, :4] += known_cov
     m = float(theta[0])
     held = m > MASS_SIGMAS * np.sqrt(theta_cov[0, 0])
     J = np.zeros((4, N_UNKNOWNS))  # d(m, c) / d theta, c = (m c) / m

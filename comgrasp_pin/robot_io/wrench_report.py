@@ -32,6 +32,9 @@ def wrench_result_dict(est: WrenchStaticEstimate, frame: str) -> dict:
         "sensor_bias_std": _floats(est.sensor_bias_std),
         "sensor_bias_units": "force_x, force_y, force_z (N), torque_x, torque_y, torque_z (N m)",
         "tool_subtracted": {"mass_kg": est.tool_mass, "com_sensor_m": _floats(est.tool_com_sensor)},
+        "theta_sensor": _floats(fit.theta[:4]),
+        "theta_sensor_cov": fit.theta_cov[:4, :4].tolist(),
+        "theta_sensor_is": "m (kg), m c (kg m) in the sensor frame: what --tool reads back",
         "noise_from": est.noise_from,
         "chi2_per_dof": fit.chi2_dof,
         "covariance_scale": fit.scale,
@@ -64,7 +67,7 @@ def wrench_summary(est: WrenchStaticEstimate, frame: str) -> str:
         f"torque ({b[3]:.4f}, {b[4]:.4f}, {b[5]:.4f}) N m (std {bs[3:].max():.4f})"
     )
     if est.tool_mass > 0:
-        lines.append(f"  the URDF's tool beyond the sensor ({est.tool_mass:.3f} kg) subtracted")
+        lines.append(f"  a tool beyond the sensor ({est.tool_mass:.3f} kg) subtracted")
     lines.append(
         f"  residuals {est.residual_rms_N:.3g} N, {est.residual_rms_Nm:.3g} N m RMS "
         f"(chi2/dof {fit.chi2_dof:.2f}; covariance scaled by {fit.scale:.2f})"

@@ -60,7 +60,8 @@ class WrenchStaticEstimate:
         q: (k, n) the mean configuration of each window (rad).
         residual_rms_N, residual_rms_Nm: RMS of the force and torque residuals.
         fit: the fit in the sensor frame (``estimation.wrench.StaticWrenchFit``).
-        tool_mass: kg subtracted as the URDF's tool beyond the sensor (0 where not).
+        tool_mass: kg subtracted as the tool beyond the sensor (the URDF's, or one identified
+            before; 0 where none).
         tool_com_sensor: (3,) that tool's CoM (sensor frame, m).
         noise_from: how each window's noise was set, one line.
         verdict: ``identified``, ``nothing held`` or ``unreliable``; reasons: why.
@@ -108,6 +109,7 @@ def estimate_wrench_static(
     min_duration: float = MIN_STATIC_S,
     wrench_std: tuple[float, float] | None = None,
     subtract_tool: bool = True,
+    tool: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> WrenchStaticEstimate:
     """Mass, CoM (ee frame) and the sensor's bias from the still windows of ``log``.
 
@@ -120,6 +122,10 @@ def estimate_wrench_static(
         wrench_std: (force N, torque N m) the sensor's repeatability between windows, added
             to each window's own noise; None for none.
         subtract_tool: subtract the URDF's links beyond the sensor (see the module docstring).
+        tool: ((4,) m, m c in the sensor frame (kg, kg m), (4, 4) their covariance): the
+            tool identified before (a run with nothing held and ``subtract_tool=False``,
+            ``theta_sensor`` in its RESULT.json), subtracted instead of the URDF's, its
+            covariance added; None for the URDF's.
 
     Raises:
         InvalidInputError: the sensor frame is not in the URDF or not on the ee's link.
@@ -147,9 +153,18 @@ def estimate_wrench_static(
         [robot.frame_pose(r.q, log.sensor_frame)[:3, :3].T @ g_world for r in readings]
     )
     wrench = np.array([r.tau for r in readings])
-    tool = tool_beyond(robot, log.sensor_frame) if subtract_tool else pin.Inertia.Zero()
-    tool_moment = tool.mass * tool.lever
-    wrench -= np.array([np.r_[tool.mass * g, np.cross(tool_moment, g)] for g in g_sensor])
+    known_cov = None
+    if tool is not None:
+        theta_tool, known_cov = (np.asarray(v, dtype=float) for v in tool)
+        if theta_tool.shape != (4,) or known_cov.shape != (4, 4):
+            raise InvalidInputError("tool must be ((4,) m, m c; (4, 4) their covariance)")
+        tool_mass, tool_moment = float(theta_tool[0]), theta_tool[1:]
+        noise_from_tool = "the tool identified before (its covariance added)"
+    else:
+        urdf_tool = tool_beyond(robot, log.sensor_frame) if subtract_tool else pin.Inertia.Zero()
+        tool_mass, tool_moment = urdf_tool.mass, urdf_tool.mass * urdf_tool.lever
+        noise_from_tool = ""
+    wrench -= np.array([np.r_[tool_mass * g, np.cross(tool_moment, g)] for g in g_sensor])
     std = np.array([r.tau_mean_std for r in readings])
     noise_from = "each window's sample spread / sqrt(n)"
     if wrench_std is not None:
@@ -159,13 +174,18 @@ def estimate_wrench_static(
         std = np.sqrt(std**2 + np.r_[[f_std] * 3, [t_std] * 3] ** 2)
         noise_from += f", plus {f_std:g} N and {t_std:g} N m between windows"
     std = np.maximum(std, 1e-9)  # a noise-free log (simulation): its residuals decide
-    fit = fit_static_wrench(g_sensor, wrench, std, log.sensor_frame)
-    return _estimate(fit, T_se, log, windows, readings, tool, noise_from)
+    fit = fit_static_wrench(g_sensor, wrench, std, log.sensor_frame, known_cov)
+    if noise_from_tool:
+        noise_from += f"; {noise_from_tool}"
+    tool_com = tool_moment / tool_mass if tool_mass > 0 else np.zeros(3)
+    return _estimate(fit, T_se, log, windows, readings, (tool_mass, tool_com), noise_from)
 
 
 def _rotated_cov(fit: StaticWrenchFit, G: np.ndarray) -> np.ndarray:
-    """(4, 4) the covariance of (mass, CoM) in the ee axes; the CoM's rows NaN where
-    nothing is held (the mass's variance kept)."""
+    """(4, 4) the covariance of (mass, CoM) in the ee axes.
+
+    Where nothing is held the CoM's rows are NaN and the mass's variance is kept.
+    """
     cov = G @ np.nan_to_num(fit.cov) @ G.T
     if not fit.held:
         cov[1:, :] = cov[:, 1:] = np.nan
@@ -205,8 +225,8 @@ def _estimate(fit, T_sensor_ee, log, windows, readings, tool, noise_from):
         residual_rms_N=float(np.sqrt(np.mean(res[:, :3] ** 2))),
         residual_rms_Nm=float(np.sqrt(np.mean(res[:, 3:] ** 2))),
         fit=fit,
-        tool_mass=float(tool.mass),
-        tool_com_sensor=np.array(tool.lever),
+        tool_mass=float(tool[0]),
+        tool_com_sensor=np.array(tool[1]),
         noise_from=noise_from,
         verdict=verdict,
         reasons=tuple(reasons),
