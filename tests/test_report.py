@@ -463,7 +463,9 @@ def test_reproduce_report_with_two_seeds_and_an_extra_object(tmp_path, monkeypat
                 row = _acc_row(obj, theta, 0.99, accuracy_line=0.97, pos_esti_line_m=0.01,
                                seed=trial_seed, trial=k, method="trial")  # fmt: skip
                 if new_columns:
-                    row.update(pos_std_m=0.003, estimator="ipopt")
+                    row.update(pos_std_m=0.003, estimator="ipopt", accuracy_wrench=0.995,
+                               accuracy_both=0.996, pos_esti_wrench_m=row["pos_real_m"],
+                               pos_std_wrench_m=0.002, wrench_share_com=0.8)  # fmt: skip
                 acc.append(row)
                 for method in ("baseline", "regrasp"):
                     r = {"object": obj, "trial": k, "seed": trial_seed, "method": method,
@@ -480,6 +482,8 @@ def test_reproduce_report_with_two_seeds_and_an_extra_object(tmp_path, monkeypat
         assert heading in text
     assert ("![calibration](calibration.png)" in text) == new_columns
     assert ("not recorded" in text.split("## Experiment 2")[0]) != new_columns
+    wrist = text.split("### The wrist force/torque sensor")[1].split("\n## ")[0]
+    assert ("| obj1 | " in wrist) == new_columns
     assert (tmp_path / "calibration.png").exists() == new_columns
 
 

@@ -69,3 +69,26 @@ def test_the_sources_table_and_figure(tmp_path, monkeypatch):
     assert [h for _, h in bars(ax)] == pytest.approx([98.0, 96.5, 95.0, 94.0])
     assert [t.get_text() for t in ax.texts] == ["0/2\nrefused", "1/2\nrefused"]
     assert [t.get_text() for t in ax.get_legend().get_texts()] == ["ours", "the paper's method"]
+
+
+def test_the_wrist_sensor_table_compares_grasp_by_grasp_below_30_deg():
+    from comgrasp_pin.experiments.report import wrist_sensor_table
+
+    rows = []
+    for k in range(6):
+        for obj, joints, wrench in (("obj1", 0.95, 0.99), ("obj2", 0.99, 0.90)):
+            rows.append({
+                "object": obj, "trial": k, "theta_deg": 5.0 + k, "accuracy": joints,
+                "accuracy_wrench": wrench + 0.001 * k, "accuracy_both": 0.98,
+                "pos_real_m": 0.0, "pos_esti_wrench_m": 0.001 * (k - 2.5),
+                "pos_std_wrench_m": 0.002, "wrench_share_com": 0.75, "pos_esti_m": 0.0,
+            })  # fmt: skip
+        rows.append({"object": "obj1", "trial": 9, "theta_deg": 60.0, "accuracy": 0.5,
+                     "accuracy_wrench": 0.1, "pos_real_m": 0.0, "pos_esti_m": 0.0})  # fmt: skip
+    text = wrist_sensor_table(rows, objects=["obj1", "obj2"])
+    obj1 = next(line for line in text.splitlines() if line.startswith("| obj1 |"))
+    cells = [c.strip() for c in obj1.strip("|").split("|")]
+    assert cells[1] == "6"  # the 60 deg grasp is left out
+    assert cells[2] == "95.0" and abs(float(cells[3]) - 99.25) < 0.06 and cells[8] == "75"
+    assert cells[5].startswith("+4.25") and cells[9] == "as accurate or more"
+    assert "less accurate for obj2" in text and "for 1 of 2 objects" in text

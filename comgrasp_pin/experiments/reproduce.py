@@ -14,6 +14,7 @@ from comgrasp_pin.config import sensor_preset
 from comgrasp_pin.experiments import report
 from comgrasp_pin.experiments.ray_backend import check_backend
 from comgrasp_pin.experiments.report.sensors import sensors_comparison
+from comgrasp_pin.experiments.report.wrist_sensor import wrist_sensor_table
 from comgrasp_pin.experiments.reproduce_report import ReportSections, report_markdown
 from comgrasp_pin.experiments.runner import (
     DEFAULT_TRIAL_TIMEOUT_S,
@@ -177,6 +178,10 @@ in, are in `ideal/`: same seeds, same scenes, the paper's measuring procedure. T
 six objects; in brackets the 95 % interval (t for means, Wilson for rates).
 
 {sensors_comparison(acc, reg, acc_ideal, reg_ideal, opts.sensors)}
+
+### The wrist force/torque sensor with ideal sensors
+
+{wrist_sensor_table(acc_ideal)}
 """
 
 

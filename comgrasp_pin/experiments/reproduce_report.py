@@ -84,6 +84,14 @@ is empty.
 
 {report.method_comparison(acc)}
 
+### The wrist force/torque sensor instead of the joint torques
+
+The same grasps, poses and side views; the CoM from the wrist sensor's wrench (a strain-gauge
+sensor between flange and gripper, this preset's class: docs/design.md, "Realistic sensing")
+averaged over the same windows as the joint torques, and from both stacked.
+
+{report.wrist_sensor_table(acc)}
+
 ## Calibration: is each estimate's stated uncertainty right?
 
 Each grasp states the standard deviation of its estimate along the rod (`pos_std_m`, from

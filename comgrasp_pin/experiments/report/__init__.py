@@ -62,6 +62,7 @@ from comgrasp_pin.experiments.report.verdicts import (
     regrasp_verdict,
     run_summary,
 )
+from comgrasp_pin.experiments.report.wrist_sensor import wrist_sensor_table
 from comgrasp_pin.experiments.stats import wilson_interval
 
 __all__ = [
@@ -109,4 +110,5 @@ __all__ = [
     "run_summary",
     "success_rates",
     "wilson_interval",
+    "wrist_sensor_table",
 ]

@@ -13,7 +13,14 @@ from collections.abc import Sequence
 import numpy as np
 
 from comgrasp_pin.experiments.report.calibration import calibration_z
-from comgrasp_pin.experiments.report.common import _abs_theta, _column, _ok, _select, paper_objects
+from comgrasp_pin.experiments.report.common import (
+    _abs_theta,
+    _column,
+    _ok,
+    _select,
+    paper_objects,
+    recorded,
+)
 from comgrasp_pin.experiments.report.regrasp import success_rates
 from comgrasp_pin.experiments.stats import calibration, mean_ci, wilson_interval
 
@@ -46,6 +53,9 @@ def _accuracy_measures(acc: Sequence[dict]) -> dict[str, str]:
         f"mean accuracy below {UP_TO_DEG:g}°, ours (%)": _mean_cell(_column(ok, "accuracy")[low]),
         f"mean accuracy below {UP_TO_DEG:g}°, the paper's method (%)": _mean_cell(
             _column(ok, "accuracy_line")[low]
+        ),
+        f"mean accuracy below {UP_TO_DEG:g}°, wrist sensor's wrench (%)": _mean_cell(
+            _column(ok, "accuracy_wrench")[low] if recorded(ok, "accuracy_wrench") else low[:0]
         ),
         "worst grasp below 30°, ours (%)": (
             f"{100 * np.nanmin(_column(ok, 'accuracy')[low]):.1f}" if low.any() else "–"
