@@ -17,10 +17,10 @@ from scipy.spatial.transform import Rotation
 
 from comgrasp_pin.errors import InvalidInputError, LogError, UnobservableError
 from comgrasp_pin.estimation.wrench import fit_static_wrench
+from comgrasp_pin.estimation.wrench_com import tool_beyond
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.planning import plan_measurement_poses
 from comgrasp_pin.robot_io.wrench_log import WrenchLog
-from comgrasp_pin.estimation.wrench_com import tool_beyond
 from comgrasp_pin.robot_io.wrench_static import estimate_wrench_static
 
 G = np.array([0.0, 0.0, -9.81])

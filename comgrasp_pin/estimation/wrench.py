@@ -185,7 +185,6 @@ def fit_static_wrench(
     g_sensor = np.asarray(g_sensor, dtype=float)
     wrench = np.asarray(wrench, dtype=float)
     k = len(g_sensor)
-    std = np.broadcast_to(np.asarray(wrench_std, dtype=float), (k, 6)) if k else None
     if g_sensor.shape != (k, 3) or wrench.shape != (k, 6):
         raise InvalidInputError(
             f"g_sensor must be (k, 3) and wrench (k, 6); got {g_sensor.shape}, {wrench.shape}"
@@ -193,6 +192,12 @@ def fit_static_wrench(
     if not (np.all(np.isfinite(g_sensor)) and np.all(np.isfinite(wrench))):
         raise InvalidInputError("g_sensor and wrench must be finite (no NaN or inf)")
     spread = check_orientations(g_sensor, sensor_frame)
+    try:
+        std = np.broadcast_to(np.asarray(wrench_std, dtype=float), (k, 6))
+    except ValueError:
+        raise InvalidInputError(
+            f"wrench_std must be (6,) or ({k}, 6) (N, N m), got shape {np.shape(wrench_std)}"
+        ) from None
     if not (np.all(np.isfinite(std)) and np.all(std > 0)):
         raise InvalidInputError("wrench_std must be finite and > 0 (N, N m)")
     A, b, w = regressor(g_sensor), wrench.ravel(), 1.0 / std.ravel()

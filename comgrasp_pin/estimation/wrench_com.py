@@ -195,6 +195,8 @@ def _with_torques(robot, Q, Y_w, b_w, std_w, chol_w, torques):
     _, dtau, _ = check_arrays(robot, Q, tau_before, tau_after, None)
     k, n = dtau.shape
     chol_t = check_dtau_cov(dtau_cov, k * n, None)
+    if chol_t is None:
+        raise InvalidInputError("torques need their differences' covariance (k n, k n)")
     Y_t, _ = stacked_regressor(robot, Q)
     cov_w = chol_w @ chol_w.T if chol_w is not None else np.diag(std_w**2)
     cov_t = chol_t @ chol_t.T
