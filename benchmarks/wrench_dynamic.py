@@ -118,7 +118,7 @@ def summary(rows: list[dict]) -> dict:
                 "runs": len(e),
                 "mass_err_rel_rms": float(np.sqrt(np.mean([x["mass_err_rel"] ** 2 for x in e]))),
                 "com_err_mm_rms": float(1e3 * np.sqrt(np.mean([x["com_err_m"] ** 2 for x in e]))),
-                "moment_err_rel_rms": float(np.sqrt(np.mean(mom**2))),
+                "moment_err_rel_rms": float(np.sqrt(np.mean(mom**2))) if mom.size else None,
                 "moment_err_kgm2_rms": float(np.sqrt(np.mean(mom_abs**2))),
                 "coverage95_mass": float(np.mean([abs(x["z_mass"]) < 1.96 for x in e])),
                 "coverage95_com": float(np.mean(np.abs(z_com) < 1.96)),
@@ -128,6 +128,10 @@ def summary(rows: list[dict]) -> dict:
                 "identified": float(np.mean([x["verdict"] == "identified" for x in e])),
             }
     return out
+
+
+def _percent(x: float | None) -> str:
+    return "-" if x is None else f"{100 * x:.1f}"
 
 
 def table(result: dict) -> str:
@@ -144,7 +148,7 @@ def table(result: dict) -> str:
             for m, s in per.items():
                 lines.append(
                     f"| {name} | {m} | {100 * s['mass_err_rel_rms']:.3f} | "
-                    f"{s['com_err_mm_rms']:.2f} | {100 * s['moment_err_rel_rms']:.1f} | "
+                    f"{s['com_err_mm_rms']:.2f} | {_percent(s['moment_err_rel_rms'])} | "
                     f"{1e6 * s['moment_err_kgm2_rms']:.1f} | {100 * s['coverage95_mass']:.0f} | "
                     f"{100 * s['coverage95_com']:.0f} | {100 * s['coverage95_moments']:.0f} | "
                     f"{s['rms_z_mass']:.2f} | {s['rms_z_com']:.2f} | "
@@ -158,7 +162,15 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=8)
     ap.add_argument("--wrench", default="ft300s,ur_eseries")
     ap.add_argument("--out", default="benchmarks/results/wrench_dynamic.json")
+    ap.add_argument("--table", action="store_true", help="only summarise --out's runs again")
     args = ap.parse_args()
+    if args.table:
+        result = json.loads(Path(args.out).read_text())
+        for block in result["wrench_classes"].values():
+            block["summary"] = summary(block["runs"])
+        Path(args.out).write_text(json.dumps(result, indent=1) + "\n")
+        print(table(result))
+        return
     robot = arm_robot("ur5")
     t0 = time.perf_counter()
     motion = plan_excitation(robot, 20.0, settings=SETTINGS, seed=0)
