@@ -40,14 +40,16 @@ from comgrasp_pin.estimation.payload_regressor import condition_number, paramete
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io import dynamic_uncertainty as du
 from comgrasp_pin.robot_io import wrench_combined as wc
+from comgrasp_pin.robot_io import wrench_findings as wf
 from comgrasp_pin.robot_io.arm_model import ArmModel
 from comgrasp_pin.robot_io.dynamic import _halves
 from comgrasp_pin.robot_io.dynamic_fit import error_sources, fit_payload
 from comgrasp_pin.robot_io.motion_signals import CUTOFF_HZ, MIN_PEAK_SPEED
-from comgrasp_pin.robot_io.motion_system import DRIFT_DEGREE, about_com, prior_of, row_noise
-from comgrasp_pin.robot_io.payload_system import ARM_MODEL, EMPTY_RUN, NOMINAL, payload_system
-from comgrasp_pin.robot_io.verdict import MIN_EXPLAINED, UNRELIABLE, Checks, verdict
-from comgrasp_pin.robot_io.wrench_estimate import JointTorquePart, WrenchDynamicEstimate
+from comgrasp_pin.robot_io.motion_system import about_com, prior_of, row_noise
+from comgrasp_pin.robot_io.payload_system import ARM_MODEL, EMPTY_RUN, payload_system
+from comgrasp_pin.robot_io.verdict import UNRELIABLE, Checks, verdict
+from comgrasp_pin.robot_io.wrench_estimate import WrenchDynamicEstimate
+from comgrasp_pin.robot_io.wrench_findings import TOOL_EMPTY_RUN, TOOL_GIVEN, TOOL_NOMINAL
 from comgrasp_pin.robot_io.wrench_log import WrenchLog
 from comgrasp_pin.robot_io.wrench_system import (
     as_joint_log,
@@ -55,10 +57,6 @@ from comgrasp_pin.robot_io.wrench_system import (
     nominal_tool,
     wrench_system,
 )
-
-TOOL_EMPTY_RUN = "empty run (the tool's parameters fitted)"
-TOOL_GIVEN = "given"
-TOOL_NOMINAL = "URDF links beyond the sensor (nominal)"
 
 
 @dataclass(frozen=True)
@@ -111,20 +109,13 @@ def estimate_wrench_dynamic(
     J, note = None, None
     if combine_joint_torques and log.effort is not None:
         J, note = _joint_system(robot, log, empty_log, window, empty_window, cutoff_hz, arm_model)
-    W = wrench_system(robot, log, window, cutoff_hz, crop=J is not None and J.source == EMPTY_RUN)
-    duration = float(W.S.t[-1] - W.S.t[0])
-    arm = arm_model if J is not None and J.source == ARM_MODEL else None
-    st = wc.stack(W, W.b - W.A_pi @ tool.params, J)
-    fits = {name: wc.alone(st, name, duration, arm) for name in st.groups}
-    st = wc.reweighted(st, fits)
+    W, arm, st, fits, duration = _stacked(robot, log, window, cutoff_hz, tool, J, arm_model)
     k, r = st.b.shape
     A_pi, A_x, b, w = st.A_pi.reshape(-1, 10), st.A_x.reshape(k * r, -1), st.b.reshape(-1), st.w
     A = np.column_stack([A_pi, A_x])
     err = _observable(robot, W, lambda: error_sources(
         A, b, w, (k, r), duration, np.zeros((k, r)), None, arm, st.arm_jac))  # fmt: skip
-    rows_w = st.rows(wc.WRENCH)
-    D = -err.sensitivity[:, rows_w] @ A_pi[rows_w]  # d pi / d the tool's parameters
-    cov_tool = D @ tool.cov @ D.T
+    cov_tool = wf.tool_cov(err.sensitivity, st, tool.cov)
     fit = fit_payload(A_pi, A_x, b, w, prior_of(prior), replace(err, arm=err.arm + cov_tool))
     params_cov = fit.data_cov + err.arm + cov_tool
     mass, com, inertia_c, cov4, inertia_cov = about_com(fit.pi, params_cov)
@@ -133,15 +124,9 @@ def estimate_wrench_dynamic(
     halves, halves_std = _halves(A, b, w, k, r, err.factor, np.zeros((k, r)), np.zeros((r, r)))
     agree = wc.agreement(fits, tool.cov) if J is not None else None
     word, reasons = verdict(Checks(mass, m_std, "wrench", 1.0, halves, halves_std))
-    reasons += _wrench_reasons(mass, m_std, validation, tool, agree, J and J.source)
-    parts = {"data and model (block jackknife)": float(np.sqrt(fit.data_cov[0, 0]))}
-    if tool.cov.any():
-        parts[f"tool ({tool.source})"] = float(np.sqrt(cov_tool[0, 0]))
-    if arm is not None:
-        parts["arm model"] = float(np.sqrt(err.arm[0, 0]))
-    payload = (b - A_x @ fit.x).reshape(k, r)
-    predicted = (A_pi @ fit.pi).reshape(k, r)
-    bias, bias_std, drift, delay = _bias(A, b, w, k, r, duration, fit.x, rows_w, A_pi, tool.cov)
+    reasons += wf.wrench_reasons(mass, m_std, validation, tool, agree, J and J.source)
+    payload, predicted = (b - A_x @ fit.x).reshape(k, r), (A_pi @ fit.pi).reshape(k, r)
+    bias, bias_std, drift, delay = wf.sensor_bias(A, b, w, st, duration, fit.x, tool.cov)
     return WrenchDynamicEstimate(
         mass=mass, com_ee=com, inertia_com_ee=inertia_c, params=fit.pi, params_cov=params_cov,
         cov=cov4, inertia_std=np.sqrt(np.clip(np.diag(inertia_cov), 0, None)).reshape(3, 3),
@@ -153,13 +138,29 @@ def estimate_wrench_dynamic(
         tool=tool.source, tool_params=tool.params, tool_cov=tool.cov,
         contributions=wc.contributions(st, fit.pi, prior_of(prior)), agreement=agree,
         alone_refused={name: (f if isinstance(f, str) else None) for name, f in fits.items()},
-        joint_torques=_joint_part(J, fit.x, W.A_x.shape[1], st, predicted, payload, note),
+        joint_torques=wf.joint_part(J, fit.x, W.A_x.shape[1], st, predicted, payload, note),
         n_samples=k, duration_s=duration, cutoff_hz=W.S.cutoff_hz,
         velocity_from=W.S.velocity_from, solver_status=fit.status,
         unconstrained_params=fit.pi_ls, t=W.S.t, wrench_payload=payload[:, :6],
-        wrench_payload_fit=predicted[:, :6], std_parts=parts, validation=validation,
-        verdict=UNRELIABLE if reasons else word, reasons=tuple(reasons), halves_mass=halves,
+        wrench_payload_fit=predicted[:, :6], validation=validation, halves_mass=halves,
+        std_parts=wf.std_parts(fit.data_cov, cov_tool, tool, err.arm if arm else None),
+        verdict=UNRELIABLE if reasons else word, reasons=tuple(reasons),
     )  # fmt: skip
+
+
+def _stacked(robot, log, window, cutoff_hz, tool, J, arm_model):
+    """(wrench system, arm model for the joints or None, stacked system, fits, duration s).
+
+    The wrench's samples are the joint torques' (the motion cropped where an empty run
+    serves them); the tool is subtracted from the wrench's rows; each source is fitted alone
+    (``wrench_combined.alone``) and weighted by it (``wrench_combined.reweighted``).
+    """
+    W = wrench_system(robot, log, window, cutoff_hz, crop=J is not None and J.source == EMPTY_RUN)
+    arm = arm_model if J is not None and J.source == ARM_MODEL else None
+    duration = float(W.S.t[-1] - W.S.t[0])
+    st = wc.stack(W, W.b - W.A_pi @ tool.params, J)
+    fits = {name: wc.alone(st, name, duration, arm) for name in st.groups}
+    return W, arm, wc.reweighted(st, fits), fits, duration
 
 
 def _tool(robot, log, empty_log, empty_window, cutoff_hz, tool_params, tool_cov) -> _Tool:
@@ -226,64 +227,3 @@ def _observable(robot, W, solve, what="the loaded run"):
             f"axes); joints below {MIN_PEAK_SPEED} rad/s: {', '.join(still) or 'none'}. Move "
             "every joint, tilt and spin the wrist (comgrasp plan-motion plans such a motion)"
         ) from None
-
-
-def _bias(A, b, w, k, r, duration, x, rows_w, A_pi, tool_cov):
-    """The sensor's bias (mean over the motion), its std, its drift and the wrench's delay."""
-    p = 16  # pi and the six biases
-    blocks = du.contiguous_blocks(k, du.block_count(duration))
-    white = du.white_cov(A, b, w, p)[10:, 10:]
-    jk = du.jackknife_cov(A, b, w, k, r, blocks, p)[10:, 10:]
-    D = -du.sensitivity(A, w, p)[10:, rows_w] @ A_pi[rows_w]
-    var = np.maximum(np.diag(white), np.diag(jk)) + np.diag(D @ tool_cov @ D.T)
-    extras = x[: 6 * (1 + DRIFT_DEGREE)].reshape(1 + DRIFT_DEGREE, 6)
-    drift = 2 * extras[1 : 1 + DRIFT_DEGREE : 2].sum(axis=0)
-    return extras[0], np.sqrt(var), drift, float(x[6 * (1 + DRIFT_DEGREE)])
-
-
-def _wrench_reasons(mass, mass_std, validation, tool, agree, joint_source) -> list[str]:
-    """The wrench path's own rules, beyond ``verdict``'s mass and halves."""
-    from comgrasp_pin.robot_io.verdict import Z95
-
-    reasons = []
-    seen = mass - Z95 * mass_std > 0
-    if seen and validation.explained_total < MIN_EXPLAINED:
-        reasons.append(
-            f"the payload explains {100 * validation.explained_total:.0f} % of the held-out "
-            f"readings (at least {100 * MIN_EXPLAINED:.0f} % expected): they hold more than a "
-            "rigid payload (a cable pulling, a contact, the payload moving in the gripper)"
-        )
-    if tool.source == TOOL_NOMINAL and tool.params[0] > 0:
-        reasons.append(
-            f"the tool's own wrench is the URDF's links beyond the sensor ({tool.params[0]:.3f} "
-            "kg), whose error on this tool is not known: give an empty run of the tool "
-            "without the payload (any motion) or the tool's parameters"
-        )
-    if agree is not None and agree["chi2"] > agree["max_chi2"]:
-        m = agree["mass_kg"]
-        reasons.append(
-            f"the wrench and the joint torques disagree (chi-square {agree['chi2']:.1f} on "
-            f"mass and first moments, at most {agree['max_chi2']:g}; masses {m['wrench']:.3f} "
-            f"and {m['joint_torques']:.3f} kg): "
-            + ("the URDF's model of the arm is the likely cause; give an empty run of the same "
-               "motion or an identified arm model, or leave the joint torques out"
-               if joint_source == NOMINAL else
-               "a sensor's scale, the tool, or the arm model is wrong")
-        )  # fmt: skip
-    return reasons
-
-
-def _joint_part(J, x, e_w, st, predicted, payload, note) -> JointTorquePart | None:
-    """The joint torques' own findings in the combined fit, or None without them."""
-    if J is None:
-        return None
-    cols = st.groups[wc.JOINT_TORQUES][0]
-    n = len(cols)
-    extras = x[e_w : e_w + J.per_joint * n].reshape(J.per_joint, n)
-    res = predicted[:, cols] - payload[:, cols]
-    return JointTorquePart(
-        J.source, st.noise[6:], extras[0], 2 * extras[1 : 1 + DRIFT_DEGREE : 2].sum(axis=0),
-        extras[1 + DRIFT_DEGREE :].T if J.source == NOMINAL else None,
-        np.sqrt(np.mean(res**2, axis=0)), None if J.alignment is not None else float(x[-1]),
-        J.alignment, payload[:, cols], predicted[:, cols], note,
-    )  # fmt: skip
