@@ -180,6 +180,19 @@ class RobotModel:
         pin.forwardKinematics(self.model, self.data, q)
         return pin.updateFramePlacement(self.model, self.data, fid).homogeneous.copy()
 
+    def T_frame_ee(self, frame: str, what: str = "frame") -> np.ndarray:
+        """(4, 4) the ee frame's pose in ``frame``, fixed by the URDF: both must be on the
+        last link (a flange, a wrist sensor), else InvalidInputError naming ``what``."""
+        _check_frame(self.model, frame, what)
+        f_id = self.model.getFrameId(frame)
+        if self.model.frames[f_id].parentJoint != self.model.frames[self.ee_frame_id].parentJoint:
+            raise InvalidInputError(
+                f"{what} {frame!r} and ee frame {self.ee_frame!r} are not on the same link "
+                "chain after the last arm joint: their relative pose changes with q"
+            )
+        q = pin.neutral(self.model)
+        return np.linalg.solve(self.frame_pose(q, frame), self.frame_pose(q, self.ee_frame))
+
     def random_configuration(self, rng: np.random.Generator) -> np.ndarray:
         """A configuration drawn uniformly within the joint limits (clipped to +-pi)."""
         lo = np.maximum(self.q_lower, -np.pi)

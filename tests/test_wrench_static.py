@@ -192,5 +192,5 @@ def test_a_sensor_frame_off_the_last_link_is_refused():
     robot = RobotModel.ur5()
     log = _log(robot, "tool0", 1.0, np.zeros(3), 0, 0.01, np.random.default_rng(0))
     bad = WrenchLog(log.time, log.joint_names, log.position, log.wrench, "forearm_link")
-    with pytest.raises(InvalidInputError, match="not on the ee frame.s link"):
+    with pytest.raises(InvalidInputError, match="not on the same link chain"):
         estimate_wrench_static(robot, bad)

@@ -41,17 +41,7 @@ UNKNOWNS = ("mass", "m c_x", "m c_y", "m c_z")
 
 def T_sensor_ee(robot: RobotModel, sensor_frame: str) -> np.ndarray:
     """(4, 4) the ee frame's pose in the sensor frame; both must be on the last link."""
-    model = robot.model
-    if not model.existFrame(sensor_frame):
-        raise InvalidInputError(f"sensor frame {sensor_frame!r} is not a frame of the URDF")
-    s_id = model.getFrameId(sensor_frame)
-    if model.frames[s_id].parentJoint != model.frames[robot.ee_frame_id].parentJoint:
-        raise InvalidInputError(
-            f"sensor frame {sensor_frame!r} is not on the ee frame's link: a wrist sensor sits "
-            "between the flange and the tool, after the last joint"
-        )
-    q = pin.neutral(model)
-    return np.linalg.solve(robot.frame_pose(q, sensor_frame), robot.ee_pose(q))
+    return robot.T_frame_ee(sensor_frame, "sensor frame")
 
 
 def _parent_frame(robot: RobotModel, f_id: int) -> int:

@@ -79,21 +79,7 @@ class Payload:
 
 def T_flange_ee(robot: RobotModel, flange_frame: str) -> np.ndarray:
     """(4, 4) the ee frame's pose in the flange frame, from the URDF (fixed joints only)."""
-    model = robot.model
-    if not model.existFrame(flange_frame):
-        names = sorted({f.name for f in model.frames})
-        raise InvalidInputError(
-            f"flange frame {flange_frame!r} is not in the URDF; frames: {names}"
-        )
-    f_id = model.getFrameId(flange_frame)
-    if model.frames[f_id].parentJoint != model.frames[robot.ee_frame_id].parentJoint:
-        raise InvalidInputError(
-            f"flange frame {flange_frame!r} and ee frame {robot.ee_frame!r} are not on the same "
-            "link chain after the last arm joint: their relative pose changes with q"
-        )
-    q = pin.neutral(model)
-    T_world_flange = robot.frame_pose(q, flange_frame)
-    return np.linalg.solve(T_world_flange, robot.frame_pose(q, robot.ee_frame))
+    return robot.T_frame_ee(flange_frame, "flange frame")
 
 
 def inertia_about_com(mass: float, spec: str) -> tuple[np.ndarray, str, int | None]:
