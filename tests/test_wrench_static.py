@@ -194,3 +194,18 @@ def test_a_sensor_frame_off_the_last_link_is_refused():
     bad = WrenchLog(log.time, log.joint_names, log.position, log.wrench, "forearm_link")
     with pytest.raises(InvalidInputError, match="not on the same link chain"):
         estimate_wrench_static(robot, bad)
+
+
+def test_a_hand_named_as_the_sensor_frame_is_on_the_tool_side():
+    """The Panda's hand as the sensor frame (the sensor at its mounting face): the hand and
+    its fingers are what the sensor carries, their masses read from the URDF's XML."""
+    from comgrasp_pin._paths import example_robot_urdf
+    from comgrasp_pin.robot_io import load_robot
+
+    urdf = example_robot_urdf("panda_description/urdf/panda.urdf")
+    robot = load_robot(urdf, "panda_hand_tcp")
+    links = {lk.get("name"): lk for lk in ET.parse(urdf).getroot().findall("link")}
+    names = ("panda_hand", "panda_leftfinger", "panda_rightfinger")
+    mass = sum(float(links[n].find("inertial/mass").get("value")) for n in names)
+    assert tool_beyond(robot, "panda_hand").mass == pytest.approx(mass, rel=1e-12)
+    assert tool_beyond(robot, "panda_link8").mass == pytest.approx(mass, rel=1e-12)

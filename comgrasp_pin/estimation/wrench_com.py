@@ -34,7 +34,7 @@ from comgrasp_pin.estimation.estimator import RCOND, carried, solve_rows
 from comgrasp_pin.estimation.inputs import check_arrays, check_dtau_cov, check_options
 from comgrasp_pin.estimation.prior import AxisPrior
 from comgrasp_pin.estimation.regressor import stacked_regressor
-from comgrasp_pin.robot import RobotModel
+from comgrasp_pin.robot import RobotModel, _check_frame
 
 UNKNOWNS = ("mass", "m c_x", "m c_y", "m c_z")
 
@@ -64,12 +64,17 @@ def tool_beyond(robot: RobotModel, sensor_frame: str) -> pin.Inertia:
 
     A link is beyond the sensor when its chain of parent frames reaches the sensor frame
     without leaving the sensor's rigid body (the last joint's). The sensor frame's own link
-    counts as before the sensor (a sensor's frame is best a massless link of its own).
+    counts as beyond it, the tool side (a hand named as the sensor frame: the sensor sits at
+    its mounting face); a sensor's frame is best a massless link of its own.
     """
     model = robot.model
+    _check_frame(model, sensor_frame, "sensor frame")
     s_id = model.getFrameId(sensor_frame)
     joint = model.frames[s_id].parentJoint
     total = pin.Inertia.Zero()
+    own = model.frames[model.frames[s_id].parentFrame]  # a link's inertia is on its joint's frame
+    if model.frames[s_id].type == pin.FrameType.BODY and own.type == pin.FrameType.FIXED_JOINT:
+        total += own.placement.act(own.inertia)
     for f_id, frame in enumerate(model.frames):
         if frame.parentJoint != joint or frame.inertia.mass <= 0:
             continue
