@@ -1,4 +1,4 @@
-"""On a real arm: joint logs in (ROS 2 bags, CSV), payloads out (UR, Franka, ROS 2).
+"""On a real arm: joint and wrench logs in (ROS 2 bags, CSV, UR recordings), payloads out.
 
     robot = load_robot(urdf, ee_frame, gravity_base=(0, 0, -9.81))
     log = read_log("run.mcap" or "run.csv", robot.joint_names)
@@ -12,6 +12,10 @@
     arm = identify_arm(robot, empty_log)  # the empty arm's own model, from any motion
     est = estimate_payload_dynamic(robot, loaded_log, arm_model=arm)  # est.verdict, .reasons
     cal = calibrate_gains(robot, loaded_log, empty_log, known_mass_kg=2.805)  # weigh it once
+    ft = read_wrench_log("ft.mcap", robot)  # a wrist sensor's WrenchStamped (or CSV, UR)
+    est = estimate_wrench_static(robot, ft)  # mass, CoM, the sensor's bias from >= 3 poses
+    est = estimate_wrench_dynamic(robot, ft_motion, empty_log=ft_tool_only)  # the inertia too
+    text = krl_load(payload)  # KUKA $LOAD; rapid_loaddata, urdf_with_payload, moveit_yaml...
 
 Layer: beside ``procedures``; imports ``estimation``, ``motion.fourier``, ``robot`` and the
 shared modules, never ``simulation`` (no MuJoCo here): it runs on a real robot's logs.
@@ -58,6 +62,8 @@ from comgrasp_pin.robot_io.windows import (
     parse_windows,
     read_window,
 )
+from comgrasp_pin.robot_io.wrench_dynamic import estimate_wrench_dynamic
+from comgrasp_pin.robot_io.wrench_estimate import WrenchDynamicEstimate
 from comgrasp_pin.robot_io.wrench_log import WrenchLog
 from comgrasp_pin.robot_io.wrench_sources import (
     read_rtde_wrench,
@@ -65,6 +71,7 @@ from comgrasp_pin.robot_io.wrench_sources import (
     read_wrench_csv,
     read_wrench_log,
 )
+from comgrasp_pin.robot_io.wrench_static import WrenchStaticEstimate, estimate_wrench_static
 
 __all__ = [
     "ArmModel",
@@ -79,11 +86,15 @@ __all__ = [
     "PosePlan",
     "StaticReading",
     "T_flange_ee",
+    "WrenchDynamicEstimate",
     "WrenchLog",
+    "WrenchStaticEstimate",
     "calibrate_gains",
     "check_on_log",
     "estimate_from_log",
     "estimate_payload_dynamic",
+    "estimate_wrench_dynamic",
+    "estimate_wrench_static",
     "find_static_windows",
     "franka_desk",
     "franka_load",
