@@ -70,6 +70,9 @@ def test_a_csv_needs_its_sensor_frame_named(wrench_log, tmp_path):
     out = tmp_path / "R.json"
     assert main(_args(["--csv", str(csv), "--sensor-frame", "ft_sensor"], out)) == 0
     assert json.loads(out.read_text())["n_poses"] == 4
+    assert main(_args(["--csv", str(csv), "--sensor-frame", "ft_sensor", "--auto"], out)) == 0
+    both = ["--csv", str(csv), "--sensor-frame", "ft_sensor", "--auto", "--windows", "0:1"]
+    assert main(_args(both, out)) == 2
     cmd = [sys.executable, "-m", "comgrasp_pin.cli", *_args(["--csv", str(csv)], out)]
     res = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
     assert res.returncode == 2 and "Traceback" not in res.stderr
@@ -140,3 +143,32 @@ def test_a_tool_identified_before_replaces_a_misstated_urdf_tool(tmp_path):
     assert r["std"]["mass_kg"] > urdf_way["std"]["mass_kg"]  # the tool's own error added
     bad = _args(["--csv", str(l_csv), *frame], out, "--tool", str(out))  # not a --keep-tool run
     assert main(bad) == 2
+
+
+def test_dynamic_from_bags_with_an_empty_run_and_a_payload_file(tmp_path):
+    """`--wrench --dynamic`: a motion's wrench and joint torques (Pinocchio's RNEA with the
+    tool and the payload beyond the sensor, tests/test_wrench_dynamic.py) as real bags, the
+    tool's own run of another motion; the inertia and each source's share in RESULT.json,
+    the URDF export read back with ElementTree."""
+    import xml.etree.ElementTree as ET
+
+    from test_wrench_dynamic import PAYLOAD, fourier_motion, wrench_log
+
+    robot = RobotModel.ur5()
+    loaded = wrench_log(robot, PAYLOAD, fourier_motion(robot), seed=6)
+    empty = wrench_log(robot, None, fourier_motion(robot, seed=5), seed=7)
+    bag = write_wrench_bag(tmp_path / "loaded", loaded, storage="mcap")
+    empty_bag = write_wrench_bag(tmp_path / "empty", empty, storage="mcap")
+    out, urdf = tmp_path / "R.json", tmp_path / "robot.urdf"
+    args = _args(["--bag", str(bag)], out, "--dynamic", "--empty-bag", str(empty_bag),
+                 "--export-urdf", str(urdf))  # fmt: skip
+    assert main(args) == 0
+    r = json.loads(out.read_text())
+    assert abs(r["mass_kg"] - PAYLOAD.mass) < 4.5 * r["std"]["mass_kg"]
+    assert len(r["sensor_bias"]) == 6 and set(r["contributions"]) >= {"wrench"}
+    assert np.array(r["inertia_kgm2"]).shape == (3, 3)
+    link = next(
+        lk for lk in ET.parse(urdf).getroot().findall("link") if lk.get("name") == "payload"
+    )
+    assert float(link.find("inertial/mass").get("value")) == pytest.approx(r["mass_kg"], rel=1e-6)
+    assert main([*args, "--windows", "0:1,2:3,4:5"]) == 2  # a motion takes --window

@@ -91,11 +91,13 @@ def read_wrench(args: argparse.Namespace, robot):
     """The WrenchLog of ``--bag`` or ``--csv`` (a project CSV or a UR recording)."""
     from comgrasp_pin.robot_io.wrench_sources import read_wrench_log
 
-    if args.before or args.after or args.auto:
+    if args.before or args.after or args.grasp_time is not None:
         raise InvalidInputError(
-            "--wrench finds its still windows itself (or takes --windows): leave out "
-            "--before, --after and --auto"
+            "--wrench needs no empty-arm windows: leave out --before, --after and "
+            "--grasp-time (its still windows are found, --auto, or given, --windows)"
         )
+    if args.auto and args.windows is not None:
+        raise InvalidInputError("give --auto (find the still windows) or --windows, not both")
     if (args.bag is None) == (args.csv is None):
         raise InvalidInputError("give exactly one log: --bag PATH or --csv PATH")
     path = args.bag if args.bag is not None else args.csv
