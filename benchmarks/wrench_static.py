@@ -10,8 +10,12 @@ drifted between sessions: independent seeds). Estimates, as ``comgrasp estimate 
 makes them (still windows found in the log):
 
 - ``calibrated_tool``: the empty session with ``subtract_tool=False`` (``--keep-tool``), its
-  ``theta_sensor`` and covariance given as ``tool=`` to the loaded session (``--tool``);
-- ``urdf_tool``: the loaded session with the URDF's tool subtracted (the default);
+  ``theta_sensor`` and covariance given as ``tool=`` to the loaded session (``--tool``); both
+  with the sensor's data-sheet drift (``drift_std``, ``drift_rate_std`` of the preset's
+  ``WrenchSensorConfig``) in the windows' covariance;
+- ``calibrated_tool_no_drift``: the same without the drift (each window's own spread, the
+  residuals' excess scaling the covariance): the static path as the CLI runs it;
+- ``urdf_tool``: the loaded session with the URDF's tool subtracted (the default), drift given;
 - ``joint_torques``: the joint-torque static path on the same sessions
   (``estimate_from_log``, the empty windows as before and the loaded ones as after, the two
   logs joined end to end, the torque sensor's data-sheet drift given).
@@ -44,11 +48,12 @@ from pathlib import Path
 import numpy as np
 
 from comgrasp_pin.config import MotionConfig, sensor_preset
-from comgrasp_pin.estimation.wrench_com import T_sensor_ee
+from comgrasp_pin.estimation.wrench_com import T_sensor_ee, tool_beyond
 from comgrasp_pin.motion.trajectory import Quintic, min_duration
 from comgrasp_pin.robot_io.estimate import estimate_from_log
 from comgrasp_pin.robot_io.joint_log import JointLog
 from comgrasp_pin.robot_io.planning import plan_measurement_poses
+from comgrasp_pin.robot_io.windows import MAX_SPEED, MIN_STATIC_S, find_static_windows
 from comgrasp_pin.robot_io.wrench_static import estimate_wrench_static
 from comgrasp_pin.simulation.arm_worlds import SENSOR_FRAME, arm_robot, arm_urdf
 from comgrasp_pin.simulation.payload_motion import MotionSimConfig, simulate_motion
@@ -59,7 +64,7 @@ HOLD_S = 2.5
 TRAJ_DT = 0.01
 """Sampling of the desired trajectory (s); the servo interpolates it (cubic Hermite)."""
 PRESETS = ("realistic", "ideal")
-HANDLINGS = ("calibrated_tool", "urdf_tool", "joint_torques")
+HANDLINGS = ("calibrated_tool", "calibrated_tool_no_drift", "urdf_tool", "joint_torques")
 TARGETS = {"mass_err_pct_max": 1.0, "com_err_mm_max": 2.0, "coverage95": (0.90, 0.97)}
 GRIPPER_LINK = "gripper_base"
 
@@ -154,31 +159,38 @@ def run_draw(robot, draw: int, preset: str, limits: MotionConfig) -> dict:
     row = {"draw": draw, "preset": preset, "mass": payload.mass,
            "com_ee": payload.p_com_ee.tolist(), "q": plan.q.tolist(),
            "session_s": float(load_w.time[-1])}  # fmt: skip
-    tool = estimate_wrench_static(robot, empty_w, subtract_tool=False)
-    tool_truth = np.r_[robot_tool_mass(robot) + (excess.mass if excess else 0.0)]
-    row["tool"] = {"mass": tool.mass, "mass_err": float(tool.mass - tool_truth[0]),
-                   "mass_std": float(np.sqrt(tool.cov[0, 0])), "verdict": tool.verdict,
-                   "chi2_dof": tool.fit.chi2_dof}  # fmt: skip
-    for name, kw in (("calibrated_tool", {"tool": (tool.fit.theta[:4], tool.fit.theta_cov[:4, :4])}),
-                     ("urdf_tool", {})):  # fmt: skip
-        est = estimate_wrench_static(robot, load_w, **kw)
-        extra = {"chi2_dof": est.fit.chi2_dof, "windows": len(est.windows),
-                 "spread_deg": est.fit.spread_deg.tolist()}  # fmt: skip
-        row[name] = scored(est.mass, est.com_ee, est.cov, payload, est.verdict, extra)
+    data_sheet = {"drift_std": sensors.wrench.drift_std,
+                  "drift_rate_std": sensors.wrench.drift_rate_std}  # fmt: skip
+    tool_truth = tool_mass(robot) + (excess.mass if excess else 0.0)
+    for name, noise in (("calibrated_tool", data_sheet), ("calibrated_tool_no_drift", {})):
+        tool = estimate_wrench_static(robot, empty_w, subtract_tool=False, **noise)
+        row[f"tool_{name}"] = {"mass": tool.mass, "mass_err": float(tool.mass - tool_truth),
+                               "mass_std": float(np.sqrt(tool.cov[0, 0])),
+                               "verdict": tool.verdict, "chi2_dof": tool.fit.chi2_dof}  # fmt: skip
+        calibrated = (tool.fit.theta[:4], tool.fit.theta_cov[:4, :4])
+        row[name] = wrench_scored(robot, load_w, payload, tool=calibrated, **noise)
+    row["urdf_tool"] = wrench_scored(robot, load_w, payload, **data_sheet)
     joined, shift = join_logs(empty_j, load_j)
-    after = [(a + shift, b + shift) for a, b in tool.windows]
-    jt = estimate_from_log(robot, joined, list(tool.windows), after,
+    before = [tuple(w) for w in find_static_windows(empty_j, MAX_SPEED, MIN_STATIC_S)]
+    after = [(a + shift, b + shift) for a, b in before]
+    jt = estimate_from_log(robot, joined, before, after,
                            drift_std=sensors.torque.drift_std)  # fmt: skip
     e = jt.estimate
     row["joint_torques"] = scored(e.mass, e.com_ee, e.cov, payload, "", {})
     return row
 
 
-def robot_tool_mass(robot) -> float:
+def tool_mass(robot) -> float:
     """The URDF's tool beyond the wrist sensor (kg)."""
-    from comgrasp_pin.estimation.wrench_com import tool_beyond
-
     return float(tool_beyond(robot, SENSOR_FRAME["ur5"]).mass)
+
+
+def wrench_scored(robot, log, payload: Payload, **kw) -> dict:
+    """``estimate_wrench_static(robot, log, **kw)`` scored against the payload."""
+    est = estimate_wrench_static(robot, log, **kw)
+    extra = {"chi2_dof": est.fit.chi2_dof, "windows": len(est.windows),
+             "spread_deg": est.fit.spread_deg.tolist()}  # fmt: skip
+    return scored(est.mass, est.com_ee, est.cov, payload, est.verdict, extra)
 
 
 def _stats(x: np.ndarray) -> dict:

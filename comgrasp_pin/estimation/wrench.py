@@ -17,14 +17,16 @@ squares, closed form. What it needs:
   too; nearly equal ones give them badly. ``check_orientations`` measures gravity's spread
   and, where it is too small, names the rotation of the sensor that would add it.
 
-The covariance is the least squares' (A^T W A)^-1 with W from each window's own noise,
-scaled by the residuals' chi-square per degree of freedom where that exceeds 1 (errors the
-windows' spread does not show, such as the bias drifting between windows, then show in the
-residuals). (m, c) and their covariance follow by the delta method.
+The covariance is the least squares' (A^T W A)^-1 with W from each window's own noise (or
+the inverse of the readings' full covariance, ``wrench_cov``: a sensor's drift shared across
+windows), scaled by the residuals' chi-square per degree of freedom where that exceeds 1
+(errors the noise model leaves out then show in the residuals). (m, c) and their covariance
+follow by the delta method.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -163,9 +165,10 @@ def check_orientations(g_sensor: np.ndarray, sensor_frame: str = "sensor") -> np
 def fit_static_wrench(
     g_sensor: np.ndarray,
     wrench: np.ndarray,
-    wrench_std: np.ndarray,
+    wrench_std: np.ndarray | None,
     sensor_frame: str = "sensor",
     known_cov: np.ndarray | None = None,
+    wrench_cov: np.ndarray | None = None,
 ) -> StaticWrenchFit:
     """Mass, CoM (sensor frame) and the sensor's bias from k orientations at rest.
 
@@ -176,6 +179,9 @@ def fit_static_wrench(
         sensor_frame: the frame's name, for messages.
         known_cov: (4, 4) covariance (kg, kg m) of a body's (m, m c) already taken out of
             ``wrench`` (a tool identified before), added to the fit's; None for none.
+        wrench_cov: (6 k, 6 k) the readings' full covariance, orientation-major (N, N m),
+            used instead of ``wrench_std`` (which may then be None): a drift shared by the
+            windows (``estimation.drift``); None for ``wrench_std``'s independent noise.
 
     Raises:
         InvalidInputError: shapes, NaN or a std that is not > 0.
@@ -192,21 +198,14 @@ def fit_static_wrench(
     if not (np.all(np.isfinite(g_sensor)) and np.all(np.isfinite(wrench))):
         raise InvalidInputError("g_sensor and wrench must be finite (no NaN or inf)")
     spread = check_orientations(g_sensor, sensor_frame)
-    try:
-        std = np.broadcast_to(np.asarray(wrench_std, dtype=float), (k, 6))
-    except ValueError:
-        raise InvalidInputError(
-            f"wrench_std must be (6,) or ({k}, 6) (N, N m), got shape {np.shape(wrench_std)}"
-        ) from None
-    if not (np.all(np.isfinite(std)) and np.all(std > 0)):
-        raise InvalidInputError("wrench_std must be finite and > 0 (N, N m)")
-    A, b, w = regressor(g_sensor), wrench.ravel(), 1.0 / std.ravel()
-    Aw = A * w[:, None]
+    whiten = _whitening(wrench_std, wrench_cov, k)
+    A, b = regressor(g_sensor), wrench.ravel()
+    Aw = whiten(A)
     info = Aw.T @ Aw
-    theta = np.linalg.lstsq(Aw, b * w, rcond=None)[0]
+    theta = np.linalg.lstsq(Aw, whiten(b), rcond=None)[0]
     residuals = (b - A @ theta).reshape(k, 6)
     dof = 6 * k - N_UNKNOWNS
-    chi2_dof = float(np.sum((residuals.ravel() * w) ** 2) / dof) if dof > 0 else float("nan")
+    chi2_dof = float(np.sum(whiten(residuals.ravel()) ** 2) / dof) if dof > 0 else float("nan")
     scale = max(1.0, chi2_dof) if dof > 0 else 1.0
     theta_cov = scale * np.linalg.inv(info)
     if known_cov is not None:
@@ -233,3 +232,37 @@ def fit_static_wrench(
         spread_deg=spread,
         held=bool(held),
     )
+
+
+def _whitening(wrench_std, wrench_cov, k: int) -> Callable[[np.ndarray], np.ndarray]:
+    """The map from rows (6 k, ...) to the same rows divided by their noise.
+
+    By ``wrench_std`` ((6,) or (k, 6)) row by row, or by the Cholesky factor of
+    ``wrench_cov`` (6 k, 6 k) where given.
+
+    Raises:
+        InvalidInputError: a std of the wrong shape or not finite and > 0; a covariance of
+            the wrong shape or not positive definite.
+    """
+    if wrench_cov is None:
+        try:
+            std = np.broadcast_to(np.asarray(wrench_std, dtype=float), (k, 6))
+        except (ValueError, TypeError):
+            raise InvalidInputError(
+                f"wrench_std must be (6,) or ({k}, 6) (N, N m), got shape {np.shape(wrench_std)}"
+            ) from None
+        if not (np.all(np.isfinite(std)) and np.all(std > 0)):
+            raise InvalidInputError("wrench_std must be finite and > 0 (N, N m)")
+        w = 1.0 / std.ravel()
+        return lambda x: x * (w[:, None] if x.ndim == 2 else w)
+    cov = np.asarray(wrench_cov, dtype=float)
+    try:
+        if cov.shape != (6 * k, 6 * k) or not np.all(np.isfinite(cov)):
+            raise np.linalg.LinAlgError
+        L = np.linalg.cholesky(0.5 * (cov + cov.T))
+    except np.linalg.LinAlgError:
+        raise InvalidInputError(
+            f"wrench_cov must be a finite, positive definite ({6 * k}, {6 * k}) matrix "
+            f"(N, N m) for {k} orientations; got shape {cov.shape}"
+        ) from None
+    return lambda x: np.linalg.solve(L, x)

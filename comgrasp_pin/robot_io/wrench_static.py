@@ -13,7 +13,10 @@ the payload: check the tool once by running with nothing held (the mass's interv
 hold zero).
 
 Noise of a window's mean: the spread of its samples over sqrt(n), plus ``wrench_std`` (the
-sensor's repeatability between windows, if known), and the residuals' excess over both
+sensor's repeatability between windows, if known); the sensor's drift from its data sheet
+(``drift_std``, a random walk, and ``drift_rate_std``, a rate fixed over the log), shared by
+the windows as their times say (``estimation.drift``, from the log's start: what all windows
+share goes into the fitted bias); and the residuals' excess over all of them
 (``estimation.wrench``: the covariance is scaled by chi-square per degree of freedom above 1).
 """
 
@@ -25,6 +28,7 @@ import numpy as np
 import pinocchio as pin
 
 from comgrasp_pin.errors import InvalidInputError, LogError
+from comgrasp_pin.estimation.drift import difference_covariance
 from comgrasp_pin.estimation.wrench import StaticWrenchFit, fit_static_wrench
 from comgrasp_pin.estimation.wrench_com import T_sensor_ee, tool_beyond
 from comgrasp_pin.robot import RobotModel
@@ -110,6 +114,8 @@ def estimate_wrench_static(
     wrench_std: tuple[float, float] | None = None,
     subtract_tool: bool = True,
     tool: tuple[np.ndarray, np.ndarray] | None = None,
+    drift_std: tuple[float, float] = (0.0, 0.0),
+    drift_rate_std: tuple[float, float] = (0.0, 0.0),
 ) -> WrenchStaticEstimate:
     """Mass, CoM (ee frame) and the sensor's bias from the still windows of ``log``.
 
@@ -126,6 +132,10 @@ def estimate_wrench_static(
             tool identified before (a run with nothing held and ``subtract_tool=False``,
             ``theta_sensor`` in its RESULT.json), subtracted instead of the URDF's, its
             covariance added; None for the URDF's.
+        drift_std: (force N / sqrt(s), torque N m / sqrt(s)) the sensor's random-walk drift
+            (its data sheet; ``WrenchSensorConfig.drift_std``), (0, 0) for none.
+        drift_rate_std: (force N / s, torque N m / s) the std of a drift rate fixed over the
+            log (temperature; ``WrenchSensorConfig.drift_rate_std``), (0, 0) for none.
 
     Raises:
         InvalidInputError: the sensor frame is not in the URDF or not on the ee's link.
@@ -165,20 +175,48 @@ def estimate_wrench_static(
         tool_mass, tool_moment = urdf_tool.mass, urdf_tool.mass * urdf_tool.lever
         noise_from_tool = ""
     wrench -= np.array([np.r_[tool_mass * g, np.cross(tool_moment, g)] for g in g_sensor])
-    std = np.array([r.tau_mean_std for r in readings])
-    noise_from = "each window's sample spread / sqrt(n)"
-    if wrench_std is not None:
-        f_std, t_std = (float(v) for v in wrench_std)
-        if not (f_std >= 0 and t_std >= 0 and np.isfinite(f_std + t_std)):
-            raise InvalidInputError(f"wrench_std must be two numbers >= 0, got {wrench_std}")
-        std = np.sqrt(std**2 + np.r_[[f_std] * 3, [t_std] * 3] ** 2)
-        noise_from += f", plus {f_std:g} N and {t_std:g} N m between windows"
-    std = np.maximum(std, 1e-9)  # a noise-free log (simulation): its residuals decide
-    fit = fit_static_wrench(g_sensor, wrench, std, log.sensor_frame, known_cov)
+    std, cov, noise_from = _window_noise(readings, wrench_std, drift_std, drift_rate_std)
+    fit = fit_static_wrench(g_sensor, wrench, std, log.sensor_frame, known_cov, cov)
     if noise_from_tool:
         noise_from += f"; {noise_from_tool}"
     tool_com = tool_moment / tool_mass if tool_mass > 0 else np.zeros(3)
     return _estimate(fit, T_se, log, windows, readings, (tool_mass, tool_com), noise_from)
+
+
+def _pair(value, name: str) -> np.ndarray:
+    """(6,) a (force, torque) pair of numbers >= 0 spread over the three axes of each."""
+    pair = np.asarray(value, dtype=float).ravel()
+    if pair.shape != (2,) or not (np.all(np.isfinite(pair)) and np.all(pair >= 0)):
+        raise InvalidInputError(f"{name} must be two numbers >= 0 (force, torque), got {value}")
+    return np.repeat(pair, 3)
+
+
+def _window_noise(readings, wrench_std, drift_std, drift_rate_std):
+    """The windows' noise (the module docstring).
+
+    Returns:
+        Each window's std (k, 6), the readings' full covariance (6 k, 6 k) where the sensor
+        drifts (None where not), and how they were set (one line).
+    """
+    std = np.array([r.tau_mean_std for r in readings])
+    noise_from = "each window's sample spread / sqrt(n)"
+    if wrench_std is not None:
+        between = _pair(wrench_std, "wrench_std")
+        std = np.sqrt(std**2 + between**2)
+        noise_from += f", plus {between[0]:g} N and {between[3]:g} N m between windows"
+    std = np.maximum(std, 1e-9)  # a noise-free log (simulation): its residuals decide
+    drift, rate = _pair(drift_std, "drift_std"), _pair(drift_rate_std, "drift_rate_std")
+    if not (drift.any() or rate.any()):
+        return std, None, noise_from
+    spans = [(r.t0, r.t1 - r.t0) for r in readings]
+    cov = difference_covariance(spans, std, np.eye(len(readings)), drift)
+    middle = np.array([r.t0 + 0.5 * (r.t1 - r.t0) for r in readings])
+    cov += np.kron(np.outer(middle, middle), np.diag(rate**2))
+    noise_from += (
+        f"; the sensor's drift shared by the windows: {drift[0]:g} N and {drift[3]:g} N m per "
+        f"sqrt(s), a rate of {rate[0]:g} N/s and {rate[3]:g} N m/s"
+    )
+    return std, cov, noise_from
 
 
 def _rotated_cov(fit: StaticWrenchFit, G: np.ndarray) -> np.ndarray:
