@@ -220,6 +220,7 @@ def summary(rows: list[dict], handling: str) -> dict:
     }  # fmt: skip
     if "chi2_dof" in e[0]:
         out["chi2_dof_median"] = float(np.median([x["chi2_dof"] for x in e]))
+        out["spread_deg_min"] = float(np.min([x["spread_deg"][1] for x in e]))
     cov = out["coverage95"]
     lo, hi = TARGETS["coverage95"]
     out["meets"] = {
@@ -248,12 +249,13 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--draws", type=int, default=100)
     ap.add_argument("--quick", action="store_true", help="10 draws per preset")
+    ap.add_argument("--first", type=int, default=0, help="the first draw's number (seed)")
     ap.add_argument("--presets", default=",".join(PRESETS))
     ap.add_argument("--out", default="benchmarks/results/wrench_static.json")
     args = ap.parse_args()
     draws = 10 if args.quick else args.draws
     robot, limits = arm_robot("ur5"), MotionConfig()
-    result = {"arm": "ur5", "draws": draws, "hold_s": HOLD_S, "targets": TARGETS,
+    result = {"arm": "ur5", "draws": draws, "first_draw": args.first, "hold_s": HOLD_S, "targets": TARGETS,
               "limits": {"v_max": limits.v_max_holding, "a_max": limits.a_max_holding},
               "environment": {"python": platform.python_version(), "cpus": os.cpu_count(),
                               "quick": args.quick, "date": time.strftime("%Y-%m-%d %H:%M")},
@@ -261,7 +263,7 @@ def main() -> None:
     for preset in args.presets.split(","):
         t0 = time.perf_counter()
         rows = []
-        for draw in range(draws):
+        for draw in range(args.first, args.first + draws):
             rows.append(run_draw(robot, draw, preset, limits))
             r = rows[-1]
             print(preset, draw, {h: (round(100 * r[h]["mass_err_rel"], 3),
