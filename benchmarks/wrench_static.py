@@ -48,6 +48,7 @@ from pathlib import Path
 import numpy as np
 
 from comgrasp_pin.config import MotionConfig, sensor_preset
+from comgrasp_pin.errors import UnobservableError
 from comgrasp_pin.estimation.wrench_com import T_sensor_ee, tool_beyond
 from comgrasp_pin.motion.trajectory import Quintic, min_duration
 from comgrasp_pin.robot_io.estimate import estimate_from_log
@@ -159,17 +160,10 @@ def run_draw(robot, draw: int, preset: str, limits: MotionConfig) -> dict:
     row = {"draw": draw, "preset": preset, "mass": payload.mass,
            "com_ee": payload.p_com_ee.tolist(), "q": plan.q.tolist(),
            "session_s": float(load_w.time[-1])}  # fmt: skip
-    data_sheet = {"drift_std": sensors.wrench.drift_std,
-                  "drift_rate_std": sensors.wrench.drift_rate_std}  # fmt: skip
-    tool_truth = tool_mass(robot) + (excess.mass if excess else 0.0)
-    for name, noise in (("calibrated_tool", data_sheet), ("calibrated_tool_no_drift", {})):
-        tool = estimate_wrench_static(robot, empty_w, subtract_tool=False, **noise)
-        row[f"tool_{name}"] = {"mass": tool.mass, "mass_err": float(tool.mass - tool_truth),
-                               "mass_std": float(np.sqrt(tool.cov[0, 0])),
-                               "verdict": tool.verdict, "chi2_dof": tool.fit.chi2_dof}  # fmt: skip
-        calibrated = (tool.fit.theta[:4], tool.fit.theta_cov[:4, :4])
-        row[name] = wrench_scored(robot, load_w, payload, tool=calibrated, **noise)
-    row["urdf_tool"] = wrench_scored(robot, load_w, payload, **data_sheet)
+    try:
+        row.update(wrench_handlings(robot, empty_w, load_w, payload, excess, sensors))
+    except UnobservableError as exc:  # the planned poses do not turn the sensor enough
+        row["refused"] = str(exc)
     joined, shift = join_logs(empty_j, load_j)
     before = [tuple(w) for w in find_static_windows(empty_j, MAX_SPEED, MIN_STATIC_S)]
     after = [(a + shift, b + shift) for a, b in before]
@@ -178,6 +172,24 @@ def run_draw(robot, draw: int, preset: str, limits: MotionConfig) -> dict:
     e = jt.estimate
     row["joint_torques"] = scored(e.mass, e.com_ee, e.cov, payload, "", {})
     return row
+
+
+def wrench_handlings(robot, empty_w, load_w, payload, excess, sensors) -> dict:
+    """The wrench path's estimates of one draw: calibrated tool (with and without the
+    data sheet's drift) and the URDF's tool, scored; the tool calibrations' own errors."""
+    out = {}
+    data_sheet = {"drift_std": sensors.wrench.drift_std,
+                  "drift_rate_std": sensors.wrench.drift_rate_std}  # fmt: skip
+    tool_truth = tool_mass(robot) + (excess.mass if excess else 0.0)
+    for name, noise in (("calibrated_tool", data_sheet), ("calibrated_tool_no_drift", {})):
+        tool = estimate_wrench_static(robot, empty_w, subtract_tool=False, **noise)
+        out[f"tool_{name}"] = {"mass": tool.mass, "mass_err": float(tool.mass - tool_truth),
+                               "mass_std": float(np.sqrt(tool.cov[0, 0])),
+                               "verdict": tool.verdict, "chi2_dof": tool.fit.chi2_dof}  # fmt: skip
+        calibrated = (tool.fit.theta[:4], tool.fit.theta_cov[:4, :4])
+        out[name] = wrench_scored(robot, load_w, payload, tool=calibrated, **noise)
+    out["urdf_tool"] = wrench_scored(robot, load_w, payload, **data_sheet)
+    return out
 
 
 def tool_mass(robot) -> float:
@@ -200,12 +212,14 @@ def _stats(x: np.ndarray) -> dict:
 
 
 def summary(rows: list[dict], handling: str) -> dict:
-    """Errors, coverage and z-scores of one preset's rows for one handling."""
-    e = [r[handling] for r in rows]
+    """Errors, coverage and z-scores of one preset's rows for one handling (the draws it
+    has: the wrench path refuses poses that do not turn the sensor enough)."""
+    e = [r[handling] for r in rows if handling in r]
     com = 1e3 * np.array([x["com_err_m"] for x in e])
     z = np.array([x["z"] for x in e])
     out = {
         "draws": len(e),
+        "refused": len(rows) - len(e),
         "mass_err_pct": _stats(100 * np.array([x["mass_err_rel"] for x in e])),
         "com_err_mm_norm": _stats(np.linalg.norm(com, axis=1)),
         "com_err_mm_axis": {ax: _stats(com[:, i]) for i, ax in enumerate("xyz")},
@@ -241,7 +255,7 @@ def table(result: dict) -> str:
             rz = ", ".join(f"{v:.2f}" for v in s["rms_z"].values())
             lines.append(f"| {preset} | {h} | {m['max']:.2f}/{m['p95']:.2f}/{m['mean']:.2f} | "
                          f"{c['max']:.2f}/{c['p95']:.2f}/{c['mean']:.2f} | {cov} | {rz} | "
-                         f"{s['verdicts']} |")  # fmt: skip
+                         f"{s['verdicts']}, refused {s['refused']} |")  # fmt: skip
     return "\n".join(lines)
 
 
@@ -266,9 +280,10 @@ def main() -> None:
         for draw in range(args.first, args.first + draws):
             rows.append(run_draw(robot, draw, preset, limits))
             r = rows[-1]
-            print(preset, draw, {h: (round(100 * r[h]["mass_err_rel"], 3),
-                                     round(1e3 * float(np.linalg.norm(r[h]["com_err_m"])), 2))
-                                 for h in HANDLINGS}, flush=True)  # fmt: skip
+            print(preset, draw, r.get("refused", ""),
+                  {h: (round(100 * r[h]["mass_err_rel"], 3),
+                       round(1e3 * float(np.linalg.norm(r[h]["com_err_m"])), 2))
+                   for h in HANDLINGS if h in r}, flush=True)  # fmt: skip
         sensors = sensor_preset(preset)
         result["presets"][preset] = {
             "wall_s": time.perf_counter() - t0,
