@@ -31,7 +31,12 @@ Truth: the simulator's payload definition (``Payload``). Written: per preset and
 the mass error (% of the truth), the CoM error (mm, norm and per ee axis), the share of
 draws whose 95 % interval (1.96 std) holds the truth, the rms z-scores, the verdicts.
 
-    python benchmarks/wrench_static.py [--draws 100] [--quick]
+The wrench path refuses poses that turn the sensor too little (``check_orientations``): such
+a draw is recorded as ``refused``. ``--plan-survey N`` counts them over N plans without
+simulating (``plan_survey`` in the JSON).
+
+    python benchmarks/wrench_static.py [--draws 100] [--first 0] [--quick]
+    python benchmarks/wrench_static.py --plan-survey 500
 """
 
 from __future__ import annotations
@@ -49,6 +54,7 @@ import numpy as np
 
 from comgrasp_pin.config import MotionConfig, sensor_preset
 from comgrasp_pin.errors import UnobservableError
+from comgrasp_pin.estimation.wrench import check_orientations
 from comgrasp_pin.estimation.wrench_com import T_sensor_ee, tool_beyond
 from comgrasp_pin.motion.trajectory import Quintic, min_duration
 from comgrasp_pin.robot_io.estimate import estimate_from_log
@@ -180,21 +186,30 @@ def wrench_handlings(robot, empty_w, load_w, payload, excess, sensors) -> dict:
     out = {}
     data_sheet = {"drift_std": sensors.wrench.drift_std,
                   "drift_rate_std": sensors.wrench.drift_rate_std}  # fmt: skip
-    tool_truth = tool_mass(robot) + (excess.mass if excess else 0.0)
+    truth = tool_theta(robot, excess)
     for name, noise in (("calibrated_tool", data_sheet), ("calibrated_tool_no_drift", {})):
         tool = estimate_wrench_static(robot, empty_w, subtract_tool=False, **noise)
-        out[f"tool_{name}"] = {"mass": tool.mass, "mass_err": float(tool.mass - tool_truth),
+        z = (tool.fit.theta[:4] - truth) / np.sqrt(np.diag(tool.fit.theta_cov)[:4])
+        out[f"tool_{name}"] = {"mass": tool.mass, "mass_err": float(tool.mass - truth[0]),
                                "mass_std": float(np.sqrt(tool.cov[0, 0])),
-                               "verdict": tool.verdict, "chi2_dof": tool.fit.chi2_dof}  # fmt: skip
+                               "verdict": tool.verdict, "chi2_dof": tool.fit.chi2_dof,
+                               "scale": tool.fit.scale, "z_theta": z.tolist(),
+                               "z_theta_unscaled": (z * np.sqrt(tool.fit.scale)).tolist()}  # fmt: skip
         calibrated = (tool.fit.theta[:4], tool.fit.theta_cov[:4, :4])
         out[name] = wrench_scored(robot, load_w, payload, tool=calibrated, **noise)
     out["urdf_tool"] = wrench_scored(robot, load_w, payload, **data_sheet)
     return out
 
 
-def tool_mass(robot) -> float:
-    """The URDF's tool beyond the wrist sensor (kg)."""
-    return float(tool_beyond(robot, SENSOR_FRAME["ur5"]).mass)
+def tool_theta(robot, excess: Solid | None) -> np.ndarray:
+    """(4,) the simulated tool's m, m c in the sensor frame (kg, kg m): the URDF's links
+    beyond the sensor and the gripper's excess."""
+    tool = tool_beyond(robot, SENSOR_FRAME["ur5"])
+    theta = np.r_[tool.mass, tool.mass * tool.lever]
+    if excess is not None:
+        T_se = T_sensor_ee(robot, SENSOR_FRAME["ur5"])
+        theta += excess.mass * np.r_[1.0, (T_se @ np.r_[excess.p_centre_ee, 1.0])[:3]]
+    return theta
 
 
 def wrench_scored(robot, log, payload: Payload, **kw) -> dict:
@@ -203,6 +218,24 @@ def wrench_scored(robot, log, payload: Payload, **kw) -> dict:
     extra = {"chi2_dof": est.fit.chi2_dof, "windows": len(est.windows),
              "spread_deg": est.fit.spread_deg.tolist()}  # fmt: skip
     return scored(est.mass, est.com_ee, est.cov, payload, est.verdict, extra)
+
+
+def plan_survey(robot, n: int) -> dict:
+    """Of ``n`` plans (seeds 0..n-1) of ``plan_measurement_poses(robot, k=4)``, those whose
+    gravity directions in the sensor frame the wrench path refuses (``check_orientations``),
+    and the spread of the others (deg, the smaller of the two principal directions)."""
+    g_world = robot.model.gravity.linear
+    refused, spread = [], []
+    for seed in range(n):
+        Q = plan_measurement_poses(robot, k=4, seed=seed).q
+        g = np.array([robot.frame_pose(q, SENSOR_FRAME["ur5"])[:3, :3].T @ g_world for q in Q])
+        try:
+            spread.append(float(check_orientations(g)[1]))
+        except UnobservableError:
+            refused.append(seed)
+    return {"plans": n, "refused": len(refused), "refused_seeds": refused,
+            "spread_deg_min": min(spread), "spread_deg_median": float(np.median(spread)),
+            "below_15_deg": int(np.sum(np.array(spread) < 15))}  # fmt: skip
 
 
 def _stats(x: np.ndarray) -> dict:
@@ -232,6 +265,13 @@ def summary(rows: list[dict], handling: str) -> dict:
                    for i, k in enumerate(("mass", "com_x", "com_y", "com_z"))},
         "verdicts": {v: sum(x["verdict"] == v for x in e) for v in sorted({x["verdict"] for x in e})},
     }  # fmt: skip
+    tool = [r[f"tool_{handling}"] for r in rows if f"tool_{handling}" in r]
+    if tool and "z_theta" in tool[0]:
+        for key in ("z_theta", "z_theta_unscaled"):
+            zt = np.array([t[key] for t in tool])
+            out[f"tool_rms_{key}"] = np.sqrt(np.mean(zt**2, axis=0)).tolist()
+            out[f"tool_coverage95_{key}"] = np.mean(np.abs(zt) < 1.96, axis=0).tolist()
+        out["tool_scale_mean"] = float(np.mean([t["scale"] for t in tool]))
     if "chi2_dof" in e[0]:
         out["chi2_dof_median"] = float(np.median([x["chi2_dof"] for x in e]))
         out["spread_deg_min"] = float(np.min([x["spread_deg"][1] for x in e]))
@@ -266,7 +306,21 @@ def main() -> None:
     ap.add_argument("--first", type=int, default=0, help="the first draw's number (seed)")
     ap.add_argument("--presets", default=",".join(PRESETS))
     ap.add_argument("--out", default="benchmarks/results/wrench_static.json")
+    ap.add_argument(
+        "--plan-survey",
+        type=int,
+        default=0,
+        metavar="N",
+        help="only survey N plans' spread of gravity (no simulation), into --out",
+    )
     args = ap.parse_args()
+    if args.plan_survey:
+        out = Path(args.out)
+        result = json.loads(out.read_text()) if out.exists() else {}
+        result["plan_survey"] = plan_survey(arm_robot("ur5"), args.plan_survey)
+        out.write_text(json.dumps(result, indent=1) + "\n")
+        print(result["plan_survey"])
+        return
     draws = 10 if args.quick else args.draws
     robot, limits = arm_robot("ur5"), MotionConfig()
     result = {"arm": "ur5", "draws": draws, "first_draw": args.first, "hold_s": HOLD_S, "targets": TARGETS,
