@@ -172,3 +172,15 @@ def test_dynamic_from_bags_with_an_empty_run_and_a_payload_file(tmp_path):
     )
     assert float(link.find("inertial/mass").get("value")) == pytest.approx(r["mass_kg"], rel=1e-6)
     assert main([*args, "--windows", "0:1,2:3,4:5"]) == 2  # a motion takes --window
+
+
+def test_the_sensors_drift_from_its_data_sheet_is_taken(wrench_log, tmp_path):
+    csv = write_wrench_csv(tmp_path / "w.csv", wrench_log)
+    log_args = ["--csv", str(csv), "--sensor-frame", "ft_sensor"]
+    out, drifting = tmp_path / "R.json", tmp_path / "D.json"
+    assert main(_args(log_args, out)) == 0
+    assert main(_args(log_args, drifting, "--wrench-drift", "0.01,0.0005,2e-4,1e-5")) == 0
+    plain, with_drift = (json.loads(p.read_text())["std"]["mass_kg"] for p in (out, drifting))
+    assert with_drift > plain  # the windows' shared drift widens the interval
+    assert main(_args(log_args, out, "--wrench-drift", "0.01")) == 2
+    assert main(_args(log_args, out, "--wrench-drift=-1,0")) == 2

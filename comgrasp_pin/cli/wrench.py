@@ -40,6 +40,10 @@ def add_wrench_args(est: argparse.ArgumentParser) -> None:
                    help="the sensor's repeatability between windows: force N, torque N m "
                    "(drift, hysteresis; its data sheet), added to each window's own "
                    "noise")  # fmt: skip
+    g.add_argument("--wrench-drift", default=None, metavar="F,T[,RF,RT]",
+                   help="the sensor's drift from its data sheet: random walk, N/sqrt(s) and "
+                   "N m/sqrt(s), and optionally a rate fixed over the log, N/s and N m/s; "
+                   "the windows then share it in their covariance (default: none)")  # fmt: skip
     g.add_argument("--keep-tool", action="store_true",
                    help="do not subtract the URDF's links beyond the sensor: estimate "
                    "everything the sensor carries (with nothing held: the tool itself, "
@@ -59,6 +63,23 @@ def _wrench_std(text: str | None) -> tuple[float, float] | None:
             f"--wrench-std {text!r}: two numbers F,T expected (N, N m)"
         ) from None
     return f, t
+
+
+def _drift(text: str | None) -> tuple[tuple[float, float], tuple[float, float]]:
+    """((walk F, walk T), (rate F, rate T)) of ``--wrench-drift``; zeros without it."""
+    if text is None:
+        return (0.0, 0.0), (0.0, 0.0)
+    try:
+        v = [float(x) for x in text.split(",")]
+    except ValueError:
+        v = []
+    if len(v) not in (2, 4) or not all(x >= 0 and x < float("inf") for x in v):
+        raise InvalidInputError(
+            f"--wrench-drift {text!r}: F,T or F,T,RF,RT expected, numbers >= 0 (N/sqrt(s), "
+            "N m/sqrt(s), N/s, N m/s)"
+        )
+    rate = (v[2], v[3]) if len(v) == 4 else (0.0, 0.0)
+    return (v[0], v[1]), rate
 
 
 def _tool(path: str | None, sensor_frame: str):
@@ -116,10 +137,12 @@ def run_wrench(args: argparse.Namespace, robot, write_json) -> int:
 
     log = read_wrench(args, robot)
     windows = None if args.windows is None else parse_windows(args.windows, "--windows")
+    walk, rate = _drift(args.wrench_drift)
     est = estimate_wrench_static(robot, log, windows, args.max_speed,
                                  wrench_std=_wrench_std(args.wrench_std),
                                  subtract_tool=not args.keep_tool,
-                                 tool=_tool(args.tool, log.sensor_frame))  # fmt: skip
+                                 tool=_tool(args.tool, log.sensor_frame), drift_std=walk,
+                                 drift_rate_std=rate)  # fmt: skip
     written = []
     if wants_exports(args):
         if est.verdict != IDENTIFIED:
