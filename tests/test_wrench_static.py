@@ -209,3 +209,23 @@ def test_a_hand_named_as_the_sensor_frame_is_on_the_tool_side():
     mass = sum(float(links[n].find("inertial/mass").get("value")) for n in names)
     assert tool_beyond(robot, "panda_hand").mass == pytest.approx(mass, rel=1e-12)
     assert tool_beyond(robot, "panda_link8").mass == pytest.approx(mass, rel=1e-12)
+
+
+def test_poses_planned_for_the_wrist_sensor_keep_the_promised_std():
+    """plan-poses --sensor-frame: the planned orientations pass the observability check, and
+    the scatter of estimates over noisy draws at them matches the std the plan predicts."""
+    robot = RobotModel.ur5()
+    plan = plan_measurement_poses(robot, k=4, n_candidates=400, sensor_frame="ft_sensor",
+                                  wrench_std=(0.05, 0.002))  # fmt: skip
+    assert plan.sensor_frame == "ft_sensor" and plan.q.shape == (4, 6)
+    g_sensor = np.array([robot.frame_pose(q, "ft_sensor")[:3, :3].T @ G for q in plan.q])
+    T = np.linalg.solve(robot.frame_pose(np.zeros(6), "ft_sensor"), robot.ee_pose(np.zeros(6)))
+    std = np.r_[[0.05] * 3, [0.002] * 3]
+    rng = np.random.default_rng(2)
+    est = []
+    for _ in range(400):  # a 1 kg payload at the ee origin, the plan's assumption
+        w = _hanging(plan.mass, T[:3, 3], g_sensor, rng.normal(size=6))
+        fit = fit_static_wrench(g_sensor, w + rng.normal(size=(4, 6)) * std, std)
+        est.append(np.r_[fit.mass, T[:3, :3].T @ fit.com_sensor])
+    spread = np.std(est, axis=0)
+    np.testing.assert_allclose(spread, plan.predicted_std, rtol=0.15)

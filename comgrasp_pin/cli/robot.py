@@ -119,13 +119,17 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         srdf=args.srdf,
         n_candidates=args.candidates,
         seed=args.seed,
+        sensor_frame=args.sensor_frame,
+        wrench_std=tuple(_vector(args.wrench_std, "--wrench-std", 2)),
     )
     _write_json(args.out, planning.plan_dict(plan))
     s = plan.predicted_std
+    noise = (f"{args.torque_std:g} N m per averaged reading" if args.sensor_frame is None else
+             f"the wrist sensor at {args.sensor_frame}, {args.wrench_std} N, N m per averaged "
+             "reading")  # fmt: skip
     print(f"{args.k} poses for {robot.ee_frame}, collision-free and within the joint limits")
-    print(f"  predicted std for a {args.mass:g} kg payload at {args.torque_std:g} N m per "
-          f"averaged reading: mass {s[0]:.4g} kg, CoM {np.array2string(1e3 * s[1:], precision=2)}"
-          " mm")  # fmt: skip
+    print(f"  predicted std for a {args.mass:g} kg payload with {noise}: mass {s[0]:.4g} kg, "
+          f"CoM {np.array2string(1e3 * s[1:], precision=2)} mm")  # fmt: skip
     if args.urscript:
         path = Path(args.urscript)
         try:
@@ -241,6 +245,13 @@ def _add_plan_poses(sub: argparse._SubParsersAction) -> None:
                       help="SRDF whose disabled collisions are removed (default: the one "
                       "beside an example-robot-data URDF, else adjacent links)")  # fmt: skip
     plan.add_argument("--candidates", type=int, default=3000, help="random candidates searched")
+    plan.add_argument("--sensor-frame", default=None,
+                      help="plan for a wrist force/torque sensor at this URDF frame (comgrasp "
+                      "estimate --wrench): the poses that best determine the mass, the CoM "
+                      "and the sensor's six offsets (k >= 3)")  # fmt: skip
+    plan.add_argument("--wrench-std", default="0.01,0.0005", metavar="F,T",
+                      help="with --sensor-frame: std of one averaged wrench reading, N and "
+                      "N m, for the prediction")  # fmt: skip
     plan.add_argument("--seed", type=int, default=0, help="random seed")
     plan.add_argument("--out", default="poses.json", help="the poses JSON")
     plan.add_argument("--urscript", default=None, help="also write a URScript movej program")

@@ -44,6 +44,9 @@ class PosePlan:
         mass: payload mass the prediction assumes (kg).
         n_candidates: candidate poses searched (within the limits; collision-free where
             the planner checks collisions).
+        sensor_frame: the wrist sensor's frame the poses were planned for, or None (the
+            joint torques); wrench_std: the (force N, torque N m) std its prediction
+            assumes, or None.
     """
 
     q: np.ndarray
@@ -53,6 +56,8 @@ class PosePlan:
     torque_std: float
     mass: float
     n_candidates: int
+    sensor_frame: str | None = None
+    wrench_std: tuple[float, float] | None = None
 
 
 def check_prediction(torque_std: float, mass: float) -> None:

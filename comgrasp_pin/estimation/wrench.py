@@ -266,3 +266,30 @@ def _whitening(wrench_std, wrench_cov, k: int) -> Callable[[np.ndarray], np.ndar
             f"(N, N m) for {k} orientations; got shape {cov.shape}"
         ) from None
     return lambda x: np.linalg.solve(L, x)
+
+
+def information(g_sensor: np.ndarray, wrench_std: tuple[float, float]) -> np.ndarray:
+    """(k, 10, 10) the information of theta = (m, m c, b_f, b_tau) each orientation gives.
+
+    For white noise of ``wrench_std`` (force N, torque N m) on each window's mean; summed
+    over orientations it is the inverse of the fit's covariance (before any scaling).
+    """
+    w = 1.0 / np.repeat(np.asarray(wrench_std, dtype=float), 3)
+    rows = regressor(np.atleast_2d(g_sensor)).reshape(-1, 6, N_UNKNOWNS) * w[None, :, None]
+    return np.einsum("kri,krj->kij", rows, rows)
+
+
+def predicted_cov(info: np.ndarray, mass: float, com_sensor: np.ndarray) -> np.ndarray:
+    """(4, 4) covariance of (mass, com_sensor) (kg, m) that the information ``info`` promises.
+
+    ``info``: (10, 10) summed over the orientations; for a payload of ``mass`` at
+    ``com_sensor`` (the delta method); infinite where ``info`` is singular.
+    """
+    s = np.linalg.svd(info, compute_uv=False)
+    if not s[-1] > 1e-12 * s[0]:
+        return np.full((4, 4), np.inf)
+    J = np.zeros((4, 4))
+    J[0, 0] = 1.0
+    J[1:, 0] = -np.asarray(com_sensor, dtype=float) / mass
+    J[1:, 1:] = np.eye(3) / mass
+    return J @ np.linalg.inv(info)[:4, :4] @ J.T

@@ -15,6 +15,7 @@ import numpy as np
 
 from comgrasp_pin import validate
 from comgrasp_pin.errors import CollisionError, InvalidInputError
+from comgrasp_pin.estimation import wrench
 from comgrasp_pin.estimation.pose_planning import (
     PosePlan,
     check_prediction,
@@ -23,6 +24,7 @@ from comgrasp_pin.estimation.pose_planning import (
     information,
     predicted_std,
 )
+from comgrasp_pin.estimation.wrench_com import T_sensor_ee
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.collision import SelfCollision
 
@@ -72,6 +74,8 @@ def plan_measurement_poses(
     n_candidates: int = 3000,
     seed: int = 0,
     min_height: float = 0.05,
+    sensor_frame: str | None = None,
+    wrench_std: tuple[float, float] = (0.01, 0.0005),
 ) -> PosePlan:
     """``k`` static poses that best determine the mass and the full 3-D CoM.
 
@@ -88,6 +92,11 @@ def plan_measurement_poses(
         n_candidates: random candidates drawn.
         seed: random seed.
         min_height: lowest height (m, world z) of the ee and the wrist joints.
+        sensor_frame: plan for a wrist force/torque sensor at this frame instead of the
+            joint torques: D-optimal for its ten unknowns (mass, CoM, the six offsets,
+            ``estimation.wrench``); ``k`` >= 3 then.
+        wrench_std: (force N, torque N m) std of one averaged wrench reading the wrench's
+            prediction assumes.
 
     Raises:
         InvalidInputError: bad k, start, torque_std or mass; CollisionError: the start
@@ -114,15 +123,42 @@ def plan_measurement_poses(
         )
     fixed = [] if start is None else [start]
     pool = np.vstack([*fixed, cand]) if fixed else cand
-    infos = information(robot, pool)
-    base = infos[0] if fixed else np.zeros((4, 4))
+    infos = (
+        information(robot, pool)
+        if sensor_frame is None
+        else _wrench_infos(robot, pool, sensor_frame, wrench_std)
+    )
+    base = infos[0] if fixed else np.zeros(infos.shape[1:])
     chosen = [0] * len(fixed) + [
         len(fixed) + i for i in greedy_d_optimal(base, infos[len(fixed) :], need)
     ]
     chosen = exchange_d_optimal(infos, chosen, fixed=len(fixed))
     Q = pool[chosen]
-    std = predicted_std(robot, Q, torque_std, mass)
-    return PosePlan(Q, tuple(robot.joint_names), robot.ee_frame, std, torque_std, mass, len(cand))
+    std = _predicted_std(robot, Q, infos[chosen].sum(axis=0), torque_std, mass, sensor_frame)
+    wstd = None if sensor_frame is None else wrench_std
+    return PosePlan(Q, tuple(robot.joint_names), robot.ee_frame, std, torque_std, mass,
+                    len(cand), sensor_frame, wstd)  # fmt: skip
+
+
+def _predicted_std(robot, Q, info, torque_std, mass, sensor_frame) -> np.ndarray:
+    """(4,) std of (mass, com_ee) the poses promise for a payload at the ee origin.
+
+    The joint torques' (``predicted_std``), or the wrist sensor's from its ``info`` (10, 10).
+    """
+    if sensor_frame is None:
+        return predicted_std(robot, Q, torque_std, mass)
+    T_se = T_sensor_ee(robot, sensor_frame)
+    G = np.eye(4)
+    G[1:, 1:] = T_se[:3, :3].T  # sensor axes to ee axes
+    cov = wrench.predicted_cov(info, mass, T_se[:3, 3])
+    return np.sqrt(np.diag(G @ cov @ G.T)) if np.all(np.isfinite(cov)) else np.full(4, np.inf)
+
+
+def _wrench_infos(robot: RobotModel, Q: np.ndarray, sensor_frame: str, wrench_std) -> np.ndarray:
+    """(c, 10, 10) each pose's information on the wrist sensor's ten unknowns."""
+    g = robot.model.gravity.linear
+    g_sensor = np.array([robot.frame_pose(q, sensor_frame)[:3, :3].T @ g for q in Q])
+    return wrench.information(g_sensor, wrench_std)
 
 
 def plan_dict(plan: PosePlan) -> dict:
@@ -142,6 +178,9 @@ def plan_dict(plan: PosePlan) -> dict:
             "torque_std_means": "std of one averaged reading",
         },  # fmt: skip
         "n_candidates": plan.n_candidates,
+        "sensor_frame": plan.sensor_frame,
+        "wrench_std": None if plan.wrench_std is None else list(plan.wrench_std),
+        "planned_for": "joint torques" if plan.sensor_frame is None else "a wrist sensor",
     }
 
 
