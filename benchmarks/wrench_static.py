@@ -154,12 +154,17 @@ def scored(mass, com_ee, cov, payload: Payload, verdict: str, extra: dict) -> di
             **extra}  # fmt: skip
 
 
-def run_draw(robot, draw: int, preset: str, limits: MotionConfig) -> dict:
+PLAN_FOR = {"wrench": SENSOR_FRAME["ur5"], "joints": None}
+"""``--plan-for``: the poses planned for the wrist sensor (`comgrasp plan-poses
+--sensor-frame ft_sensor`) or for the joint torques (`comgrasp plan-poses`)."""
+
+
+def run_draw(robot, draw: int, preset: str, limits: MotionConfig, plan_for="wrench") -> dict:
     """One draw: plan, simulate both sessions, estimate every way, score against the truth."""
     sensors = sensor_preset(preset)
     payload = random_payload(np.random.default_rng((draw, 1)))
     excess = gripper_excess(robot, sensors.gripper_mass_error, sensors.gripper_com_error)
-    plan = plan_measurement_poses(robot, k=4, seed=draw)
+    plan = plan_measurement_poses(robot, k=4, seed=draw, sensor_frame=PLAN_FOR[plan_for])
     traj = session_trajectory(plan.q, limits)
     empty_j, empty_w = simulate(held_body(None, excess), traj, sensors, 2 * draw + 1, draw)
     load_j, load_w = simulate(held_body(payload, excess), traj, sensors, 2 * draw + 2, draw)
@@ -220,20 +225,20 @@ def wrench_scored(robot, log, payload: Payload, **kw) -> dict:
     return scored(est.mass, est.com_ee, est.cov, payload, est.verdict, extra)
 
 
-def plan_survey(robot, n: int) -> dict:
+def plan_survey(robot, n: int, plan_for: str = "wrench") -> dict:
     """Of ``n`` plans (seeds 0..n-1) of ``plan_measurement_poses(robot, k=4)``, those whose
     gravity directions in the sensor frame the wrench path refuses (``check_orientations``),
     and the spread of the others (deg, the smaller of the two principal directions)."""
     g_world = robot.model.gravity.linear
     refused, spread = [], []
     for seed in range(n):
-        Q = plan_measurement_poses(robot, k=4, seed=seed).q
+        Q = plan_measurement_poses(robot, k=4, seed=seed, sensor_frame=PLAN_FOR[plan_for]).q
         g = np.array([robot.frame_pose(q, SENSOR_FRAME["ur5"])[:3, :3].T @ g_world for q in Q])
         try:
             spread.append(float(check_orientations(g)[1]))
         except UnobservableError:
             refused.append(seed)
-    return {"plans": n, "refused": len(refused), "refused_seeds": refused,
+    return {"plans": n, "planned_for": plan_for, "refused": len(refused), "refused_seeds": refused,
             "spread_deg_min": min(spread), "spread_deg_median": float(np.median(spread)),
             "below_15_deg": int(np.sum(np.array(spread) < 15))}  # fmt: skip
 
@@ -306,6 +311,9 @@ def main() -> None:
     ap.add_argument("--first", type=int, default=0, help="the first draw's number (seed)")
     ap.add_argument("--presets", default=",".join(PRESETS))
     ap.add_argument("--out", default="benchmarks/results/wrench_static.json")
+    ap.add_argument("--plan-for", default="wrench", choices=tuple(PLAN_FOR),
+                    help="plan the poses for the wrist sensor (plan-poses --sensor-frame) or "
+                    "for the joint torques")  # fmt: skip
     ap.add_argument(
         "--plan-survey",
         type=int,
@@ -317,13 +325,15 @@ def main() -> None:
     if args.plan_survey:
         out = Path(args.out)
         result = json.loads(out.read_text()) if out.exists() else {}
-        result["plan_survey"] = plan_survey(arm_robot("ur5"), args.plan_survey)
+        key = "plan_survey" if args.plan_for == "wrench" else "plan_survey_joints"
+        result[key] = plan_survey(arm_robot("ur5"), args.plan_survey, args.plan_for)
         out.write_text(json.dumps(result, indent=1) + "\n")
-        print(result["plan_survey"])
+        print(result[key])
         return
     draws = 10 if args.quick else args.draws
     robot, limits = arm_robot("ur5"), MotionConfig()
-    result = {"arm": "ur5", "draws": draws, "first_draw": args.first, "hold_s": HOLD_S, "targets": TARGETS,
+    result = {"arm": "ur5", "draws": draws, "first_draw": args.first,
+              "planned_for": args.plan_for, "hold_s": HOLD_S, "targets": TARGETS,
               "limits": {"v_max": limits.v_max_holding, "a_max": limits.a_max_holding},
               "environment": {"python": platform.python_version(), "cpus": os.cpu_count(),
                               "quick": args.quick, "date": time.strftime("%Y-%m-%d %H:%M")},
@@ -332,7 +342,7 @@ def main() -> None:
         t0 = time.perf_counter()
         rows = []
         for draw in range(args.first, args.first + draws):
-            rows.append(run_draw(robot, draw, preset, limits))
+            rows.append(run_draw(robot, draw, preset, limits, args.plan_for))
             r = rows[-1]
             print(preset, draw, r.get("refused", ""),
                   {h: (round(100 * r[h]["mass_err_rel"], 3),

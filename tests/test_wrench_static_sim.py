@@ -42,7 +42,8 @@ def _sessions(robot, draw, preset):
     sensors = sensor_preset(preset)
     payload = random_payload(np.random.default_rng((draw, 1)))
     excess = gripper_excess(robot, sensors.gripper_mass_error, sensors.gripper_com_error)
-    traj = session_trajectory(plan_measurement_poses(robot, k=4, seed=draw).q, MotionConfig())
+    plan = plan_measurement_poses(robot, k=4, seed=draw, sensor_frame="ft_sensor")
+    traj = session_trajectory(plan.q, MotionConfig())
     _, empty = simulate(held_body(None, excess), traj, sensors, 2 * draw + 1, draw)
     _, loaded = simulate(held_body(payload, excess), traj, sensors, 2 * draw + 2, draw)
     return payload, excess, empty, loaded
