@@ -105,11 +105,12 @@ def test_nothing_held_writes_no_payload_file(tmp_path):
     assert main(args) == 2 and not script.exists()
 
 
-def test_before_and_after_windows_are_refused_with_wrench(wrench_log, tmp_path):
+def test_pairs_and_orientations_at_rest_are_not_mixed(wrench_log, tmp_path):
     csv = write_wrench_csv(tmp_path / "w.csv", wrench_log)
     args = _args(["--csv", str(csv), "--sensor-frame", "ft_sensor"], tmp_path / "R.json",
-                 "--before", "0:1", "--after", "3:4")  # fmt: skip
+                 "--before", "0:1", "--after", "3:4", "--auto")  # fmt: skip
     assert main(args) == 2
+    assert main([*args[:-1], "--grasp-time", "2"]) == 2
 
 
 def test_a_tool_identified_before_replaces_a_misstated_urdf_tool(tmp_path):
@@ -184,3 +185,57 @@ def test_the_sensors_drift_from_its_data_sheet_is_taken(wrench_log, tmp_path):
     assert with_drift > plain  # the windows' shared drift widens the interval
     assert main(_args(log_args, out, "--wrench-drift", "0.01")) == 2
     assert main(_args(log_args, out, "--wrench-drift=-1,0")) == 2
+
+
+def test_before_and_after_pairs_use_the_wrench_and_the_joint_torques(tmp_path, capsys):
+    """A log at three poses empty, a grasp, the same poses holding: efforts from MuJoCo
+    (tests/_logs.py, a payload body on eelink), the wrench written out here (the URDF's tool
+    and the payload hanging at the sensor, f = m g, tau = c x m g, plus an offset and noise).
+    Both sources are used, each one's share is stated, and without efforts the wrench alone."""
+    from _logs import mujoco_torques, session
+
+    from comgrasp_pin.estimation.wrench_com import tool_beyond
+    from comgrasp_pin.robot_io import WrenchLog
+
+    robot = RobotModel.ur5()
+    Q = np.array([[0.0, -1.6, 1.6, -1.57, -1.57, 0.0], [0.4, -1.2, 1.2, -0.4, 0.8, 1.0],
+                  [-0.5, -1.9, 1.5, -2.5, -0.6, -1.2]])  # fmt: skip
+    mass, com_ee = 0.6, np.array([0.03, -0.015, 0.04])
+    jlog, before, after, grasp = session(Q, mujoco_torques(mass, com_ee), robot.joint_names,
+                                         200.0, 0.05, seed=3)  # fmt: skip
+    T_s_ee = np.linalg.solve(robot.frame_pose(np.zeros(6), "ft_sensor"), robot.ee_pose(np.zeros(6)))
+    c_s = T_s_ee[:3, :3] @ com_ee + T_s_ee[:3, 3]
+    tool = tool_beyond(robot, "ft_sensor")
+    rng = np.random.default_rng(4)
+    bias = rng.normal(size=6)
+    wrench = []
+    for t, q in zip(jlog.time, jlog.position):
+        g = robot.frame_pose(q, "ft_sensor")[:3, :3].T @ np.array([0.0, 0.0, -9.81])
+        w = _hanging(tool.mass, tool.lever, g) + (_hanging(mass, c_s, g) if t >= grasp else 0)
+        wrench.append(w + bias + rng.normal(size=6) * STD)
+    log = WrenchLog(jlog.time, jlog.joint_names, jlog.position, np.array(wrench), "ft_sensor",
+                    "test", effort=jlog.effort)  # fmt: skip
+    csv = write_wrench_csv(tmp_path / "w.csv", log)
+    out = tmp_path / "R.json"
+    win = ["--before", ",".join(f"{a}:{b}" for a, b in before),
+           "--after", ",".join(f"{a}:{b}" for a, b in after)]  # fmt: skip
+    assert main(_args(["--csv", str(csv), "--sensor-frame", "ft_sensor", *win], out)) == 0
+    r = json.loads(out.read_text())
+    std = np.sqrt(np.diag(r["cov"]))
+    assert r["sources"] == ["wrench", "joint torques"] and r["n_poses"] == 3
+    assert abs(r["mass_kg"] - mass) < 4 * std[0]
+    assert np.all(np.abs(np.array(r["com_m"]) - com_ee) < 4 * std[1:])
+    for unknown in r["contributions_of"]:
+        total = sum(r["contributions"][s][unknown] for s in r["sources"])
+        assert total == pytest.approx(1.0, abs=1e-9)
+    assert "% of the information on the mass" in capsys.readouterr().out
+    alone = WrenchLog(log.time, log.joint_names, log.position, log.wrench, "ft_sensor", "test")
+    csv2 = write_wrench_csv(tmp_path / "w2.csv", alone)
+    assert main(_args(["--csv", str(csv2), "--sensor-frame", "ft_sensor", *win], out)) == 0
+    r2 = json.loads(out.read_text())
+    assert r2["sources"] == ["wrench"] and np.sqrt(r2["cov"][0][0]) >= std[0]
+    assert main(_args(["--csv", str(csv), "--sensor-frame", "ft_sensor", *win[:2]], out)) == 2
+
+
+def _hanging(m, c, g):
+    return np.r_[m * g, np.cross(np.asarray(c) * m, g)]

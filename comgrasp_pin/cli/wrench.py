@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import argparse
 
+import numpy as np
+
 from comgrasp_pin.errors import InvalidInputError
 
 
@@ -112,10 +114,15 @@ def read_wrench(args: argparse.Namespace, robot):
     """The WrenchLog of ``--bag`` or ``--csv`` (a project CSV or a UR recording)."""
     from comgrasp_pin.robot_io.wrench_sources import read_wrench_log
 
-    if args.before or args.after or args.grasp_time is not None:
+    if args.grasp_time is not None:
         raise InvalidInputError(
-            "--wrench needs no empty-arm windows: leave out --before, --after and "
-            "--grasp-time (its still windows are found, --auto, or given, --windows)"
+            "--wrench pairs no windows by a grasp time: give --before and --after, or the "
+            "still windows at rest (--auto, --windows)"
+        )
+    if (args.before or args.after) and (args.auto or args.windows or args.dynamic):
+        raise InvalidInputError(
+            "--before/--after (the same poses empty and holding) or --auto/--windows (one "
+            "log of orientations at rest) or --dynamic: one of them"
         )
     if args.auto and args.windows is not None:
         raise InvalidInputError("give --auto (find the still windows) or --windows, not both")
@@ -136,6 +143,8 @@ def run_wrench(args: argparse.Namespace, robot, write_json) -> int:
     from comgrasp_pin.robot_io.wrench_static import IDENTIFIED, estimate_wrench_static
 
     log = read_wrench(args, robot)
+    if args.before or args.after:
+        return _run_pairs(args, robot, log, write_json)
     windows = None if args.windows is None else parse_windows(args.windows, "--windows")
     walk, rate = _drift(args.wrench_drift)
     est = estimate_wrench_static(robot, log, windows, args.max_speed,
@@ -154,6 +163,39 @@ def run_wrench(args: argparse.Namespace, robot, write_json) -> int:
         written = write_exports(args, robot, payload)
     write_json(args.out, wrench_result_dict(est, robot.ee_frame))
     print(wrench_summary(est, robot.ee_frame))
+    for path in [*written, args.out]:
+        print(f"wrote {path}")
+    return 0
+
+
+def _run_pairs(args: argparse.Namespace, robot, log, write_json) -> int:
+    """``--before``/``--after``: the wrench's change at the same poses, with the log's
+    efforts where it has them (``robot_io.wrench_pairs``)."""
+    from comgrasp_pin.cli.exports import wants_exports, write_exports
+    from comgrasp_pin.robot_io import parse_windows
+    from comgrasp_pin.robot_io.payload import payload_in_flange
+    from comgrasp_pin.robot_io.wrench_pairs import estimate_wrench_pairs, pairs_result_dict
+
+    if not (args.before and args.after):
+        raise InvalidInputError("give both --before and --after windows (one pair per pose)")
+    result = estimate_wrench_pairs(robot, log, parse_windows(args.before, "--before"),
+                                   parse_windows(args.after, "--after"), args.max_speed,
+                                   method=args.method)  # fmt: skip
+    est = result.estimate
+    written = []
+    if wants_exports(args):
+        written = write_exports(args, robot, payload_in_flange(robot, est, args.flange_frame,
+                                                                args.inertia))  # fmt: skip
+    write_json(args.out, pairs_result_dict(result, robot.ee_frame))
+    s = est.std if est.std is not None else np.full(4, np.nan)
+    sources = " and the ".join(result.sources)
+    print(f"payload from {est.n_poses} pose(s) before/after, from the {sources}")
+    print(f"  mass {est.mass:.4f} kg (std {s[0]:.4f}), CoM in {robot.ee_frame} "
+          f"{np.array2string(1e3 * est.com_ee, precision=2)} mm (std "
+          f"{np.array2string(1e3 * s[1:], precision=2)})")  # fmt: skip
+    for source, share in result.shares.items():
+        print(f"  {source}: {100 * share['mass']:.0f} % of the information on the mass, "
+              f"{100 * np.mean([share[u] for u in list(share)[1:]]):.0f} % on the CoM")  # fmt: skip
     for path in [*written, args.out]:
         print(f"wrote {path}")
     return 0
