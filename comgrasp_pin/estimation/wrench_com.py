@@ -87,6 +87,13 @@ def tool_beyond(robot: RobotModel, sensor_frame: str) -> pin.Inertia:
     return model.frames[s_id].placement.actInv(total)
 
 
+def tool_wrench(robot: RobotModel, q: np.ndarray, sensor_frame: str) -> np.ndarray:
+    """(6,) the gravity wrench of the URDF's links beyond the sensor at ``q`` (N, N m)."""
+    tool = tool_beyond(robot, sensor_frame)
+    g = robot.frame_pose(q, sensor_frame)[:3, :3].T @ robot.model.gravity.linear
+    return np.r_[tool.mass * g, np.cross(tool.mass * tool.lever, g)]
+
+
 def wrench_regressor(
     robot: RobotModel, Q: np.ndarray, sensor_frame: str
 ) -> tuple[np.ndarray, np.ndarray]:

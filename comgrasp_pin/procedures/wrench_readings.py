@@ -28,7 +28,7 @@ from comgrasp_pin.estimation.regressor import stacked_regressor
 from comgrasp_pin.estimation.wrench_com import (
     estimate_com_wrench,
     source_shares,
-    tool_beyond,
+    tool_wrench,
     wrench_regressor,
 )
 from comgrasp_pin.procedures.measurement import HeldReadings
@@ -47,21 +47,17 @@ def has_wrench(held: HeldReadings) -> bool:
     return all(m.wrench is not None for m in windows)
 
 
-def tool_wrench(robot: RobotModel, q: np.ndarray, sensor_frame: str = SENSOR_FRAME) -> np.ndarray:
-    """(6,) the gravity wrench of the URDF's links beyond the sensor at ``q`` (N, N m)."""
-    tool = tool_beyond(robot, sensor_frame)
-    g = robot.frame_pose(q, sensor_frame)[:3, :3].T @ robot.model.gravity.linear
-    return np.r_[tool.mass * g, np.cross(tool.mass * tool.lever, g)]
-
-
 def wrench_before(robot: RobotModel, held: HeldReadings, use: list[int]) -> np.ndarray:
     """(k, 6) the empty wrench at the poses ``use``: measured, or modelled (module doc)."""
     measured = [(b.q, b.wrench) for b in held.before if b is not None]
-    offset = np.mean([w - tool_wrench(robot, q) for q, w in measured], axis=0)
+    offset = np.mean([w - tool_wrench(robot, q, SENSOR_FRAME) for q, w in measured], axis=0)
     rows = []
     for i in use:
         b = held.before[i]
-        rows.append(b.wrench if b is not None else tool_wrench(robot, held.after[i].q) + offset)
+        if b is None:  # an extra pose: the tool at its configuration, the measured offset
+            rows.append(tool_wrench(robot, held.after[i].q, SENSOR_FRAME) + offset)
+        else:
+            rows.append(b.wrench)
     return np.array(rows)
 
 

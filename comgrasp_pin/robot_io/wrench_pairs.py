@@ -22,7 +22,7 @@ from comgrasp_pin.estimation.wrench_com import (
     UNKNOWNS,
     estimate_com_wrench,
     source_shares,
-    tool_beyond,
+    tool_wrench,
     wrench_regressor,
 )
 from comgrasp_pin.robot import RobotModel
@@ -50,12 +50,6 @@ class WrenchPairEstimate:
     shares: dict
     sensor_frame: str
     q: np.ndarray
-
-
-def _tool_wrench(robot: RobotModel, q: np.ndarray, frame: str) -> np.ndarray:
-    tool = tool_beyond(robot, frame)
-    g = robot.frame_pose(q, frame)[:3, :3].T @ robot.model.gravity.linear
-    return np.r_[tool.mass * g, np.cross(tool.mass * tool.lever, g)]
 
 
 def _pairs(log: JointLog, before, after, max_speed: float):
@@ -90,7 +84,7 @@ def estimate_wrench_pairs(
     wlog = JointLog(log.time, log.joint_names, log.position, log.wrench, log.source)
     wb, wa = _pairs(wlog, before, after, max_speed)
     q = np.array([r.q for r in wa])
-    w_b = np.array([b.tau + _tool_wrench(robot, a.q, frame) - _tool_wrench(robot, b.q, frame)
+    w_b = np.array([b.tau + tool_wrench(robot, a.q, frame) - tool_wrench(robot, b.q, frame)
                     for b, a in zip(wb, wa)])  # fmt: skip
     w_std = np.concatenate([np.hypot(b.tau_mean_std, a.tau_mean_std) for b, a in zip(wb, wa)])
     w_std = np.maximum(w_std, 1e-9)
