@@ -32,7 +32,7 @@ from comgrasp_pin.estimation.estimate import delta_method
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.dynamic_uncertainty import relative_gain_cov
 from comgrasp_pin.robot_io.logs import JointLog
-from comgrasp_pin.robot_io.windows import MAX_SPEED, StaticReading, read_window
+from comgrasp_pin.robot_io.windows import MAX_SPEED, StaticReading, read_pairs
 
 NOISE_FLOOR = 1e-6
 """Smallest torque std (N m) taken from the samples (a noise-free log has spread 0)."""
@@ -168,18 +168,7 @@ def _read_windows(
     """(before readings, after readings) of the paired windows, or a LogError saying why not."""
     if tuple(log.joint_names) != tuple(robot.joint_names):
         raise LogError(f"the log's joints {log.joint_names} are not the arm's {robot.joint_names}")
-    if len(before) != len(after):
-        raise LogError(
-            f"{len(before)} --before window(s) but {len(after)} --after window(s): each "
-            "before window pairs with the after window of the same pose (same count needed)"
-        )
-    if not before:
-        raise LogError("no windows given: at least one before/after pair is needed")
-    rb = tuple(read_window(log, t0, t1, max_speed, f"before window {i}")
-               for i, (t0, t1) in enumerate(before))  # fmt: skip
-    ra = tuple(read_window(log, t0, t1, max_speed, f"after window {i}")
-               for i, (t0, t1) in enumerate(after))  # fmt: skip
-    return rb, ra
+    return read_pairs(log, before, after, max_speed)
 
 
 def _reading_std(rb, ra, torque_std: float | None, n: int) -> tuple[np.ndarray, str]:

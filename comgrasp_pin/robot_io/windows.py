@@ -125,6 +125,30 @@ def read_window(
     )
 
 
+def read_pairs(
+    log: JointLog,
+    before: list[tuple[float, float]],
+    after: list[tuple[float, float]],
+    max_speed: float = MAX_SPEED,
+) -> tuple[tuple[StaticReading, ...], tuple[StaticReading, ...]]:
+    """(before readings, after readings) of paired windows (``read_window``), or a LogError.
+
+    ``before[i]`` is the empty arm at the pose of ``after[i]``.
+    """
+    if len(before) != len(after):
+        raise LogError(
+            f"{len(before)} --before window(s) but {len(after)} --after window(s): each "
+            "before window pairs with the after window of the same pose (same count needed)"
+        )
+    if not before:
+        raise LogError("no windows given: at least one before/after pair is needed")
+    rb = tuple(read_window(log, t0, t1, max_speed, f"before window {i}")
+               for i, (t0, t1) in enumerate(before))  # fmt: skip
+    ra = tuple(read_window(log, t0, t1, max_speed, f"after window {i}")
+               for i, (t0, t1) in enumerate(after))  # fmt: skip
+    return rb, ra
+
+
 def find_static_windows(
     log: JointLog,
     max_speed: float = MAX_SPEED,

@@ -15,7 +15,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from comgrasp_pin.errors import LogError
 from comgrasp_pin.estimation import ComEstimate
 from comgrasp_pin.estimation.regressor import stacked_regressor
 from comgrasp_pin.estimation.wrench_com import (
@@ -27,7 +26,7 @@ from comgrasp_pin.estimation.wrench_com import (
 )
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.joint_log import JointLog
-from comgrasp_pin.robot_io.windows import MAX_SPEED, read_window
+from comgrasp_pin.robot_io.windows import MAX_SPEED, read_pairs
 from comgrasp_pin.robot_io.wrench_log import WrenchLog
 
 WRENCH, JOINT_TORQUES = "wrench", "joint torques"
@@ -52,19 +51,6 @@ class WrenchPairEstimate:
     q: np.ndarray
 
 
-def _pairs(log: JointLog, before, after, max_speed: float):
-    if len(before) != len(after) or not before:
-        raise LogError(
-            f"{len(before)} --before and {len(after)} --after window(s): one before window "
-            "per after window, at the same pose, at least one pair"
-        )
-    rb = [
-        read_window(log, a, b, max_speed, f"before window {i}") for i, (a, b) in enumerate(before)
-    ]
-    ra = [read_window(log, a, b, max_speed, f"after window {i}") for i, (a, b) in enumerate(after)]
-    return rb, ra
-
-
 def estimate_wrench_pairs(
     robot: RobotModel,
     log: WrenchLog,
@@ -82,7 +68,7 @@ def estimate_wrench_pairs(
     """
     frame = log.sensor_frame
     wlog = JointLog(log.time, log.joint_names, log.position, log.wrench, log.source)
-    wb, wa = _pairs(wlog, before, after, max_speed)
+    wb, wa = read_pairs(wlog, before, after, max_speed)
     q = np.array([r.q for r in wa])
     w_b = np.array([b.tau + tool_wrench(robot, a.q, frame) - tool_wrench(robot, b.q, frame)
                     for b, a in zip(wb, wa)])  # fmt: skip
@@ -92,7 +78,7 @@ def estimate_wrench_pairs(
     torques = None
     if use_joint_torques and log.effort is not None:
         jlog = JointLog(log.time, log.joint_names, log.position, log.effort, log.source)
-        tb, ta = _pairs(jlog, before, after, max_speed)
+        tb, ta = read_pairs(jlog, before, after, max_speed)
         tau_b = np.array([b.tau + robot.gravity_torques(a.q) - robot.gravity_torques(b.q)
                           for b, a in zip(tb, ta)])  # fmt: skip
         t_std = np.concatenate([np.hypot(b.tau_mean_std, a.tau_mean_std) for b, a in zip(tb, ta)])
