@@ -7,13 +7,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from comgrasp_pin.estimation import ComEstimate
 from comgrasp_pin.robot_io.estimate import LogEstimate
 
 
-def result_dict(result: LogEstimate, frame: str) -> dict:
-    """The RESULT.json contents (DESIGN.md section 4b): SI units, CoM in the ee frame."""
-    est = result.estimate
-    std = est.std
+def estimate_fields(est: ComEstimate, frame: str) -> dict:
+    """RESULT.json's fields of a static estimate (DESIGN.md section 4b), CoM in ``frame``."""
     u = est.unobservable_ee
     return {
         "mass_kg": est.mass,
@@ -23,6 +22,15 @@ def result_dict(result: LogEstimate, frame: str) -> dict:
         "unobservable": None if u is None else [float(v) for v in u],
         "n_poses": est.n_poses,
         "residual_rms_Nm": est.residual_rms,
+    }
+
+
+def result_dict(result: LogEstimate, frame: str) -> dict:
+    """The RESULT.json contents (DESIGN.md section 4b): SI units, CoM in the ee frame."""
+    est = result.estimate
+    std = est.std
+    return {
+        **estimate_fields(est, frame),
         "std": None if std is None else _std_dict(result, std),
         "torque_std_Nm": result.torque_std.tolist(),
         "torque_std_from": result.noise_from,

@@ -26,6 +26,7 @@ from comgrasp_pin.estimation.wrench_com import (
 )
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.joint_log import JointLog
+from comgrasp_pin.robot_io.static_report import estimate_fields
 from comgrasp_pin.robot_io.windows import MAX_SPEED, read_pairs
 from comgrasp_pin.robot_io.wrench_log import WrenchLog
 
@@ -94,18 +95,10 @@ def estimate_wrench_pairs(
 def pairs_result_dict(result: WrenchPairEstimate, frame: str) -> dict:
     """RESULT.json (DESIGN.md 4b's fields, plus the sources and their shares)."""
     est = result.estimate
-    u = est.unobservable_ee
+    std = est.std
     return {
-        "mass_kg": est.mass,
-        "com_m": [float(v) for v in est.com_ee],
-        "frame": frame,
-        "cov": None if est.cov is None else np.asarray(est.cov).tolist(),
-        "unobservable": None if u is None else [float(v) for v in u],
-        "n_poses": est.n_poses,
-        "residual_rms_Nm": est.residual_rms,
-        "std": None
-        if est.std is None
-        else {"mass_kg": float(est.std[0]), "com_m": est.std[1:].tolist()},  # fmt: skip
+        **estimate_fields(est, frame),
+        "std": None if std is None else {"mass_kg": float(std[0]), "com_m": std[1:].tolist()},
         "sensor_frame": result.sensor_frame,
         "sources": list(result.sources),
         "contributions": result.shares,
