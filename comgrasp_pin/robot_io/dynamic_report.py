@@ -71,14 +71,30 @@ def dynamic_result_dict(est: DynamicEstimate, frame: str) -> dict:
     }  # fmt: skip
 
 
+def mass_lines(est, std: np.ndarray) -> list[str]:
+    """The summary's mass with its std and 95 % interval, and the std by source."""
+    return [
+        f"  mass  {est.mass:.4f} +- {std[0]:.4f} kg (std; 95 %: {est.mass - Z95 * std[0]:.3f} "
+        f"to {est.mass + Z95 * std[0]:.3f} kg)",
+        "        std by source: " + ", ".join(f"{k} {v:.4f}" for k, v in est.std_parts.items()),
+    ]
+
+
+def moment_lines(est, frame: str) -> list[str]:
+    """The summary's principal moments about the CoM with their std and axes."""
+    moments, axes = np.linalg.eigh(est.inertia_com_ee)
+    lines = ["  principal moments of inertia about the CoM (kg m^2), axes in " + frame + ":"]
+    for value, u in zip(moments, axes.T):
+        # std of each principal moment: the inertia's covariance projected on u u^T
+        s = float(np.sqrt(max(np.kron(u, u) @ est.inertia_cov @ np.kron(u, u), 0)))
+        lines.append(f"    {value:.3e} +- {s:.1e}  along {np.array2string(u, precision=3)}")
+    return lines
+
+
 def dynamic_summary(est: DynamicEstimate, frame: str) -> str:
     """Mass, CoM, principal moments with their std; where the arm's own torques came from."""
     std = np.sqrt(np.clip(np.diag(est.cov), 0, None))
     c = 1e3 * est.com_ee
-    moments, axes = np.linalg.eigh(est.inertia_com_ee)
-    # std of each principal moment: the inertia's covariance projected on u u^T
-    moment_std = [float(np.sqrt(max(np.kron(u, u) @ est.inertia_cov @ np.kron(u, u), 0)))
-                  for u in axes.T]  # fmt: skip
     arm = {
         EMPTY_RUN: "the empty-arm run subtracted",
         NOMINAL: "the URDF's NOMINAL model stands for the arm (last resort), friction identified",
@@ -86,16 +102,12 @@ def dynamic_summary(est: DynamicEstimate, frame: str) -> str:
     lines = [
         f"payload from a {est.duration_s:.1f} s motion ({est.n_samples} samples after a "
         f"{est.cutoff_hz:g} Hz zero-phase filter; velocities from {est.velocity_from}); {arm}",
-        f"  mass  {est.mass:.4f} +- {std[0]:.4f} kg (std; 95 %: {est.mass - Z95 * std[0]:.3f} "
-        f"to {est.mass + Z95 * std[0]:.3f} kg)",
-        "        std by source: " + ", ".join(f"{k} {v:.4f}" for k, v in est.std_parts.items()),
+        *mass_lines(est, std),
         f"  CoM in {frame}:  x {c[0]:8.2f} +- {1e3 * std[1]:.2f} mm",
         f"                 y {c[1]:8.2f} +- {1e3 * std[2]:.2f} mm",
         f"                 z {c[2]:8.2f} +- {1e3 * std[3]:.2f} mm",
-        "  principal moments of inertia about the CoM (kg m^2), axes in " + frame + ":",
+        *moment_lines(est, frame),
     ]
-    for value, s, u in zip(moments, moment_std, axes.T):
-        lines.append(f"    {value:.3e} +- {s:.1e}  along {np.array2string(u, precision=3)}")
     lines += [
         f"  condition number of the logged motion {est.condition_number:.1f} (scaled regressor)",
         f"  residual RMS per joint {np.array2string(est.residual_rms, precision=3)} N m",

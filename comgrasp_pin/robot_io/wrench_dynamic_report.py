@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from comgrasp_pin.robot_io.dynamic_report import payload_fields
-from comgrasp_pin.robot_io.verdict import Z95
+from comgrasp_pin.robot_io.dynamic_report import mass_lines, moment_lines, payload_fields
 from comgrasp_pin.robot_io.wrench_estimate import WrenchDynamicEstimate
+from comgrasp_pin.robot_io.wrench_report import bias_line
 
 COVERS = (
     "noise and the model's error (block jackknife), the tool's parameters, the arm model (joint "
@@ -78,26 +78,17 @@ def wrench_dynamic_summary(est: WrenchDynamicEstimate, frame: str) -> str:
     """Mass, CoM, principal moments with their std; the sensor's bias; each source's share."""
     std = np.sqrt(np.clip(np.diag(est.cov), 0, None))
     c = 1e3 * est.com_ee
-    moments, axes = np.linalg.eigh(est.inertia_com_ee)
-    moment_std = [float(np.sqrt(max(np.kron(u, u) @ est.inertia_cov @ np.kron(u, u), 0)))
-                  for u in axes.T]  # fmt: skip
-    b, bs = est.sensor_bias, est.sensor_bias_std
     lines = [
         f"payload from a {est.duration_s:.1f} s motion seen by the wrist sensor "
         f"({est.sensor_frame}; {est.n_samples} samples after a {est.cutoff_hz:g} Hz zero-phase "
         f"filter); the tool's own wrench: {est.tool}",
-        f"  mass  {est.mass:.4f} +- {std[0]:.4f} kg (std; 95 %: {est.mass - Z95 * std[0]:.3f} "
-        f"to {est.mass + Z95 * std[0]:.3f} kg)",
-        "        std by source: " + ", ".join(f"{k} {v:.4f}" for k, v in est.std_parts.items()),
+        *mass_lines(est, std),
         f"  CoM in {frame}: ({c[0]:.2f}, {c[1]:.2f}, {c[2]:.2f}) mm (std {1e3 * std[1]:.2f}, "
         f"{1e3 * std[2]:.2f}, {1e3 * std[3]:.2f})",
-        "  principal moments of inertia about the CoM (kg m^2), axes in " + frame + ":",
+        *moment_lines(est, frame),
     ]
-    for value, s, u in zip(moments, moment_std, axes.T):
-        lines.append(f"    {value:.3e} +- {s:.1e}  along {np.array2string(u, precision=3)}")
     lines += [
-        f"  sensor bias: force ({b[0]:.3f}, {b[1]:.3f}, {b[2]:.3f}) N (std {bs[:3].max():.3f}), "
-        f"torque ({b[3]:.4f}, {b[4]:.4f}, {b[5]:.4f}) N m (std {bs[3:].max():.4f})",
+        bias_line(est.sensor_bias, est.sensor_bias_std),
         f"  residual RMS: force {np.array2string(est.residual_rms_wrench[:3], precision=3)} N, "
         f"torque {np.array2string(est.residual_rms_wrench[3:], precision=4)} N m",
         f"  held out ({est.validation.folds} folds): "

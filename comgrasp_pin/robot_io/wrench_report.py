@@ -46,6 +46,14 @@ def wrench_result_dict(est: WrenchStaticEstimate, frame: str) -> dict:
     }
 
 
+def bias_line(b: np.ndarray, bs: np.ndarray) -> str:
+    """The summary's line of the sensor's six offsets (N, N m) and their largest std."""
+    return (
+        f"  sensor bias: force ({b[0]:.3f}, {b[1]:.3f}, {b[2]:.3f}) N (std {bs[:3].max():.3f}), "
+        f"torque ({b[3]:.4f}, {b[4]:.4f}, {b[5]:.4f}) N m (std {bs[3:].max():.4f})"
+    )
+
+
 def wrench_summary(est: WrenchStaticEstimate, frame: str) -> str:
     """A few lines for a person: mass, CoM and the sensor's bias with their std, the verdict."""
     std = np.sqrt(np.clip(np.diag(est.cov), 0, None))
@@ -61,11 +69,7 @@ def wrench_summary(est: WrenchStaticEstimate, frame: str) -> str:
             f"  CoM in {frame}: ({c[0]:.2f}, {c[1]:.2f}, {c[2]:.2f}) mm "
             f"(std {s[0]:.2f}, {s[1]:.2f}, {s[2]:.2f})"
         )
-    b, bs = est.sensor_bias, est.sensor_bias_std
-    lines.append(
-        f"  sensor bias: force ({b[0]:.3f}, {b[1]:.3f}, {b[2]:.3f}) N (std {bs[:3].max():.3f}), "
-        f"torque ({b[3]:.4f}, {b[4]:.4f}, {b[5]:.4f}) N m (std {bs[3:].max():.4f})"
-    )
+    lines.append(bias_line(est.sensor_bias, est.sensor_bias_std))
     if est.tool_mass > 0:
         lines.append(f"  a tool beyond the sensor ({est.tool_mass:.3f} kg) subtracted")
     lines.append(
