@@ -29,6 +29,24 @@ def mean_min(a: tuple[float, float], b: tuple[float, float]) -> float:
     return float(np.minimum(s[:, None], t[None, :]).mean())
 
 
+def difference_weights(empty_of: list[int | None], n_empty: int) -> np.ndarray:
+    """(k, k + n_empty) weights of k differences over the windows held_0..k-1, empty_0..n-1.
+
+    Difference i is its held window minus the empty window ``empty_of[i]``, or, where that is
+    None (the empty reading modelled), minus the mean of the empty windows (the offset they
+    show).
+    """
+    k = len(empty_of)
+    weights = np.zeros((k, k + n_empty))
+    for i, j in enumerate(empty_of):
+        weights[i, i] = 1.0
+        if j is None:
+            weights[i, k:] = -1.0 / n_empty
+        else:
+            weights[i, k + j] = -1.0
+    return weights
+
+
 def difference_covariance(
     windows: list[tuple[float, float]],
     white_std: np.ndarray,

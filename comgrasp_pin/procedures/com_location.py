@@ -23,7 +23,7 @@ from comgrasp_pin.config import (
     WrenchSensorConfig,
 )
 from comgrasp_pin.estimation import AxisPrior, ComEstimate, com_along_axis, estimate_com
-from comgrasp_pin.estimation.drift import difference_covariance
+from comgrasp_pin.estimation.drift import difference_covariance, difference_weights
 from comgrasp_pin.perception import SideView
 from comgrasp_pin.procedures import uncertainty
 from comgrasp_pin.procedures.measurement import HeldReadings
@@ -198,16 +198,9 @@ def drift_cov(before: list, after: list, drift_std: float) -> np.ndarray:
     mean offset), minus the mean of the measured poses' empty windows."""
     measured = [b for b in before if b is not None]
     windows = [*after, *measured]
-    k = len(after)
-    weights = np.zeros((k, len(windows)))
-    column = k  # the next measured empty window's
-    for i, b in enumerate(before):
-        weights[i, i] = 1.0
-        if b is not None:
-            weights[i, column] = -1.0
-            column += 1
-        else:
-            weights[i, k:] = -1.0 / len(measured)
+    count = iter(range(len(measured)))
+    weights = difference_weights([None if b is None else next(count) for b in before],
+                                 len(measured))  # fmt: skip
     spans = [(float(m.time), float(m.duration)) for m in windows]
     white = np.array([np.asarray(m.std_error, dtype=float) for m in windows])
     return difference_covariance(spans, white, weights, drift_std)

@@ -23,7 +23,7 @@ import numpy as np
 from comgrasp_pin.config import WrenchSensorConfig
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.estimation import ComEstimate
-from comgrasp_pin.estimation.drift import difference_covariance
+from comgrasp_pin.estimation.drift import difference_covariance, difference_weights
 from comgrasp_pin.estimation.regressor import stacked_regressor
 from comgrasp_pin.estimation.wrench_com import (
     estimate_com_wrench,
@@ -64,24 +64,16 @@ def wrench_before(robot: RobotModel, held: HeldReadings, use: list[int]) -> np.n
 def wrench_cov(held: HeldReadings, use: list[int], sensor: WrenchSensorConfig) -> np.ndarray:
     """(6 k, 6 k) covariance of the k wrench differences at ``use``, pose-major."""
     measured = [b for b in held.before if b is not None]
+    count = iter(range(len(measured)))
+    index_of = [None if b is None else next(count) for b in held.before]
+    empty_of = [index_of[i] for i in use]
     after = [held.after[i] for i in use]
     windows = [*after, *measured]
-    k = len(after)
-    weights = np.zeros((k, len(windows)))
-    column, starts = k, {}
-    for j, b in enumerate(held.before):
-        if b is not None:
-            starts[j], column = column, column + 1
-    elapsed = np.zeros(k)
-    for row, i in enumerate(use):
-        weights[row, row] = 1.0
-        b = held.before[i]
-        if b is not None:
-            weights[row, starts[i]] = -1.0
-            elapsed[row] = held.after[i].time - b.time
-        else:  # the offset is the measured poses' mean
-            weights[row, k:] = -1.0 / len(measured)
-            elapsed[row] = held.after[i].time - np.mean([m.time for m in measured])
+    weights = difference_weights(empty_of, len(measured))
+    # the time each difference spans: from its empty window, or the measured ones' mean
+    start = [np.mean([m.time for m in measured]) if j is None else measured[j].time
+             for j in empty_of]  # fmt: skip
+    elapsed = np.array([a.time - t for a, t in zip(after, start)])
     spans = [(float(m.time), float(m.duration)) for m in windows]
     white = np.array([np.asarray(m.wrench_std_error, dtype=float) for m in windows])
     drift = np.repeat(np.asarray(sensor.drift_std, dtype=float), 3)
