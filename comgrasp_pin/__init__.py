@@ -23,8 +23,8 @@ from comgrasp_pin.estimation import (
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io import (
     JointLog,
-    LogEstimate,
     Payload,
+    PayloadEstimate,
     PosePlan,
     estimate_from_log,
     load_robot,
@@ -42,10 +42,10 @@ __all__ = [
     "InvalidInputError",
     "JointLog",
     "LogError",
-    "LogEstimate",
     "NotStaticError",
     "OutputError",
     "Payload",
+    "PayloadEstimate",
     "PerceptionError",
     "PosePlan",
     "RobotModel",
@@ -61,7 +61,7 @@ __all__ = [
     "read_log",
     "robot_io",
 ]
-__version__ = "0.2.0"  # the one source: pyproject.toml reads it (tool.setuptools.dynamic)
+__version__ = "0.3.0"  # the one source: pyproject.toml reads it (tool.setuptools.dynamic)
 
 
 def __dir__() -> list[str]:

@@ -6,8 +6,8 @@ one is also the built-in exception of its kind, so a caller that knows nothing o
 package catches it where it belongs:
 
 - bad input and estimates that cannot be made: ``ValueError`` (``InvalidInputError``,
-  ``UnobservableError``, ``EmptyGripperError``, ``SolverError``, the ``PerceptionError``,
-  ``LogError`` and ``IKError`` families, ``CollisionError``);
+  ``UnobservableError``, ``EmptyGripperError``, ``NotIdentifiedError``, ``SolverError``,
+  the ``PerceptionError``, ``LogError`` and ``IKError`` families, ``CollisionError``);
 - the physical outcomes of a grasp, which are neither bad input nor a broken harness: a
   ``ComGraspError`` only (``RodDroppedError``, ``RodSlippedError``);
 - run and harness failures: ``UnstablePhysicsError``, ``WorkerDiedError``,
@@ -42,6 +42,11 @@ class UnobservableError(ComGraspError, ValueError):
 
 class EmptyGripperError(ComGraspError, ValueError):
     """The estimated payload mass is not measurably above zero: nothing is held."""
+
+
+class NotIdentifiedError(ComGraspError, ValueError):
+    """A payload file was asked for an estimate whose verdict is not ``identified``
+    (``robot_io.trust``): the message gives the verdict and its reasons."""
 
 
 class SolverError(ComGraspError, ValueError):

@@ -26,7 +26,7 @@ from comgrasp_pin.robot_io.arm_model import (
 from comgrasp_pin.robot_io.dynamic import check_on_log, estimate_payload_dynamic
 from comgrasp_pin.robot_io.excitation import ExcitationSettings, plan_excitation
 from comgrasp_pin.robot_io.gain_calibration import calibrate_gains
-from comgrasp_pin.robot_io.verdict import Checks, verdict
+from comgrasp_pin.robot_io.trust import Checks, judge, motion_reasons
 from comgrasp_pin.simulation.arm_worlds import arm_robot, arm_urdf
 from comgrasp_pin.simulation.payload_motion import simulate_motion
 from comgrasp_pin.simulation.payloads import box
@@ -80,7 +80,7 @@ def test_a_wrong_urdf_reads_an_empty_arm_as_a_payload_and_says_it_is_unreliable(
 def test_the_identified_arm_model_gives_a_payload_of_another_motion(runs, wrong, arm):
     payload = box()
     est = estimate_payload_dynamic(wrong, runs["loaded_B"], arm_model=arm)
-    assert est.arm_model == "identified arm model"
+    assert est.joint_torques.arm_model == "identified arm model"
     assert abs(est.mass / payload.mass - 1) < 0.02
     assert np.linalg.norm(est.com_ee - payload.p_com_ee) < 5e-3  # the issue's 2 % and 5 mm
     z = (np.concatenate([[est.mass], est.com_ee]) - [payload.mass, *payload.p_com_ee]) / np.sqrt(
@@ -89,16 +89,16 @@ def test_the_identified_arm_model_gives_a_payload_of_another_motion(runs, wrong,
     assert np.all(np.abs(z) < 4), z
     assert est.std_parts["arm model"] > 0  # the arm model's own uncertainty is carried
     assert est.verdict == "identified", est.reasons
-    assert est.validation.explained_total > 0.95
+    assert est.motion.validation.explained_total > 0.95
 
 
 def test_an_empty_arm_with_the_arm_model_claims_no_payload(runs, wrong, arm):
     est = estimate_payload_dynamic(wrong, runs["empty_B"], arm_model=arm)
     std = np.sqrt(est.cov[0, 0])
     assert est.mass - Z95 * std <= 0 <= est.mass + Z95 * std
-    assert est.verdict == "unreliable" and est.reasons == (est.reasons[0],)  # that one alone
+    assert est.verdict == "nothing held" and est.reasons == (est.reasons[0],)  # that one alone
     assert "no payload seen" in est.reasons[0]
-    assert est.solver_status.startswith("not run")
+    assert est.motion.solver_status.startswith("not run")
 
 
 def test_the_arm_model_file_round_trips_and_refuses_other_arms(runs, wrong, arm, tmp_path):
@@ -156,23 +156,41 @@ def _checks(**kw):
     return Checks(**{**base, **kw})
 
 
+def _verdict(c: Checks):
+    """The verdict of a motion's checks: the shared rules (trust.judge) and the motion's own."""
+    cov = np.diag([c.mass_std_kg**2, 1e-6, 1e-6, 1e-6])
+    return judge(c.mass_kg, np.zeros(3), cov, 50.0, motion_reasons(c))
+
+
 @pytest.mark.parametrize(
-    "change, phrase",
+    "change, word, phrase",
     [
-        ({"mass_kg": 0.01}, "no payload seen"),
-        ({"mass_kg": -0.5}, "negative"),
-        ({"arm_model": "URDF model + friction"}, "nominal model"),
-        ({"explained": 0.5}, "explains 50 %"),
-        ({"halves_mass_kg": (1.0, 1.2)}, "halves disagree"),
+        ({"mass_kg": 0.01}, "nothing held", "no payload seen"),
+        ({"mass_kg": -0.5}, "unreliable", "negative"),
+        ({"mass_kg": 60.0}, "unreliable", "heavier than the arm"),
+        ({"arm_model": "URDF model + friction"}, "unreliable", "nominal model"),
+        ({"explained": 0.5}, "unreliable", "explains 50 %"),
+        ({"halves_mass_kg": (1.0, 1.2)}, "unreliable", "halves disagree"),
     ],
 )
-def test_each_verdict_rule_objects_alone(change, phrase):
+def test_each_verdict_rule_objects_alone(change, word, phrase):
     """Each rule alone; with no payload seen the fit's rules (explained, halves) stay quiet."""
-    assert verdict(_checks()) == ("identified", [])
-    word, reasons = verdict(_checks(**change))
-    assert word == "unreliable" and len(reasons) == 1 and phrase in reasons[0]
-    nothing = verdict(_checks(mass_kg=0.0, explained=0.0, halves_mass_kg=(0.0, 0.5)))
+    assert _verdict(_checks()) == ("identified", ())
+    got, reasons = _verdict(_checks(**change))
+    assert got == word and len(reasons) == 1 and phrase in reasons[0]
+    nothing = _verdict(_checks(mass_kg=0.0, explained=0.0, halves_mass_kg=(0.0, 0.5)))
+    assert nothing[0] == "nothing held"
     assert len(nothing[1]) == 1 and "no payload seen" in nothing[1][0]
+
+
+def test_a_result_that_is_not_finite_is_never_identified():
+    """NaN in the CoM or the covariance: unreliable, whatever else the checks say."""
+    cov = np.diag([1e-4, 1e-6, 1e-6, 1e-6])
+    word, reasons = judge(1.0, np.array([0.0, np.nan, 0.0]), cov, 50.0)
+    assert word == "unreliable" and "not finite" in reasons[0]
+    word, reasons = judge(float("nan"), np.zeros(3), cov, 50.0)
+    assert word == "unreliable" and "not finite" in reasons[0]
+    assert judge(1.0, np.zeros(3), None, 50.0)[0] == "unreliable"  # no uncertainty
 
 
 def test_identify_arm_then_estimate_from_the_command_line(runs, tmp_path, capsys):
@@ -186,11 +204,11 @@ def test_identify_arm_then_estimate_from_the_command_line(runs, tmp_path, capsys
                  str(tmp_path / "loaded.csv"), "--arm-model", str(arm_json), "--plot", str(png),
                  "--out", str(out)]) == 0  # fmt: skip
     result = json.loads(out.read_text())
-    assert result["verdict"] == "identified" and result["arm_model"] == "identified arm model"
+    assert result["verdict"] == "identified" and result["joint_torques"]["arm_model"] == "identified arm model"
     assert abs(result["mass_kg"] / box().mass - 1) < 0.02
     lo, hi = result["interval95_mass_kg"]
     assert lo < box().mass < hi
-    assert len(result["validation"]["rms_Nm"]) == 6
+    assert len(result["motion"]["validation"]["rms_Nm"]) == 6
     assert "VERDICT: identified" in capsys.readouterr().out
     import matplotlib.image
 
@@ -204,7 +222,7 @@ def test_identify_arm_then_estimate_from_the_command_line(runs, tmp_path, capsys
 def test_a_second_log_of_the_same_payload_confirms_it_and_an_empty_one_does_not(runs, wrong, arm):
     est = estimate_payload_dynamic(wrong, runs["loaded_B"], arm_model=arm)
     same = check_on_log(wrong, est, runs["loaded_A"], arm)  # the box again, motion A
-    assert same.second_log.explained_total > 0.95 and same.verdict == "identified"
+    assert same.motion.second_log.explained_total > 0.95 and same.verdict == "identified"
     other = check_on_log(wrong, est, runs["empty_B"], arm)  # nothing held
-    assert other.second_log.explained_total < 0.5
+    assert other.motion.second_log.explained_total < 0.5
     assert other.verdict == "unreliable" and "second log" in other.reasons[-1]

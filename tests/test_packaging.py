@@ -179,7 +179,7 @@ def test_the_notebooks_find_the_committed_results(monkeypatch, tmp_path):
 
 # --- the metadata a package index shows ----------------------------------------------------------
 
-VERSION = "0.2.0"  # the release this tree is (CHANGELOG.md)
+VERSION = "0.3.0"  # the release this tree is (CHANGELOG.md)
 URLS = {"Homepage", "Documentation", "Repository", "Issues", "Changelog"}
 PYTHONS = ("3.10", "3.11", "3.12")
 

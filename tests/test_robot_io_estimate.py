@@ -31,14 +31,14 @@ def test_panda_target_truth_within_three_sigma(robot, planned):
     log, before, after, _ = session(planned, rnea_torques(robot, MASS, COM), robot.joint_names,
                                     RATE, NOISE, seed=3)  # fmt: skip
     r = estimate_from_log(robot, log, before, after)
-    est = r.estimate
-    assert est.unobservable_ee is None and est.n_poses == 3
+    est = r
+    assert est.unobservable_ee is None and est.at_rest.n_poses == 3
     std = est.std
     assert abs(est.mass - MASS) < 3 * std[0]
     assert np.all(np.abs(est.com_ee - COM) < 3 * std[1:])
     # the noise of one averaged reading: 0.05 / sqrt(201 samples), from the samples' spread
-    np.testing.assert_allclose(r.torque_std, NOISE / np.sqrt(201), rtol=0.15)
-    assert r.noise_from == "samples"
+    np.testing.assert_allclose(r.joint_torques.torque_std, NOISE / np.sqrt(201), rtol=0.15)
+    assert r.joint_torques.noise_from == "samples"
 
 
 def test_reported_sigma_matches_monte_carlo_spread(robot, planned):
@@ -51,7 +51,7 @@ def test_reported_sigma_matches_monte_carlo_spread(robot, planned):
     for _ in range(200):
         noisy = type(log)(log.time, log.joint_names, log.position,
                           log.effort + NOISE * rng.standard_normal(log.effort.shape))  # fmt: skip
-        est = estimate_from_log(robot, noisy, before, after).estimate
+        est = estimate_from_log(robot, noisy, before, after)
         estimates.append(np.r_[est.mass, est.com_ee])
         stds.append(est.std)
     spread = np.std(estimates, axis=0, ddof=1)
@@ -67,8 +67,8 @@ def test_given_torque_std_is_the_std_of_an_averaged_reading(robot, planned):
                                     RATE, NOISE, seed=4)  # fmt: skip
     from_samples = estimate_from_log(robot, log, before, after)
     given = estimate_from_log(robot, log, before, after, torque_std=NOISE / np.sqrt(201))
-    np.testing.assert_allclose(given.estimate.std, from_samples.estimate.std, rtol=0.15)
-    assert given.noise_from == "given"
+    np.testing.assert_allclose(given.std, from_samples.std, rtol=0.15)
+    assert given.joint_torques.noise_from == "given"
 
 
 def test_tau_before_is_carried_to_the_after_configuration(robot, planned):
@@ -77,7 +77,7 @@ def test_tau_before_is_carried_to_the_after_configuration(robot, planned):
     shift = np.array([0.0, 0.02, -0.01, 0.015, 0.0, -0.02, 0.01])
     log, before, after, _ = session(planned, rnea_torques(robot, MASS, COM), robot.joint_names,
                                     RATE, NOISE, seed=5, q_shift_after=shift)  # fmt: skip
-    est = estimate_from_log(robot, log, before, after).estimate
+    est = estimate_from_log(robot, log, before, after)
     assert abs(est.mass - MASS) < 3 * est.std[0]
     assert np.all(np.abs(est.com_ee - COM) < 3 * est.std[1:])
 
@@ -95,10 +95,10 @@ def test_tilted_mount(robot, planned):
 
     log, before, after, _ = session(planned, torques, robot.joint_names, RATE, NOISE, seed=6)
     mounted = load_robot(robot.urdf_path, robot.ee_frame, gravity_base=g)
-    est = estimate_from_log(mounted, log, before, after).estimate
+    est = estimate_from_log(mounted, log, before, after)
     assert abs(est.mass - MASS) < 3 * est.std[0]
     assert np.all(np.abs(est.com_ee - COM) < 3 * est.std[1:])
-    wrong = estimate_from_log(robot, log, before, after).estimate  # floor gravity assumed
+    wrong = estimate_from_log(robot, log, before, after)  # floor gravity assumed
     assert np.max(np.abs(wrong.com_ee - COM) / wrong.std[1:]) > 10
 
 
@@ -110,7 +110,7 @@ def test_unpaired_windows_are_refused(robot, planned):
 
 def test_one_pose_reports_the_unobservable_direction(robot, planned):
     log, before, after, _ = session(planned, rnea_torques(robot, MASS, COM), robot.joint_names)
-    est = estimate_from_log(robot, log, before[:1], after[:1]).estimate
+    est = estimate_from_log(robot, log, before[:1], after[:1])
     down_ee = robot.ee_pose(planned[0])[:3, :3].T @ np.array([0, 0, -1.0])
     np.testing.assert_allclose(est.unobservable_ee, down_ee, atol=1e-4)  # q has encoder noise
 
@@ -129,7 +129,7 @@ def test_a_drifting_sensor_is_covered_with_drift_std(robot, planned):
         effort = log.effort + walk + NOISE * rng.standard_normal(log.effort.shape)
         noisy = type(log)(log.time, log.joint_names, log.position, effort)
         for drift_std, (estimates, stds) in results.items():
-            est = estimate_from_log(robot, noisy, before, after, drift_std=drift_std).estimate
+            est = estimate_from_log(robot, noisy, before, after, drift_std=drift_std)
             estimates.append(np.r_[est.mass, est.com_ee])
             stds.append(est.std)
     ratios = {}

@@ -54,7 +54,7 @@ def urdf_T(urdf_text, parent_link, child_link):
 def _estimate(robot, Q, seed=0):
     log, before, after, _ = session(Q, rnea_torques(robot, MASS, COM), robot.joint_names,
                                     200.0, 0.05, seed=seed)  # fmt: skip
-    return estimate_from_log(robot, log, before, after).estimate
+    return estimate_from_log(robot, log, before, after)
 
 
 PANDA_Q = np.array(

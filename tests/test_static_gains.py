@@ -53,24 +53,24 @@ def test_gains_part_matches_monte_carlo_on_the_data(robot, torque_session, curre
     plain = estimate_from_log(robot, current_log, before, after)
     gain_cov = np.diag((REL * K) ** 2)
     r = estimate_from_log(robot, current_log, before, after, gain_cov=gain_cov)
-    est = r.estimate
-    assert est.mass == plain.estimate.mass
-    np.testing.assert_array_equal(est.com_ee, plain.estimate.com_ee)
-    np.testing.assert_allclose(est.cov, plain.estimate.cov + r.gains_cov, rtol=1e-12)
-    assert np.all(est.std > plain.estimate.std)
-    parts = r.mass_std_by_source
+    est = r
+    assert est.mass == plain.mass
+    np.testing.assert_array_equal(est.com_ee, plain.com_ee)
+    np.testing.assert_allclose(est.cov, plain.cov + r.joint_torques.gains_cov, rtol=1e-12)
+    assert np.all(est.std > plain.std)
+    parts = r.std_parts
     assert parts is not None
-    np.testing.assert_allclose(parts["noise"], plain.estimate.std[0], rtol=1e-9)
+    np.testing.assert_allclose(parts["noise"], plain.std[0], rtol=1e-9)
     np.testing.assert_allclose(np.hypot(parts["noise"], parts["gains"]), est.std[0], rtol=1e-12)
-    assert result_dict(r, "eelink")["std"]["mass_kg_by_source"] == parts
-    gains_std = np.sqrt(np.diag(r.gains_cov))
+    assert result_dict(r)["std"]["mass_kg_by_source"] == parts
+    gains_std = np.sqrt(np.diag(r.joint_torques.gains_cov))
     # Monte Carlo on the data: each joint's efforts scaled by 1 + delta_j, re-estimated
     rng = np.random.default_rng(5)
     draws = []
     for _ in range(DRAWS):
         delta = REL * rng.standard_normal(robot.nq)
         scaled = dataclasses.replace(current_log, effort=current_log.effort * (1 + delta))
-        e = estimate_from_log(robot, scaled, before, after).estimate
+        e = estimate_from_log(robot, scaled, before, after)
         draws.append(np.r_[e.mass, e.com_ee])
     spread = np.std(draws, axis=0, ddof=1)
     ratio = spread / gains_std
@@ -84,11 +84,11 @@ def test_nothing_changes_without_gain_cov_or_with_torques(robot, torque_session,
     gain_cov = np.diag((REL * K) ** 2)
     for r in (estimate_from_log(robot, current_log, before, after),  # no gain_cov
               estimate_from_log(robot, torques, before, after, gain_cov=gain_cov)):  # fmt: skip
-        assert r.gains_cov is None and r.mass_std_by_source is None
-        assert r.estimate.mass == base.estimate.mass
-        np.testing.assert_array_equal(r.estimate.com_ee, base.estimate.com_ee)
-        np.testing.assert_array_equal(r.estimate.cov, base.estimate.cov)
-        assert result_dict(r, "eelink") == result_dict(base, "eelink")
+        assert r.joint_torques.gains_cov is None and r.std_parts == {}
+        assert r.mass == base.mass
+        np.testing.assert_array_equal(r.com_ee, base.com_ee)
+        np.testing.assert_array_equal(r.cov, base.cov)
+        assert result_dict(r) == result_dict(base)
 
 
 def test_gain_cov_of_the_wrong_shape_is_refused(robot, torque_session, current_log):

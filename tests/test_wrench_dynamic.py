@@ -23,7 +23,7 @@ from comgrasp_pin.robot_io.wrench_dynamic import (
     TOOL_NOMINAL,
     estimate_wrench_dynamic,
 )
-from comgrasp_pin.robot_io.wrench_dynamic_report import wrench_dynamic_result_dict
+from comgrasp_pin.robot_io.result_file import result_dict
 from comgrasp_pin.robot_io.wrench_log import WrenchLog
 from comgrasp_pin.robot_io.wrench_system import nominal_tool, params_map
 
@@ -153,12 +153,12 @@ def test_the_nominal_tool_and_the_wrist_link_make_the_last_links_body(robot):
 
 def _check_payload(est, truth=PAYLOAD, z_max=4.5):
     t = truth.toDynamicParameters()
-    z = (est.params - t) / np.sqrt(np.diag(est.params_cov))
+    z = (est.inertia.params - t) / np.sqrt(np.diag(est.inertia.params_cov))
     assert np.all(np.abs(z) < z_max), z
     assert abs(est.mass - truth.mass) < 0.01 * truth.mass
     assert np.linalg.norm(est.com_ee - truth.lever) < 2e-3
-    assert np.linalg.eigvalsh(pseudo_inertia(est.params)).min() > -1e-12  # consistent
-    e = np.linalg.eigvalsh(est.inertia_com_ee)
+    assert np.linalg.eigvalsh(pseudo_inertia(est.inertia.params)).min() > -1e-12  # consistent
+    e = np.linalg.eigvalsh(est.inertia.inertia_com_ee)
     assert e.min() >= -1e-12 and e[0] + e[1] >= e[2] * (1 - 1e-9)
 
 
@@ -169,16 +169,16 @@ def test_payload_and_bias_from_the_wrench_within_their_stated_uncertainty(robot)
     _check_payload(est)
     # the bias is the mean over the fitted samples of BIAS + the linear drift
     u = est.t / motion[0][-1]
-    z_bias = (est.sensor_bias - BIAS - 0.6 * u.mean()) / est.sensor_bias_std
+    z_bias = (est.wrench.sensor_bias - BIAS - 0.6 * u.mean()) / est.wrench.sensor_bias_std
     assert np.all(np.abs(z_bias) < 4.5), z_bias
-    np.testing.assert_allclose(est.sensor_bias_drift, 0.6 * (u[-1] - u[0]), atol=0.03)
-    assert abs(est.delay_s) < 2e-3
-    assert est.tool == TOOL_NOMINAL and est.joint_torques is None
-    assert set(est.contributions) == {"wrench"}
-    assert est.contributions["wrench"]["mass_kg"] == pytest.approx(1.0)
+    np.testing.assert_allclose(est.wrench.sensor_bias_drift, 0.6 * (u[-1] - u[0]), atol=0.03)
+    assert abs(est.wrench.delay_s) < 2e-3
+    assert est.wrench.tool == TOOL_NOMINAL and est.joint_torques is None
+    assert set(est.sources) == {"wrench"}
+    assert est.sources["wrench"]["mass_kg"] == pytest.approx(1.0)
     assert est.verdict == "unreliable"  # the URDF's tool is never trusted blindly
     assert len(est.reasons) == 1 and "URDF's links beyond the sensor" in est.reasons[0]
-    assert est.validation.explained_total > 0.99
+    assert est.motion.validation.explained_total > 0.99
 
 
 @pytest.mark.parametrize("how", ["empty run", "given"])
@@ -190,13 +190,13 @@ def test_a_tool_the_urdf_does_not_know_is_fitted_from_an_empty_run_or_given(robo
     if how == "empty run":  # another motion, the same sensor with its own noise
         empty = wrench_log(robot, None, fourier_motion(robot, seed=5), tool_sensor=tool, seed=3)
         est = estimate_wrench_dynamic(robot, log, empty_log=empty, combine_joint_torques=False)
-        assert est.tool == TOOL_EMPTY_RUN
+        assert est.wrench.tool == TOOL_EMPTY_RUN
         assert any(k.startswith("tool") for k in est.std_parts)
     else:
         tool_ee = T_sensor_ee(robot).actInv(tool).toDynamicParameters()
         est = estimate_wrench_dynamic(robot, log, tool_params=tool_ee,
                                       combine_joint_torques=False)  # fmt: skip
-        assert est.tool == TOOL_GIVEN
+        assert est.wrench.tool == TOOL_GIVEN
     _check_payload(est)
     assert est.verdict == "identified", est.reasons
     nominal = estimate_wrench_dynamic(robot, log, combine_joint_torques=False)
@@ -221,7 +221,7 @@ def test_both_sources_used_their_shares_follow_their_noise(robot):
     # a sensor 100 times noisier: the joint torques carry most of it
     noisy = wrench_log(robot, PAYLOAD, motion, noise=(10.0, 0.5), seed=4)
     est = estimate_wrench_dynamic(robot, noisy)
-    assert est.contributions["joint_torques"]["mass_kg"] > 0.8
+    assert est.sources["joint_torques"]["mass_kg"] > 0.8
     assert abs(est.mass - PAYLOAD.mass) < 5 * np.sqrt(est.cov[0, 0])
 
 
@@ -232,10 +232,10 @@ def test_a_static_prior_is_a_source_of_its_own(robot):
     prior = (np.r_[PAYLOAD.mass, PAYLOAD.lever], np.diag([1e-3, 1e-3, 1e-3, 1e-3]) ** 2)
     est = estimate_wrench_dynamic(robot, log, combine_joint_torques=False, prior=prior,
                                   tool_params=nominal_tool(robot, SENSOR))  # fmt: skip
-    assert set(est.contributions) == {"wrench", "prior"}
-    assert est.contributions["prior"]["mass_kg"] > 0.5
+    assert set(est.sources) == {"wrench", "prior"}
+    assert est.sources["prior"]["mass_kg"] > 0.5
     for quantity in ("mass_kg", "com_m"):
-        total = np.add(est.contributions["wrench"][quantity], est.contributions["prior"][quantity])
+        total = np.add(est.sources["wrench"][quantity], est.sources["prior"][quantity])
         np.testing.assert_allclose(total, 1.0, atol=1e-9)
     assert abs(est.mass - PAYLOAD.mass) < 4 * np.sqrt(est.cov[0, 0])
 
@@ -246,7 +246,7 @@ def test_sources_that_disagree_make_the_verdict_unreliable(robot):
     heavier = pin.Inertia(1.1, PAYLOAD.lever, PAYLOAD.inertia)
     log = wrench_log(robot, PAYLOAD, fourier_motion(robot), seed=6, tau_payload_ee=heavier)
     est = estimate_wrench_dynamic(robot, log, tool_params=nominal_tool(robot, SENSOR))
-    assert est.agreement["chi2"] > est.agreement["max_chi2"]
+    assert est.wrench.agreement["chi2"] > est.wrench.agreement["max_chi2"]
     assert est.verdict == "unreliable"
     assert any("disagree" in r and "URDF's model of the arm" in r for r in est.reasons)
 
@@ -256,7 +256,7 @@ def test_nothing_held_is_not_a_payload(robot):
     est = estimate_wrench_dynamic(robot, log, tool_params=nominal_tool(robot, SENSOR))
     lo, hi = est.mass - 1.96 * np.sqrt(est.cov[0, 0]), est.mass + 1.96 * np.sqrt(est.cov[0, 0])
     assert lo < 0 < hi
-    assert est.verdict == "unreliable" and est.solver_status.startswith("not run")
+    assert est.verdict == "nothing held" and est.motion.solver_status.startswith("not run")
     assert any("no payload seen" in r for r in est.reasons)
 
 
@@ -298,14 +298,18 @@ def test_bad_input_says_what_is_wrong(robot):
 
 def test_result_json_carries_the_sensor_and_each_source(robot):
     est = estimate_wrench_dynamic(robot, wrench_log(robot, PAYLOAD, fourier_motion(robot)))
-    out = json.loads(json.dumps(wrench_dynamic_result_dict(est, robot.ee_frame)))
-    keys = "mass_kg com_m cov inertia_kgm2 inertia_std_kgm2 params_cov condition_number verdict"
-    for key in (*keys.split(), "reasons", "validation", "sensor_frame", "tool", "std"):
+    out = json.loads(json.dumps(result_dict(est)))
+    for key in "schema_version mass_kg com_m cov std interval95_mass_kg verdict reasons".split():
         assert key in out, key
-    assert len(out["sensor_bias"]) == 6 and len(out["sensor_bias_std"]) == 6
-    assert set(out["contributions"]) == {"wrench", "joint_torques"}
-    assert len(out["validation"]["joint_torques"]["rms_Nm"]) == robot.nq
-    assert out["frame"] == robot.ee_frame and out["source"] == "wrench and joint torques"
+    for key in "inertia_kgm2 inertia_std_kgm2 params_cov verdict".split():
+        assert key in out["inertia"], key
+    assert "condition_number" in out["motion"] and "validation" in out["motion"]
+    w = out["wrench"]
+    assert w["sensor_frame"] == SENSOR and "source" in w["tool"]
+    assert len(w["sensor_bias"]) == 6 and len(w["sensor_bias_std"]) == 6
+    assert set(out["sources"]) == {"wrench", "joint_torques"}
+    assert len(out["motion"]["validation"]["rms_Nm"]) == 6 + robot.nq
+    assert out["frame"] == robot.ee_frame and out["mode"] == "a motion's wrench and joint torques"
 
 
 @pytest.mark.slow
@@ -339,9 +343,9 @@ def test_mujoco_wrench_against_the_truth_and_the_joint_torques_on_one_motion():
         z = (np.r_[est.mass, est.com_ee] - truth) / np.sqrt(np.diag(est.cov))
         assert np.all(np.abs(z) < 4), z
         for moment, u in zip(true_moments, axes.T):
-            std = np.sqrt(np.kron(u, u) @ est.inertia_cov @ np.kron(u, u))
-            assert abs(u @ est.inertia_com_ee @ u - moment) < 4 * std
-            assert abs(u @ est.inertia_com_ee @ u / moment - 1) < 0.1
+            std = np.sqrt(np.kron(u, u) @ est.inertia.inertia_cov @ np.kron(u, u))
+            assert abs(u @ est.inertia.inertia_com_ee @ u - moment) < 4 * std
+            assert abs(u @ est.inertia.inertia_com_ee @ u / moment - 1) < 0.1
         assert est.verdict == "identified", est.reasons
     # the two paths see one payload: they agree within their stated uncertainties
     d = np.r_[wrench.mass, wrench.com_ee] - np.r_[joint.mass, joint.com_ee]

@@ -7,12 +7,8 @@ parsed arguments here when ``--dynamic`` is given (DESIGN.md 4c).
 from __future__ import annotations
 
 import argparse
-import json
-from pathlib import Path
 
-import numpy as np
-
-from comgrasp_pin.errors import InvalidInputError, LogError
+from comgrasp_pin.errors import InvalidInputError
 
 
 def add_dynamic_args(est: argparse.ArgumentParser) -> None:
@@ -50,21 +46,18 @@ def add_dynamic_args(est: argparse.ArgumentParser) -> None:
                    "enter as a Gaussian prior")  # fmt: skip
 
 
-def run_dynamic(args: argparse.Namespace, robot, write_json) -> int:
+def run_dynamic(args: argparse.Namespace, robot) -> int:
     """Read the logs, identify the payload, write RESULT.json and the payload files."""
     from comgrasp_pin import robot_io as rio
-    from comgrasp_pin.cli.exports import wants_exports, write_exports
-    from comgrasp_pin.robot_io.dynamic import estimate_payload_dynamic
-    from comgrasp_pin.robot_io.dynamic_report import dynamic_result_dict, dynamic_summary
-    from comgrasp_pin.robot_io.payload import dynamic_payload_in_flange
+    from comgrasp_pin.cli.exports import finish_estimate
+    from comgrasp_pin.cli.gains_args import gains_from_args
+    from comgrasp_pin.robot_io.arm_model import load_arm_model
+    from comgrasp_pin.robot_io.dynamic import check_on_log, estimate_payload_dynamic
+    from comgrasp_pin.robot_io.dynamic_plot import plot_validation
 
     if args.before or args.after or args.auto:
         raise InvalidInputError("--dynamic uses the whole motion (or --window): leave out "
                                 "--before, --after and --auto")  # fmt: skip
-    from comgrasp_pin.cli.gains_args import gains_from_args
-    from comgrasp_pin.robot_io.arm_model import load_arm_model
-    from comgrasp_pin.robot_io.dynamic_plot import plot_validation
-
     gains = gains_from_args(args, robot)
     if args.arm_model is not None and (args.empty_bag or args.empty_csv):
         raise InvalidInputError("give an empty-arm run (--empty-csv/--empty-bag) or "
@@ -74,13 +67,11 @@ def run_dynamic(args: argparse.Namespace, robot, write_json) -> int:
     empty = one_log(args.empty_bag, args.empty_csv, "--empty-bag", "--empty-csv", robot,
                     args.topic, gains, required=False)  # fmt: skip
     est = estimate_payload_dynamic(
-        robot, log, empty, _window(args.window, "--window"),
-        _window(args.empty_window, "--empty-window"), args.cutoff, _prior(args.prior),
+        robot, log, empty, window(args.window, "--window"),
+        window(args.empty_window, "--empty-window"), args.cutoff, prior(args.prior),
         arm, None if gains is None else gains.cov, None if gains is None else gains.source,
     )  # fmt: skip
     if args.validate is not None:
-        from comgrasp_pin.robot_io.dynamic import check_on_log
-
         if empty is not None:
             raise InvalidInputError(
                 "--validate predicts a second log with the arm model or the URDF's model: "
@@ -89,36 +80,28 @@ def run_dynamic(args: argparse.Namespace, robot, write_json) -> int:
             )
         second = rio.read_log(args.validate, robot.joint_names, args.topic, None, gains)
         est = check_on_log(robot, est, second, arm, args.cutoff)
-    written = []
-    if wants_exports(args):  # every file made and checked before anything is written
-        payload = dynamic_payload_in_flange(robot, est, args.flange_frame)
-        written = write_exports(args, robot, payload)
-    write_json(args.out, dynamic_result_dict(est, robot.ee_frame))
-    print(dynamic_summary(est, robot.ee_frame))
-    for path in written:
-        print(f"wrote {path}")
-    if args.plot:
-        print(f"wrote {plot_validation(est, robot.joint_names, args.plot)}")
-    print(f"wrote {args.out}")
-    return 0
+
+    def plot(est) -> list:
+        return [plot_validation(est, robot.joint_names, args.plot)] if args.plot else []
+
+    return finish_estimate(args, robot, est, plot)
 
 
 def one_log(bag, csv, bag_opt, csv_opt, robot, topic, gains=None, required: bool = True):
     """The log of ``--bag`` or ``--csv`` (one of them), read with ``gains``; None if neither."""
     from comgrasp_pin import robot_io as rio
+    from comgrasp_pin.cli.exports import log_path
 
-    if bag is not None and csv is not None:
-        raise InvalidInputError(f"give one of {bag_opt} and {csv_opt}, not both")
-    if bag is None and csv is None:
-        if required:
-            raise InvalidInputError(f"give the motion's log: {bag_opt} PATH or {csv_opt} PATH")
+    path = log_path(bag, csv, bag_opt, csv_opt, required)
+    if path is None:
         return None
     if bag is not None:
         return rio.read_bag(bag, robot.joint_names, topic, None, gains)
     return rio.read_csv(csv, robot.joint_names, gains)
 
 
-def _window(text: str | None, option: str):
+def window(text: str | None, option: str):
+    """The one window T0:T1 of ``option``, or None."""
     if text is None:
         return None
     from comgrasp_pin.robot_io import parse_windows
@@ -129,16 +112,8 @@ def _window(text: str | None, option: str):
     return windows[0]
 
 
-def _prior(path: str | None):
+def prior(path: str | None):
     """The static estimate in a RESULT.json as a prior ((m, c), cov), or None."""
-    if path is None:
-        return None
-    try:
-        data = json.loads(Path(path).read_text())
-        mass, com = float(data["mass_kg"]), np.array(data["com_m"], float)
-        cov = np.array(data["cov"], float)
-    except (OSError, ValueError, KeyError, TypeError) as exc:
-        raise LogError(f"--prior {path}: not a static estimate's RESULT.json ({exc})") from None
-    if cov.shape != (4, 4) or com.shape != (3,) or data.get("unobservable") is not None:
-        raise LogError(f"--prior {path}: needs a full 3-D CoM with its 4x4 cov (mass, CoM)")
-    return np.concatenate([[mass], com]), cov
+    from comgrasp_pin.robot_io.result_file import prior_of_result
+
+    return None if path is None else prior_of_result(path)

@@ -1,17 +1,18 @@
 """The payload files of `comgrasp estimate`: their options and their writing, in one place.
 
-``add_export_args(parser)`` adds ``--flange-frame`` and every ``--export-*`` option. After
-an estimate (static, ``--dynamic``, or any other path that ends in a ``Payload``), the
-caller asks ``wants_exports(args)`` whether to make the payload at all, then calls
-``write_exports(args, robot, payload)``: it renders every file asked for and checks that
-each path can be written, and only then writes them, so a URDF that cannot take the payload
-or an unwritable path ends the command (exit status 2) with nothing written.
+``add_export_args(parser)`` adds ``--flange-frame``, every ``--export-*`` option and
+``--export-anyway``. Every estimate mode ends in ``finish_estimate(args, robot, est)``: it
+writes RESULT.json and the summary, and the payload files only for an ``identified`` verdict
+(or ``--export-anyway``); it renders every file asked for and checks that each path can be
+written before it writes any, so a URDF that cannot take the payload or an unwritable path
+ends the command (exit status 2) with no payload file written.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
 from comgrasp_pin.errors import InvalidInputError, OutputError
@@ -75,6 +76,10 @@ def add_export_args(parser: argparse.ArgumentParser) -> None:
                    "the flange); default: the ee frame")  # fmt: skip
     for option, text in EXPORTS:
         g.add_argument(option, default=None, metavar="FILE", help=text)
+    g.add_argument("--export-anyway", action="store_true",
+                   help="write the payload files although the verdict is not 'identified' "
+                   "(default: refuse them, exit status 2); each file's header then states "
+                   "the verdict and its reasons")  # fmt: skip
 
 
 def wants_exports(args: argparse.Namespace) -> bool:
@@ -90,8 +95,8 @@ def _check_writable(path: Path, option: str) -> None:
         raise OutputError(f"{option} {path}: cannot write it, {folder} is not a folder")
 
 
-def write_exports(args: argparse.Namespace, robot, payload, urdf_path=None) -> list[Path]:
-    """Write every payload file the ``--export-*`` options of ``args`` ask for.
+def render_exports(args: argparse.Namespace, robot, payload, urdf_path=None) -> list:
+    """Every payload file the ``--export-*`` options of ``args`` ask for, made, not written.
 
     Args:
         args: the parsed options (``add_export_args``).
@@ -100,12 +105,12 @@ def write_exports(args: argparse.Namespace, robot, payload, urdf_path=None) -> l
         urdf_path: the URDF that ``--export-urdf`` copies; default ``robot.urdf_path``.
 
     Returns:
-        The paths written, in the order of ``EXPORTS``.
+        [(option, path, text)] in the order of ``EXPORTS``.
 
     Raises:
         InvalidInputError, OutputError: a file cannot be made (the URDF cannot take the
             payload, a frame is not in it) or written (a folder, a missing folder, two
-            options naming one file): raised before any file is written.
+            options naming one file).
     """
     urdf = Path(urdf_path if urdf_path is not None else robot.urdf_path)
     jobs = [(option, Path(getattr(args, _dest(option))))
@@ -113,13 +118,72 @@ def write_exports(args: argparse.Namespace, robot, payload, urdf_path=None) -> l
     paths = [path.resolve() for _, path in jobs]
     if len(set(paths)) < len(paths):
         raise InvalidInputError("two --export-* options name the same file; give each its own")
-    texts = []
+    rendered = []
     for option, path in jobs:
         _check_writable(path, option)
-        texts.append(_render(option, robot, payload, path, urdf))
-    for (option, path), text in zip(jobs, texts, strict=True):
+        rendered.append((option, path, _render(option, robot, payload, path, urdf)))
+    return rendered
+
+
+def write_rendered(rendered: list) -> list[Path]:
+    """Write the files of ``render_exports``; their paths."""
+    for option, path, text in rendered:
         try:
             path.write_text(text)
         except OSError as exc:
             raise OutputError(f"{option}: cannot write {path}: {exc}") from None
-    return [path for _, path in jobs]
+    return [path for _, path, _ in rendered]
+
+
+def write_exports(args: argparse.Namespace, robot, payload, urdf_path=None) -> list[Path]:
+    """Make, check, then write every file the ``--export-*`` options ask for; their paths."""
+    return write_rendered(render_exports(args, robot, payload, urdf_path))
+
+
+def log_path(bag, csv, bag_opt: str = "--bag", csv_opt: str = "--csv", required: bool = True):
+    """The one log path of a ``--bag``/``--csv`` pair of options, or None where neither."""
+    if bag is not None and csv is not None:
+        raise InvalidInputError(f"give one of {bag_opt} and {csv_opt}, not both")
+    if bag is None and csv is None and required:
+        raise InvalidInputError(f"give the log: {bag_opt} PATH or {csv_opt} PATH")
+    return bag if bag is not None else csv
+
+
+def finish_estimate(args: argparse.Namespace, robot, est, extra=None) -> int:
+    """Every estimate command's ending: RESULT.json, the summary, the payload files.
+
+    The payload files are written only for an ``identified`` verdict (``trust``), or with
+    ``--export-anyway``; each is made and checked before anything is written. Otherwise
+    RESULT.json and the summary are written, the verdict's reasons printed, and the exit
+    status is 2. ``extra(est)``: more files to write (a plot), their paths.
+
+    Returns:
+        The exit status: 0, or 2 where payload files were asked for and refused.
+    """
+    from comgrasp_pin.errors import NotIdentifiedError
+    from comgrasp_pin.robot_io.payload import payload_in_flange
+    from comgrasp_pin.robot_io.result_file import write_result
+    from comgrasp_pin.robot_io.summary import summary
+
+    rendered, refused, payload = [], None, None
+    if wants_exports(args):
+        try:
+            payload = payload_in_flange(robot, est, args.flange_frame, args.inertia,
+                                        anyway=args.export_anyway)  # fmt: skip
+        except NotIdentifiedError as exc:
+            refused = exc
+        else:
+            rendered = render_exports(args, robot, payload)
+    write_result(est, args.out)
+    print(summary(est))
+    if payload is not None:
+        c = 1e3 * payload.com_flange
+        print(f"  CoM in {payload.flange_frame}: ({c[0]:.2f}, {c[1]:.2f}, {c[2]:.2f}) mm, "
+              f"inertia: {payload.inertia_model}")  # fmt: skip
+    written = [*write_rendered(rendered), *([] if extra is None else extra(est)), args.out]
+    for path in written:
+        print(f"wrote {path}")
+    if refused is not None:
+        print(f"comgrasp estimate: {refused}", file=sys.stderr)
+        return 2
+    return 0

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from comgrasp_pin.cli.dynamic import add_dynamic_args, run_dynamic
-from comgrasp_pin.cli.exports import add_export_args, wants_exports, write_exports
+from comgrasp_pin.cli.exports import add_export_args, finish_estimate, log_path
 from comgrasp_pin.cli.gains_args import add_gains_args, gains_from_args
 from comgrasp_pin.cli.motion import add_plan_motion, run_plan_motion
 from comgrasp_pin.cli.wrench import add_wrench_args, run_wrench
@@ -52,8 +52,7 @@ def _log_and_windows(args: argparse.Namespace, robot):
     """The log, its paired windows and the drive gains (or None), as the options ask."""
     from comgrasp_pin import robot_io as rio
 
-    if (args.bag is None) == (args.csv is None):
-        raise InvalidInputError("give exactly one log: --bag PATH or --csv PATH")
+    log_path(args.bag, args.csv)
     if args.auto and args.grasp_time is None:
         raise InvalidInputError("--auto needs --grasp-time T (s from the log's start)")
     if not args.auto and (args.before is None or args.after is None):
@@ -78,26 +77,14 @@ def _cmd_estimate(args: argparse.Namespace) -> int:
 
     robot = _robot(args)
     if args.wrench:
-        run = run_wrench_dynamic if args.dynamic else run_wrench
-        return run(args, robot, _write_json)
+        return (run_wrench_dynamic if args.dynamic else run_wrench)(args, robot)
     if args.dynamic:
-        return run_dynamic(args, robot, _write_json)
+        return run_dynamic(args, robot)
     log, before, after, gains = _log_and_windows(args, robot)
     gain_cov = None if gains is None else gains.cov  # the gains' error enters the covariance
-    result = rio.estimate_from_log(robot, log, before, after, args.torque_std, args.method,
-                                   args.max_speed, args.drift_std, gain_cov)  # fmt: skip
-    written, lines = [], [rio.summary(result, robot.ee_frame)]
-    if wants_exports(args):  # every file made and checked before anything is written
-        payload = rio.payload_in_flange(robot, result.estimate, args.flange_frame, args.inertia)
-        written = write_exports(args, robot, payload)
-        c = 1e3 * payload.com_flange
-        lines.append(f"  CoM in {payload.flange_frame}: ({c[0]:.2f}, {c[1]:.2f}, {c[2]:.2f}) "
-                     f"mm, inertia: {payload.inertia_model} (an approximation)")  # fmt: skip
-    _write_json(args.out, rio.result_dict(result, robot.ee_frame))
-    print("\n".join(lines))
-    for path in [*written, args.out]:
-        print(f"wrote {path}")
-    return 0
+    est = rio.estimate_from_log(robot, log, before, after, args.torque_std, args.method,
+                                args.max_speed, args.drift_std, gain_cov)  # fmt: skip
+    return finish_estimate(args, robot, est)
 
 
 def _cmd_plan(args: argparse.Namespace) -> int:

@@ -11,8 +11,6 @@ from __future__ import annotations
 
 import argparse
 
-import numpy as np
-
 from comgrasp_pin.errors import InvalidInputError
 
 
@@ -84,34 +82,9 @@ def _drift(text: str | None) -> tuple[tuple[float, float], tuple[float, float]]:
     return (v[0], v[1]), rate
 
 
-def _tool(path: str | None, sensor_frame: str):
-    """((4,) m, m c; (4, 4) cov) of a --keep-tool run's RESULT.json, or None."""
-    if path is None:
-        return None
-    import json
-    from pathlib import Path
-
-    import numpy as np
-
-    try:
-        data = json.loads(Path(path).read_text())
-        theta = np.array(data["theta_sensor"], dtype=float)
-        cov = np.array(data["theta_sensor_cov"], dtype=float)
-        frame, tool_mass = data["sensor_frame"], float(data["tool_subtracted"]["mass_kg"])
-    except (OSError, ValueError, KeyError, TypeError) as exc:
-        raise InvalidInputError(
-            f"--tool {path}: not the RESULT.json of a --wrench --keep-tool run ({exc})"
-        ) from None
-    if frame != sensor_frame or tool_mass != 0 or theta.shape != (4,) or cov.shape != (4, 4):
-        raise InvalidInputError(
-            f"--tool {path}: needs a --keep-tool run (nothing subtracted) in the sensor frame "
-            f"{sensor_frame!r}; it has {frame!r} and {tool_mass:g} kg subtracted"
-        )
-    return theta, cov
-
-
 def read_wrench(args: argparse.Namespace, robot):
     """The WrenchLog of ``--bag`` or ``--csv`` (a project CSV or a UR recording)."""
+    from comgrasp_pin.cli.exports import log_path
     from comgrasp_pin.robot_io.wrench_sources import read_wrench_log
 
     if args.grasp_time is not None:
@@ -126,76 +99,34 @@ def read_wrench(args: argparse.Namespace, robot):
         )
     if args.auto and args.windows is not None:
         raise InvalidInputError("give --auto (find the still windows) or --windows, not both")
-    if (args.bag is None) == (args.csv is None):
-        raise InvalidInputError("give exactly one log: --bag PATH or --csv PATH")
-    path = args.bag if args.bag is not None else args.csv
+    path = log_path(args.bag, args.csv)
     return read_wrench_log(path, robot, args.sensor_frame, args.wrench_topic, args.topic,
                            args.tcp_frame)  # fmt: skip
 
 
-def run_wrench(args: argparse.Namespace, robot, write_json) -> int:
+def run_wrench(args: argparse.Namespace, robot) -> int:
     """Read the log, estimate at rest, write RESULT.json and the payload files (``--dynamic``
-    is ``cli.wrench_dynamic``'s)."""
-    from comgrasp_pin.cli.exports import wants_exports, write_exports
+    is ``cli.wrench_dynamic``'s; ``--before``/``--after``: the wrench's change at the same
+    poses, with the log's efforts where it has them, ``robot_io.wrench_pairs``)."""
+    from comgrasp_pin.cli.exports import finish_estimate
     from comgrasp_pin.robot_io import parse_windows
-    from comgrasp_pin.robot_io.payload import payload_in_flange
-    from comgrasp_pin.robot_io.wrench_report import wrench_result_dict, wrench_summary
-    from comgrasp_pin.robot_io.wrench_static import IDENTIFIED, estimate_wrench_static
+    from comgrasp_pin.robot_io.result_file import tool_of_result
+    from comgrasp_pin.robot_io.wrench_pairs import estimate_wrench_pairs
+    from comgrasp_pin.robot_io.wrench_static import estimate_wrench_static
 
     log = read_wrench(args, robot)
     if args.before or args.after:
-        return _run_pairs(args, robot, log, write_json)
+        if not (args.before and args.after):
+            raise InvalidInputError("give both --before and --after windows (one pair per pose)")
+        est = estimate_wrench_pairs(robot, log, parse_windows(args.before, "--before"),
+                                    parse_windows(args.after, "--after"), args.max_speed,
+                                    method=args.method)  # fmt: skip
+        return finish_estimate(args, robot, est)
     windows = None if args.windows is None else parse_windows(args.windows, "--windows")
     walk, rate = _drift(args.wrench_drift)
+    tool = None if args.tool is None else tool_of_result(args.tool, log.sensor_frame)
     est = estimate_wrench_static(robot, log, windows, args.max_speed,
                                  wrench_std=_wrench_std(args.wrench_std),
-                                 subtract_tool=not args.keep_tool,
-                                 tool=_tool(args.tool, log.sensor_frame), drift_std=walk,
+                                 subtract_tool=not args.keep_tool, tool=tool, drift_std=walk,
                                  drift_rate_std=rate)  # fmt: skip
-    written = []
-    if wants_exports(args):
-        if est.verdict != IDENTIFIED:
-            raise InvalidInputError(
-                f"no payload file written: the verdict is {est.verdict!r} "
-                f"({'; '.join(est.reasons)})"
-            )
-        payload = payload_in_flange(robot, est, args.flange_frame, args.inertia)
-        written = write_exports(args, robot, payload)
-    write_json(args.out, wrench_result_dict(est, robot.ee_frame))
-    print(wrench_summary(est, robot.ee_frame))
-    for path in [*written, args.out]:
-        print(f"wrote {path}")
-    return 0
-
-
-def _run_pairs(args: argparse.Namespace, robot, log, write_json) -> int:
-    """``--before``/``--after``: the wrench's change at the same poses, with the log's
-    efforts where it has them (``robot_io.wrench_pairs``)."""
-    from comgrasp_pin.cli.exports import wants_exports, write_exports
-    from comgrasp_pin.robot_io import parse_windows
-    from comgrasp_pin.robot_io.payload import payload_in_flange
-    from comgrasp_pin.robot_io.wrench_pairs import estimate_wrench_pairs, pairs_result_dict
-
-    if not (args.before and args.after):
-        raise InvalidInputError("give both --before and --after windows (one pair per pose)")
-    result = estimate_wrench_pairs(robot, log, parse_windows(args.before, "--before"),
-                                   parse_windows(args.after, "--after"), args.max_speed,
-                                   method=args.method)  # fmt: skip
-    est = result.estimate
-    written = []
-    if wants_exports(args):
-        written = write_exports(args, robot, payload_in_flange(robot, est, args.flange_frame,
-                                                                args.inertia))  # fmt: skip
-    write_json(args.out, pairs_result_dict(result, robot.ee_frame))
-    s = est.std if est.std is not None else np.full(4, np.nan)
-    sources = " and the ".join(result.sources)
-    print(f"payload from {est.n_poses} pose(s) before/after, from the {sources}")
-    print(f"  mass {est.mass:.4f} kg (std {s[0]:.4f}), CoM in {robot.ee_frame} "
-          f"{np.array2string(1e3 * est.com_ee, precision=2)} mm (std "
-          f"{np.array2string(1e3 * s[1:], precision=2)})")  # fmt: skip
-    for source, share in result.shares.items():
-        print(f"  {source}: {100 * share['mass']:.0f} % of the information on the mass, "
-              f"{100 * np.mean([share[u] for u in list(share)[1:]]):.0f} % on the CoM")  # fmt: skip
-    for path in [*written, args.out]:
-        print(f"wrote {path}")
-    return 0
+    return finish_estimate(args, robot, est)

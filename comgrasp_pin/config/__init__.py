@@ -4,6 +4,7 @@
     sensors.py  the sensors' part (torque sensor, depth cameras' errors) and its presets
     wrench.py   the wrist force/torque sensor's part (data-sheet classes, part of the sensors')
     depth_line.py  the wrist camera's depth-line error model (part of the sensors')
+    log_limits.py  the largest values a robot log may hold (beyond them no sensor gives them)
     trial.py    the trial grasp's part, and the procedure a real arm's sensors need
     paths.py    every number of the tree by its dotted path (``motion.grip_force``), for sweeps
 
@@ -13,6 +14,14 @@ package, and every layer above reads its numbers from here. Import the names fro
 """
 
 from comgrasp_pin.config.depth_line import DepthLineErrorConfig
+from comgrasp_pin.config.log_limits import (
+    MAX_ABS_FORCE_N,
+    MAX_ABS_JOINT_EFFORT,
+    MAX_ABS_JOINT_POSITION_RAD,
+    MAX_ABS_JOINT_VELOCITY_RAD_S,
+    MAX_ABS_TIME_S,
+    MAX_ABS_TORQUE_NM,
+)
 from comgrasp_pin.config.sensors import (
     SENSOR_PRESETS,
     DepthNoiseConfig,
@@ -40,6 +49,12 @@ __all__ = [
     "TorqueSensorConfig",
     "TrialConfig",
     "hardware_trial",
+    "MAX_ABS_FORCE_N",
+    "MAX_ABS_JOINT_EFFORT",
+    "MAX_ABS_JOINT_POSITION_RAD",
+    "MAX_ABS_JOINT_VELOCITY_RAD_S",
+    "MAX_ABS_TIME_S",
+    "MAX_ABS_TORQUE_NM",
     "ESTIMATORS",
     "TAU_BEFORE",
     "WorldConfig",

@@ -22,8 +22,9 @@ shared modules, never ``simulation`` (no MuJoCo here): it runs on a real robot's
 """
 
 from comgrasp_pin.robot_io.arm_model import ArmModel, identify_arm, load_arm_model
-from comgrasp_pin.robot_io.dynamic import DynamicEstimate, check_on_log, estimate_payload_dynamic
-from comgrasp_pin.robot_io.estimate import LogEstimate, estimate_from_log
+from comgrasp_pin.robot_io.dynamic import check_on_log, estimate_payload_dynamic
+from comgrasp_pin.robot_io.estimate import estimate_from_log
+from comgrasp_pin.robot_io.estimate_result import PayloadEstimate
 from comgrasp_pin.robot_io.excitation import (
     ExcitationMotion,
     ExcitationSettings,
@@ -45,8 +46,9 @@ from comgrasp_pin.robot_io.mount import load_robot
 from comgrasp_pin.robot_io.payload import Payload, T_flange_ee, payload_in_flange
 from comgrasp_pin.robot_io.planning import PosePlan, plan_measurement_poses
 from comgrasp_pin.robot_io.record import write_bag, write_csv, write_wrench_bag, write_wrench_csv
+from comgrasp_pin.robot_io.result_file import read_result, result_dict, write_result
 from comgrasp_pin.robot_io.rtde import read_rtde
-from comgrasp_pin.robot_io.static_report import result_dict, summary
+from comgrasp_pin.robot_io.summary import summary
 from comgrasp_pin.robot_io.vendor_exports import (
     franka_desk,
     krl_load,
@@ -63,7 +65,6 @@ from comgrasp_pin.robot_io.windows import (
     read_window,
 )
 from comgrasp_pin.robot_io.wrench_dynamic import estimate_wrench_dynamic
-from comgrasp_pin.robot_io.wrench_estimate import WrenchDynamicEstimate
 from comgrasp_pin.robot_io.wrench_log import WrenchLog
 from comgrasp_pin.robot_io.wrench_sources import (
     read_rtde_wrench,
@@ -71,24 +72,21 @@ from comgrasp_pin.robot_io.wrench_sources import (
     read_wrench_csv,
     read_wrench_log,
 )
-from comgrasp_pin.robot_io.wrench_static import WrenchStaticEstimate, estimate_wrench_static
+from comgrasp_pin.robot_io.wrench_static import estimate_wrench_static
 
 __all__ = [
     "ArmModel",
-    "DynamicEstimate",
     "ExcitationMotion",
     "ExcitationSettings",
     "GainCalibration",
     "Gains",
     "JointLog",
-    "LogEstimate",
     "Payload",
+    "PayloadEstimate",
     "PosePlan",
     "StaticReading",
     "T_flange_ee",
-    "WrenchDynamicEstimate",
     "WrenchLog",
-    "WrenchStaticEstimate",
     "calibrate_gains",
     "check_on_log",
     "estimate_from_log",
@@ -116,6 +114,7 @@ __all__ = [
     "read_bag",
     "read_csv",
     "read_log",
+    "read_result",
     "read_rtde",
     "read_rtde_wrench",
     "read_window",
@@ -132,6 +131,7 @@ __all__ = [
     "write_bag",
     "write_csv",
     "write_franka",
+    "write_result",
     "write_ros2",
     "write_urscript",
     "write_wrench_bag",

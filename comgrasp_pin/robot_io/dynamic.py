@@ -25,10 +25,11 @@ covariance propagated. Validation: each fifth of the motion predicted from the r
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 
+from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.estimation import ComEstimate
 from comgrasp_pin.estimation.payload_regressor import (
     condition_number,
@@ -37,98 +38,23 @@ from comgrasp_pin.estimation.payload_regressor import (
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io import dynamic_uncertainty as du
 from comgrasp_pin.robot_io.arm_model import ArmModel
-from comgrasp_pin.robot_io.dynamic_fit import error_sources, fit_payload, std_parts
+from comgrasp_pin.robot_io.dynamic_fit import error_sources, fit_payload, motion_estimate, std_parts
+from comgrasp_pin.robot_io.estimate_result import (
+    JOINT_TORQUES,
+    JointTorques,
+    Motion,
+    PayloadEstimate,
+    sole_source,
+)
 from comgrasp_pin.robot_io.logs import JointLog
 from comgrasp_pin.robot_io.motion_signals import CUTOFF_HZ
-from comgrasp_pin.robot_io.motion_system import (
-    DRIFT_DEGREE,
-    about_com,
-    prior_of,
-    row_noise,
-)
+from comgrasp_pin.robot_io.motion_system import DRIFT_DEGREE, prior_of, row_noise
 from comgrasp_pin.robot_io.payload_system import (
     EMPTY_RUN,
     NOMINAL,
     payload_system,
 )
-from comgrasp_pin.robot_io.verdict import Checks, verdict
-
-
-@dataclass(frozen=True)
-class DynamicEstimate:
-    """A payload identified from a motion (ee frame, SI units).
-
-    Attributes:
-        mass: kg.
-        com_ee: (3,) CoM (m).
-        inertia_com_ee: (3, 3) inertia about the CoM, ee axes (kg m^2).
-        params: (10,) m, m c, I at the ee origin (Pinocchio's order).
-        params_cov: (10, 10) their covariance, every modelled source (``std_parts``).
-        cov: (4, 4) covariance of (mass, com_ee).
-        inertia_std: (3, 3) std of each entry of ``inertia_com_ee``.
-        inertia_cov: (9, 9) covariance of ``inertia_com_ee`` flattened row-major.
-        condition_number: of the payload regressor along the motion, columns scaled by a
-            1 kg payload 0.1 m out (``payload_regressor.parameter_scale``).
-        residual_rms: (n,) per joint (N m).
-        torque_std: (n,) the noise per joint that weighs the rows (N m, white).
-        arm_model: ``EMPTY_RUN``, ``ARM_MODEL`` or ``NOMINAL``: where the arm's torques came from.
-        offsets: (n,) the efforts' offsets found (N m), their mean over the motion.
-        offset_drift: (n,) their change from the motion's start to its end (N m).
-        friction: (n, 2) viscous (N m s/rad) and Coulomb (N m) per joint (nominal model
-            only), or None.
-        n_samples, duration_s: samples fitted and the motion's length (s).
-        cutoff_hz: the filter's cutoff; velocity_from: "log" or "positions".
-        solver_status: IPOPT's, or "not run: ..." where no payload was seen.
-        unconstrained_params: (10,) the plain least squares' parameters (maybe inconsistent).
-        t: (k,) the fitted samples' times (s from the log's start).
-        tau_payload: (k, n) the payload's torques as measured (N m).
-        tau_payload_fit: (k, n) the fitted payload's torques, Y pi (N m).
-        std_parts: the mass's std (kg) from each source that applies: "data and model
-            (block jackknife)", "gains" (a log of currents), "arm model" (``arm_model``).
-        validation: the held-out prediction (``dynamic_uncertainty.Validation``).
-        verdict: "identified" or "unreliable"; reasons: why, one line each.
-        halves_mass: (m1, m2) kg, each half of the motion alone.
-        alignment: the empty run's alignment (``alignment.Alignment.as_dict``), or None.
-        gains_source: where the drive gains came from, or None (torques logged).
-        delay_s: the efforts' delay behind the positions found (s), or None with an empty
-            run (the same delay in both runs cancels).
-        second_log: the payload predicting a second log of the same payload
-            (``check_on_log``), or None.
-    """
-
-    mass: float
-    com_ee: np.ndarray
-    inertia_com_ee: np.ndarray
-    params: np.ndarray
-    params_cov: np.ndarray
-    cov: np.ndarray
-    inertia_std: np.ndarray
-    inertia_cov: np.ndarray
-    condition_number: float
-    residual_rms: np.ndarray
-    torque_std: np.ndarray
-    arm_model: str
-    offsets: np.ndarray
-    offset_drift: np.ndarray
-    friction: np.ndarray | None
-    n_samples: int
-    duration_s: float
-    cutoff_hz: float
-    velocity_from: str
-    solver_status: str
-    unconstrained_params: np.ndarray
-    t: np.ndarray
-    tau_payload: np.ndarray
-    tau_payload_fit: np.ndarray
-    std_parts: dict
-    validation: du.Validation
-    verdict: str
-    reasons: tuple[str, ...]
-    halves_mass: tuple[float, float]
-    alignment: dict | None
-    gains_source: str | None
-    delay_s: float | None
-    second_log: du.Validation | None = None
+from comgrasp_pin.robot_io.trust import MIN_EXPLAINED, UNRELIABLE, Checks, motion_reasons
 
 
 def estimate_payload_dynamic(
@@ -142,7 +68,7 @@ def estimate_payload_dynamic(
     arm_model: ArmModel | None = None,
     gain_cov: np.ndarray | None = None,
     gains_source: str | None = None,
-) -> DynamicEstimate:
+) -> PayloadEstimate:
     """Identify the held payload's ten inertial parameters from a motion's log.
 
     Args:
@@ -167,8 +93,6 @@ def estimate_payload_dynamic(
         UnobservableError: the motion does not determine the parameters.
         SolverError: IPOPT did not converge.
     """
-    from comgrasp_pin.errors import InvalidInputError
-
     if empty_log is not None and arm_model is not None:
         raise InvalidInputError("give an empty run or an arm model, not both")
     system = payload_system(robot, log, empty_log, window, empty_window, cutoff_hz, arm_model)
@@ -187,60 +111,68 @@ def estimate_payload_dynamic(
     tau_fit = (A_pi @ pi).reshape(k, n)
     tau_payload = (b_rows - A_x @ x).reshape(k, n)
     residual = tau_fit - tau_payload
-    delay = float(x[-1]) if source != EMPTY_RUN else None
     extras = x[: columns * n].reshape(columns, n)
-    mass, com, inertia_c, cov4, inertia_cov = about_com(pi, params_cov)
-    inertia_std = np.sqrt(np.clip(np.diag(inertia_cov), 0, None)).reshape(3, 3)
     validation = du.held_out(A_pi, A_x, b_rows, w, S.t, k, n)
     halves, halves_std = _halves(A, b_rows, w, k, n, err.factor, b_gain, err.rel_gain_cov)
-    cond = condition_number(system.Y, parameter_scale())
-    checks = Checks(mass, float(np.sqrt(params_cov[0, 0])), source,
-                    validation.explained_total, halves, halves_std)  # fmt: skip
-    word, reasons = verdict(checks)
     parts = std_parts(fit.data_cov, err, log.current_gains is not None, arm_model is not None)
-    return DynamicEstimate(
-        mass, com, inertia_c, pi, params_cov, cov4, inertia_std, inertia_cov, cond,
-        np.sqrt(np.mean(residual**2, axis=0)), sigma, source, extras[0],
-        2 * extras[1 : 1 + DRIFT_DEGREE : 2].sum(axis=0),
-        extras[1 + DRIFT_DEGREE :].T if source == NOMINAL else None,
-        k, float(S.t[-1] - S.t[0]), S.cutoff_hz, S.velocity_from, fit.status, fit.pi_ls, S.t,
-        tau_payload, tau_fit, parts, validation, word, tuple(reasons), halves, system.alignment,
-        gains_source if log.current_gains is not None else None, delay,
+    duration = float(S.t[-1] - S.t[0])
+    motion = Motion(k, duration, S.cutoff_hz, S.velocity_from, fit.status,
+                    condition_number(system.Y, parameter_scale()), S.t, validation,
+                    halves)  # fmt: skip
+    joints = JointTorques(
+        sigma, "residuals", source,
+        gains_source if log.current_gains is not None else None,
+        offsets=extras[0], offset_drift=2 * extras[1 : 1 + DRIFT_DEGREE : 2].sum(axis=0),
+        friction=extras[1 + DRIFT_DEGREE :].T if source == NOMINAL else None,
+        residual_rms=np.sqrt(np.mean(residual**2, axis=0)),
+        delay_s=float(x[-1]) if source != EMPTY_RUN else None, alignment=system.alignment,
+        tau_payload=tau_payload, tau_payload_fit=tau_fit,
     )  # fmt: skip
+    checks = Checks(float(pi[0]), float(np.sqrt(params_cov[0, 0])), source,
+                    validation.explained_total, halves, halves_std)  # fmt: skip
+    sources = sole_source(JOINT_TORQUES, motion=True)
+    return motion_estimate(
+        robot, fit, params_cov, motion, motion_reasons(checks), sources, parts,
+        joint_torques=joints,
+    )
 
 
-def _halves(A, b_rows, w, k, n, factor, b_gain, rel):
-    """((m1, m2), std of m1 - m2): each half alone, its data std widened as the whole's."""
+def _halves(A, b_rows, w, k, n, factor, b_gain=None, rel=None):
+    """((m1, m2), std of m1 - m2): each half alone, its data std widened as the whole's.
+
+    The drive gains' part is added where the rows have one (``b_gain``, ``rel``).
+    """
     (p1, c1, r1), (p2, c2, r2) = du.split_halves(A, b_rows, w, k, n)
     var = (c1[0, 0] + c2[0, 0]) * factor[0] ** 2
-    J1 = du.gains_jacobian(du.sensitivity(A[r1], w[r1]), b_gain[: len(r1) // n])
-    J2 = du.gains_jacobian(du.sensitivity(A[r2], w[r2]), b_gain[len(r1) // n :])
-    d = J1[0] - J2[0]
-    return (float(p1[0]), float(p2[0])), float(np.sqrt(var + d @ rel @ d))
+    if b_gain is not None:
+        J1 = du.gains_jacobian(du.sensitivity(A[r1], w[r1]), b_gain[: len(r1) // n])
+        J2 = du.gains_jacobian(du.sensitivity(A[r2], w[r2]), b_gain[len(r1) // n :])
+        d = J1[0] - J2[0]
+        var = var + d @ rel @ d
+    return (float(p1[0]), float(p2[0])), float(np.sqrt(var))
 
 
 def check_on_log(
     robot: RobotModel,
-    est: DynamicEstimate,
+    est: PayloadEstimate,
     log: JointLog,
     arm_model: ArmModel | None = None,
     cutoff_hz: float = CUTOFF_HZ,
-) -> DynamicEstimate:
-    """``est`` with its payload checked on a second log of the same payload (any motion).
+) -> PayloadEstimate:
+    """``est`` (a motion's) with its payload checked on a second log of the same payload.
 
     The arm's torques come from ``arm_model`` or the URDF's nominal model (a second log has
     no empty run of its own); the second log's offsets, drift, friction and delay are
     fitted to it, the payload is not. Where the payload explains less of the second log
-    than ``verdict.MIN_EXPLAINED``, the verdict becomes ``unreliable`` with that reason.
+    than ``trust.MIN_EXPLAINED``, the verdict becomes ``unreliable`` with that reason.
     """
-    from comgrasp_pin.robot_io.motion_system import row_noise
-    from comgrasp_pin.robot_io.verdict import MIN_EXPLAINED, UNRELIABLE
-
+    if est.inertia is None or est.motion is None:
+        raise InvalidInputError("check_on_log takes a motion's estimate (its ten parameters)")
     system = payload_system(robot, log, None, None, None, cutoff_hz, arm_model)
     k, n = system.b.shape
     A = np.column_stack([system.Y.reshape(-1, 10), system.A_x])
     w = np.tile(1.0 / row_noise(A, system.b.reshape(-1), k, n), k)
-    v = du.predicted_on(system.Y, system.A_x, system.b, w, system.S.t, est.params)
+    v = du.predicted_on(system.Y, system.A_x, system.b, w, system.S.t, est.inertia.params)
     word, reasons = est.verdict, est.reasons
     if v.explained_total < MIN_EXPLAINED:
         word = UNRELIABLE
@@ -250,4 +182,4 @@ def check_on_log(
             "not the same payload, or the payload moved in the gripper, or the arm model "
             "does not hold on that motion",
         )
-    return replace(est, second_log=v, verdict=word, reasons=reasons)
+    return replace(est, motion=replace(est.motion, second_log=v), verdict=word, reasons=reasons)

@@ -6,7 +6,8 @@ widened by a delete-a-block jackknife), the drive gains' covariance, the arm mod
 ``fit_payload`` fits the ten inertial parameters physically consistent where the mass's
 95 % interval is above zero (``estimation.inertial_fit``), and reports the unconstrained
 least squares where it is not (a consistent body of zero mass does not exist).
-``std_parts`` names the mass's std by source. Parameters in the ee frame, SI units.
+``std_parts`` names the mass's std by source; ``motion_estimate`` makes the result of any
+motion's fit, its verdicts by ``trust``. Parameters in the ee frame, SI units.
 """
 
 from __future__ import annotations
@@ -17,8 +18,11 @@ import numpy as np
 
 from comgrasp_pin.estimation.inertial_fit import fit_inertial
 from comgrasp_pin.robot_io import dynamic_uncertainty as du
+from comgrasp_pin.robot_io import trust
 from comgrasp_pin.robot_io.arm_model import ArmModel
-from comgrasp_pin.robot_io.verdict import Z95
+from comgrasp_pin.robot_io.estimate_result import Inertia, Motion, PayloadEstimate
+from comgrasp_pin.robot_io.motion_system import about_com
+from comgrasp_pin.robot_io.trust import Z95
 
 
 @dataclass(frozen=True)
@@ -49,7 +53,7 @@ def error_sources(
     w: np.ndarray,
     shape: tuple[int, int],
     duration_s: float,
-    b_gain: np.ndarray,
+    b_gain: np.ndarray | None,
     rel_gain_cov: np.ndarray | None,
     arm_model: ArmModel | None,
     arm_jac: np.ndarray | None,
@@ -57,7 +61,8 @@ def error_sources(
     """The error sources of the fit of ``A`` (k n, p) to ``b_rows`` (k n,), row weights ``w``.
 
     ``shape`` = (k samples, n joints) over ``duration_s`` s; ``b_gain``: the rows'
-    derivative by the gains; ``rel_gain_cov``: (n, n) or None; ``arm_jac``: the rows'
+    derivative by the gains, or None for rows no gain scales (a wrench); ``rel_gain_cov``:
+    (n, n) or None; ``arm_jac``: the rows'
     derivative by the arm model's parameters, or None.
     """
     k, n = shape
@@ -67,12 +72,16 @@ def error_sources(
     factor = np.sqrt(np.maximum(np.diag(jk) / np.maximum(np.diag(white), 1e-300), 1.0))
     P = du.sensitivity(A, w)
     rel = np.zeros((n, n)) if rel_gain_cov is None else rel_gain_cov
-    J_gain = du.gains_jacobian(P, b_gain)
+    if b_gain is None:
+        cov_gains = np.zeros((P.shape[0], P.shape[0]))
+    else:
+        J_gain = du.gains_jacobian(P, b_gain)
+        cov_gains = J_gain @ rel @ J_gain.T
     cov_arm = np.zeros((10, 10))
     if arm_model is not None and arm_jac is not None:
         D = P @ arm_jac @ arm_model.replicates.T  # each replicate's effect on pi
         cov_arm = D @ D.T
-    return ErrorSources(factor, white, P, rel, J_gain @ rel @ J_gain.T, cov_arm)
+    return ErrorSources(factor, white, P, rel, cov_gains, cov_arm)
 
 
 @dataclass(frozen=True)
@@ -130,3 +139,28 @@ def std_parts(data_cov: np.ndarray, err: ErrorSources, gains: bool, arm: bool) -
     if arm:
         parts["arm model"] = float(np.sqrt(err.arm[0, 0]))
     return parts
+
+
+def motion_estimate(
+    robot,
+    fit: PayloadFit,
+    params_cov: np.ndarray,
+    motion: Motion,
+    findings: list[str],
+    sources: dict,
+    std_parts: dict,
+    **parts,
+) -> PayloadEstimate:
+    """A motion's ``PayloadEstimate`` from its fit.
+
+    pi about the CoM, the verdicts of the mass and CoM and of the inertia (``trust``), the
+    per-source ``parts`` (``joint_torques=``, ``wrench=``).
+    """
+    mass, com, inertia_c, cov4, inertia_cov = about_com(fit.pi, params_cov)
+    inertia_std = np.sqrt(np.clip(np.diag(inertia_cov), 0, None)).reshape(3, 3)
+    word, reasons = trust.judge(mass, com, cov4, trust.arm_mass(robot), findings)
+    i_word, i_reasons = trust.inertia_verdict(inertia_c, inertia_cov)
+    inertia = Inertia(inertia_c, inertia_cov, inertia_std, fit.pi, params_cov, fit.pi_ls,
+                      i_word, i_reasons)  # fmt: skip
+    return PayloadEstimate(mass, com, cov4, robot.ee_frame, word, reasons, sources, std_parts,
+                           motion=motion, inertia=inertia, **parts)  # fmt: skip

@@ -16,13 +16,13 @@ from comgrasp_pin.errors import OutputError
 
 
 def plot_validation(est, joint_names, path: str | Path, title: str = "") -> Path:
-    """Write the PNG of ``est.validation`` (a DynamicEstimate's); returns its path."""
+    """Write the PNG of a motion's estimate's held-out validation; returns its path."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    v = est.validation
+    v = est.motion.validation
     n = v.measured.shape[1]
     fig, axes = plt.subplots(n, 1, figsize=(10, 1.7 * n + 1.2), sharex=True, squeeze=False)
     t = v.t - v.t[0]

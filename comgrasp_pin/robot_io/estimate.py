@@ -21,7 +21,6 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 
@@ -31,7 +30,15 @@ from comgrasp_pin.estimation.drift import difference_covariance
 from comgrasp_pin.estimation.estimate import delta_method
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.dynamic_uncertainty import relative_gain_cov
+from comgrasp_pin.robot_io.estimate_result import (
+    JOINT_TORQUES,
+    AtRest,
+    JointTorques,
+    PayloadEstimate,
+    sole_source,
+)
 from comgrasp_pin.robot_io.logs import JointLog
+from comgrasp_pin.robot_io.trust import arm_mass, judge
 from comgrasp_pin.robot_io.windows import MAX_SPEED, StaticReading, read_pairs
 
 NOISE_FLOOR = 1e-6
@@ -40,48 +47,6 @@ GAIN_STEP = 1e-4
 """Relative gain change of the central difference in ``_gains_covariance`` (the estimate's
 (m, m c) is linear in it: any step is exact up to rounding; a small one keeps the stepped
 estimates clear of the empty-gripper refusal)."""
-
-
-@dataclass(frozen=True)
-class LogEstimate:
-    """A payload estimate from a log, with what went into it.
-
-    Attributes:
-        estimate: the ComEstimate (CoM in the ee frame ``estimate`` was made for).
-        q: (k, n) the poses (the after windows' mean configurations, rad).
-        tau_before: (k, n) empty-arm torques carried to ``q`` (N m).
-        tau_after: (k, n) torques holding the payload (N m).
-        torque_std: (n,) std of one averaged reading used (N m).
-        noise_from: "given" (torque_std passed) or "samples" (the windows' spread).
-        before, after: the k static readings of each window.
-        drift_std: the sensor's drift taken into the covariance (N m / sqrt(s); 0: none).
-        gains_cov: (4, 4) the part of ``estimate.cov`` (mass, com_ee) that comes from the
-            drive gains' uncertainty (added to the noise's), or None: no gains' covariance
-            given, or the log holds torques.
-    """
-
-    estimate: ComEstimate
-    q: np.ndarray
-    tau_before: np.ndarray
-    tau_after: np.ndarray
-    torque_std: np.ndarray
-    noise_from: str
-    before: tuple[StaticReading, ...]
-    after: tuple[StaticReading, ...]
-    drift_std: float = 0.0
-    gains_cov: np.ndarray | None = None
-
-    @property
-    def mass_std_by_source(self) -> dict[str, float] | None:
-        """The mass's std (kg) per source, {"noise": ..., "gains": ...}, or None.
-
-        None without ``gains_cov``. The two add in quadrature to ``estimate.std[0]``.
-        """
-        if self.gains_cov is None or self.estimate.cov is None:
-            return None
-        gains = float(self.gains_cov[0, 0])
-        noise = float(self.estimate.cov[0, 0]) - gains
-        return {"noise": float(np.sqrt(max(noise, 0.0))), "gains": float(np.sqrt(max(gains, 0.0)))}
 
 
 def estimate_from_log(
@@ -94,7 +59,7 @@ def estimate_from_log(
     max_speed: float = MAX_SPEED,
     drift_std: float = 0.0,
     gain_cov: np.ndarray | None = None,
-) -> LogEstimate:
+) -> PayloadEstimate:
     """Estimate the payload from paired static windows of ``log``.
 
     Args:
@@ -147,15 +112,51 @@ def estimate_from_log(
                             dtau_cov=cov)  # fmt: skip
 
     est = solve(None, method)
-    result = LogEstimate(est, Q, tau_b, tau_a, sigma, noise_from, rb, ra, float(drift_std))
-    if rel is None:
-        return result
-    part = _gains_covariance(lambda f: solve(f, "lstsq"), est, rel)
-    total = part.copy() if est.cov is None else est.cov + part
-    for a in (part, total):  # read-only, as the estimate's own arrays
-        a.setflags(write=False)
-    estimate = dataclasses.replace(est, cov=total)
-    return dataclasses.replace(result, estimate=estimate, gains_cov=part)
+    gains_part = None
+    if rel is not None:
+        gains_part = _gains_covariance(lambda f: solve(f, "lstsq"), est, rel)
+        total = gains_part.copy() if est.cov is None else est.cov + gains_part
+        est = dataclasses.replace(est, cov=total)
+    joints = JointTorques(
+        sigma, noise_from, gains_cov=gains_part, drift_std=float(drift_std), tau_before=tau_b,
+        tau_after=tau_a,
+    )  # fmt: skip
+    windows = {"before": [[r.t0, r.t1, r.n_samples] for r in rb],
+               "after": [[r.t0, r.t1, r.n_samples] for r in ra]}  # fmt: skip
+    return judged_at_rest(robot, est, Q, windows, sole_source(JOINT_TORQUES), joint_torques=joints)
+
+
+def judged_at_rest(
+    robot: RobotModel, est: ComEstimate, q: np.ndarray, windows: dict, sources: dict, **parts
+) -> PayloadEstimate:
+    """A ``PayloadEstimate`` of readings at rest from the estimator's ``ComEstimate``.
+
+    Judged by ``trust``: a CoM that one pose leaves unseen along gravity is not identified
+    (a payload file would place it on that line's point nearest the origin). ``parts``: the
+    sources' own (``joint_torques=``, ``wrench=``). The mass's std by source where the drive
+    gains' part is known (``JointTorques.gains_cov``).
+    """
+    findings = []
+    if est.unobservable_ee is not None:
+        u = np.array2string(np.asarray(est.unobservable_ee), precision=3)
+        findings.append(
+            f"the CoM along {u} ({robot.ee_frame}) was not observed (gravity's direction at "
+            "the single pose): add poses that turn the wrist against gravity (comgrasp "
+            "plan-poses)"
+        )
+    verdict, reasons = judge(est.mass, est.com_ee, est.cov, arm_mass(robot), findings)
+    at_rest = AtRest(q, windows, est.method, est.solver_status, est.condition_number, est)
+    joints = parts.get("joint_torques")
+    std_parts = {}
+    if joints is not None and joints.gains_cov is not None and est.cov is not None:
+        gains = float(joints.gains_cov[0, 0])
+        noise = float(est.cov[0, 0]) - gains
+        std_parts = {"noise": float(np.sqrt(max(noise, 0.0))),
+                     "gains": float(np.sqrt(max(gains, 0.0)))}  # fmt: skip
+    return PayloadEstimate(
+        est.mass, est.com_ee, est.cov, robot.ee_frame, verdict, reasons, sources, std_parts,
+        est.unobservable_ee, at_rest, **parts,
+    )  # fmt: skip
 
 
 def _read_windows(

@@ -26,32 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from comgrasp_pin.errors import OutputError
-from comgrasp_pin.robot_io.payload import Payload
-
-
-def _note(p: Payload) -> list[str]:
-    std = p.std
-    if p.inertia_std_flange is None:
-        lines = [
-            f"payload estimated by comgrasp_pin from {p.source}; frame {p.flange_frame}",
-            f"inertia: {p.inertia_model} approximation about the CoM, flange axes (readings "
-            "at rest do not see inertia)",
-        ]
-    else:
-        s = _six(p.inertia_std_flange)
-        lines = [
-            f"payload identified by comgrasp_pin from {p.source}; frame {p.flange_frame}",
-            "inertia: identified, about the CoM, flange axes; 1-sigma [Ixx, Iyy, Izz, Ixy, "
-            f"Ixz, Iyz] {_list(s)} kg m^2",
-        ]
-    if std is not None:
-        lines.append(
-            f"1-sigma: mass {std[0]:.4g} kg, CoM {np.array2string(1e3 * std[1:], precision=3)} mm"
-        )
-    if p.unobservable_flange is not None:
-        u = np.array2string(p.unobservable_flange, precision=4)
-        lines.append(f"the CoM along {u} (gravity at the single pose) was not observed: 0")
-    return lines
+from comgrasp_pin.robot_io.payload import Payload, header_lines
 
 
 def _six(I: np.ndarray) -> list[float]:
@@ -66,7 +41,7 @@ def _list(values) -> str:
 
 def urscript(p: Payload) -> str:
     """A URScript program text: comments and one ``set_target_payload`` line."""
-    head = "".join(f"# {line}\n" for line in _note(p))
+    head = "".join(f"# {line}\n" for line in header_lines(p))
     return (
         f"{head}set_target_payload({p.mass:.9g}, {_list(p.com_flange)}, "
         f"{_list(_six(p.inertia_flange))})\n"
@@ -80,7 +55,7 @@ def franka_load(p: Payload) -> dict:
         "F_x_Cload": [float(v) for v in p.com_flange],
         "load_inertia": [float(v) for v in p.inertia_flange.ravel(order="F")],
         "frame": p.flange_frame,
-        "comment": " ".join(_note(p)),
+        "comment": " ".join(header_lines(p)),
     }
 
 
@@ -88,7 +63,7 @@ def ros2_yaml(p: Payload) -> str:
     """YAML with the request fields of ur_msgs/srv/SetPayload and franka_msgs/srv/SetLoad."""
     c = p.com_flange
     ixx, iyy, izz, ixy, ixz, iyz = _six(p.inertia_flange)
-    head = "".join(f"# {line}\n" for line in _note(p))
+    head = "".join(f"# {line}\n" for line in header_lines(p))
     return (
         f"{head}"
         "# ur_msgs/srv/SetPayload request (ixx..transition_time: Jazzy and later)\n"

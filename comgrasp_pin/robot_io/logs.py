@@ -34,6 +34,7 @@ from comgrasp_pin.errors import LogError
 from comgrasp_pin.robot_io import rtde
 from comgrasp_pin.robot_io.gains import Gains
 from comgrasp_pin.robot_io.joint_log import JointLog, assemble_log
+from comgrasp_pin.robot_io.log_values import check_joint_rows, check_table
 
 JOINT_STATE = "sensor_msgs/msg/JointState"
 DEFAULT_TOPIC = "/joint_states"
@@ -75,7 +76,9 @@ def read_bag(
     Raises:
         LogError: the bag cannot be opened or fails ``file_checks.bag_folder`` (a FIFO, a
             compressed bag), has no such topic or type, no message holds all
-            the joints (the missing ones are named), or the messages carry no efforts.
+            the joints (the missing ones are named), the messages carry no efforts, or a
+            value that is NaN, inf or past any sensor's range (``log_values``: its message's
+            time, joint and field named).
     """
     from rosbags.highlevel import AnyReader
 
@@ -85,7 +88,9 @@ def read_bag(
     try:
         with AnyReader([bag]) as reader:
             conns = topic_connections(reader, topic, JOINT_STATE, bag)
-            rows = _seconds(_joint_rows(reader, conns, names, windows))
+            raw = _joint_rows(reader, conns, names, windows)
+            check_joint_rows(raw, names, topic, f"bag {bag}")
+            rows = _seconds(raw)
     except LogError:
         raise
     except Exception as exc:  # rosbags raises its own error types for broken bags
@@ -201,7 +206,9 @@ def read_csv(
     Raises:
         LogError: the file is missing, not a regular file (a FIFO, a device), larger than
             ``file_checks.MAX_CSV_BYTES``, not UTF-8; a column is missing (named), or a
-            value is not a number; see ``rtde.read_rtde`` for a UR recording.
+            value is not a number, NaN, inf or past any sensor's range
+            (``log_values.check_table``: its line and column named); see
+            ``rtde.read_rtde`` for a UR recording.
     """
     path = Path(path)
     line = file_checks.first_line(path, "CSV log", file_checks.MAX_CSV_BYTES,
@@ -225,12 +232,8 @@ def read_csv(
     if all(v in header for v in velocity):
         wanted += velocity
     cols = [header.index(w) for w in wanted]
-    try:
-        data = np.loadtxt(path, delimiter=",", skiprows=1, usecols=cols, ndmin=2)
-    except ValueError as exc:
-        raise LogError(f"CSV {path} has a value that is not a number: {exc}") from None
-    except MemoryError:  # within MAX_CSV_BYTES, yet more than this machine holds
-        raise LogError(f"CSV {path} is too large to load here") from None
+    data = rtde._load(path, ",", cols, "CSV")
+    check_table(data, wanted, path, f"CSV {path}")
     n = len(names)
     has_velocity = data.shape[1] > 1 + 2 * n
     rows = [

@@ -27,8 +27,7 @@ import pinocchio as pin
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.file_checks import read_description
 from comgrasp_pin.robot import RobotModel
-from comgrasp_pin.robot_io.exports import _note
-from comgrasp_pin.robot_io.payload import Payload, T_flange_ee
+from comgrasp_pin.robot_io.payload import Payload, T_flange_ee, header_lines
 from comgrasp_pin.robot_io.vendor_exports import principal_axes
 
 PAYLOAD_LINK, PAYLOAD_JOINT = "payload", "payload_joint"
@@ -43,7 +42,7 @@ def _vec(values) -> str:
 
 
 def _comment(p: Payload):
-    return ET.Comment(" " + " | ".join(_note(p)).replace("--", "- -") + " ")
+    return ET.Comment(" " + " | ".join(header_lines(p)).replace("--", "- -") + " ")
 
 
 def _frame_pose(robot: RobotModel, name: str) -> np.ndarray:

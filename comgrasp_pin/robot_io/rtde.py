@@ -28,6 +28,7 @@ from comgrasp_pin import file_checks
 from comgrasp_pin.errors import LogError
 from comgrasp_pin.robot_io.gains import Gains
 from comgrasp_pin.robot_io.joint_log import JointLog, assemble_log
+from comgrasp_pin.robot_io.log_values import check_table
 
 TIME = "timestamp"
 POSITION = "actual_q"
@@ -99,7 +100,8 @@ def read_rtde(
             ``file_checks.MAX_CSV_BYTES``, not UTF-8), has no RTDE header, another number
             of joints than ``joint_names``, currents without gains (the message says what to
             give), gains without currents or for other joints, a value that is not a
-            number, NaN or inf, fewer than two samples.
+            number, NaN, inf or past any sensor's range (``log_values.check_table``: its line
+            and column named), fewer than two samples.
     """
     path = Path(path)
     names = tuple(joint_names)
@@ -114,7 +116,7 @@ def read_rtde(
     efforts, current_gains = _effort_columns(header, n, gains, path)
     cols = [header.index(TIME), *(_vector(header, POSITION, n) or []), *efforts, *(velocity or [])]
     data = _load(path, delimiter, cols)
-    check_finite(data, [header[c] for c in cols], f"UR log {path}")
+    check_table(data, [header[c] for c in cols], path, f"UR log {path}")
     t, q = data[:, 0], data[:, 1 : 1 + n]
     effort = data[:, 1 + n : 1 + 2 * n]
     if current_gains is not None:
@@ -174,22 +176,6 @@ def _effort_columns(header: list[str], n: int, gains: Gains | None, path: Path):
             f"{path}: give {n}, one per joint in chain order"
         )
     return currents, gains.values
-
-
-def check_finite(data: np.ndarray, columns: list[str], source: str) -> None:
-    """Refuse NaN or inf in a text log's (N, k) ``data`` under the k ``columns``.
-
-    Raises:
-        LogError: how many there are, and the first one's line (the header is line 1) and
-            column.
-    """
-    bad = np.argwhere(~np.isfinite(data))
-    if len(bad):
-        row, col = bad[0]
-        raise LogError(
-            f"{source} has NaN or inf values ({len(bad)}), first on line {row + 2} in "
-            f"{columns[col]!r}; every value the log is read for must be a number"
-        )
 
 
 def _load(path: Path, delimiter: str | None, cols: list[int], what: str = "UR log") -> np.ndarray:

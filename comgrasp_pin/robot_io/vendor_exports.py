@@ -36,8 +36,8 @@ import yaml
 
 from comgrasp_pin import validate
 from comgrasp_pin.errors import InvalidInputError
-from comgrasp_pin.robot_io.exports import _note
-from comgrasp_pin.robot_io.payload import Payload
+from comgrasp_pin.robot_io.payload import Payload, header_lines
+from comgrasp_pin.robot_io.trust import IDENTIFIED
 
 
 def principal_axes(inertia: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -83,7 +83,7 @@ def _kuka_numbers(p: Payload) -> tuple[list[str], list[str], list[str]]:
 def krl_load(p: Payload) -> str:
     """A KRL text: comments (``;``) and one ``$LOAD=...`` line (KUKA KSS)."""
     (x, y, z), (a, b, c), (jx, jy, jz) = _kuka_numbers(p)
-    head = "".join(f"; {line}\n" for line in _note(p))
+    head = "".join(f"; {line}\n" for line in header_lines(p))
     head += (f"; KUKA $LOAD: M kg; CM X, Y, Z mm in the flange frame ({p.flange_frame}); "
              "A, B, C deg (Z, Y', X'') to the principal axes; J kg m^2 about them\n")  # fmt: skip
     return (f"{head}$LOAD={{M {_fixed(p.mass, 6)},CM {{X {x},Y {y},Z {z},A {a},B {b},C {c}}},"
@@ -93,7 +93,7 @@ def krl_load(p: Payload) -> str:
 def sunrise_load_data(p: Payload) -> str:
     """A Java statement for KUKA Sunrise (LBR iiwa): a ``LoadData`` with the KRL numbers."""
     (x, y, z), (a, b, c), (jx, jy, jz) = _kuka_numbers(p)
-    head = "".join(f"// {line}\n" for line in _note(p))
+    head = "".join(f"// {line}\n" for line in header_lines(p))
     head += ("// KUKA Sunrise LoadData: mass kg; centre of mass mm and A, B, C deg (principal "
              f"axes) in the flange frame ({p.flange_frame}); moments kg m^2\n")  # fmt: skip
     return (f"{head}LoadData loadData = new LoadData({_fixed(p.mass, 6)}, "
@@ -110,7 +110,7 @@ def rapid_loaddata(p: Payload, name: str = "comgrasp_load") -> str:
     cog = ", ".join(_fixed(v, 4) for v in 1e3 * p.com_flange)
     aom = ", ".join(_fixed(v, 9) for v in quat_wxyz)
     inertia = ", ".join(_fixed(v, 9) for v in moments)
-    head = "".join(f"! {line}\n" for line in _note(p))
+    head = "".join(f"! {line}\n" for line in header_lines(p))
     head += (f"! ABB loaddata: mass kg; cog mm in {p.flange_frame}; aom [q1 (scalar), q2, q3, "
              "q4] to the principal axes; ix, iy, iz kg m^2 about them\n")  # fmt: skip
     return f"{head}PERS loaddata {name} := [{_fixed(p.mass, 6)}, [{cog}], [{aom}], {inertia}];\n"
@@ -124,12 +124,15 @@ def franka_desk(p: Payload, T_flange_ee: np.ndarray | None = None) -> dict:
         T_flange_ee: (4, 4) the end effector frame (TCP) in F, m; default the identity.
     """
     T = np.eye(4) if T_flange_ee is None else _pose_matrix(T_flange_ee, "T_flange_ee")
-    return {
+    desk = {
         "mass": float(p.mass),
         "centerOfMass": [float(v) for v in p.com_flange],
         "transformation": [float(v) for v in T.ravel(order="F")],
         "inertia": [float(v) for v in p.inertia_flange.ravel(order="F")],
     }
+    if p.verdict not in (None, IDENTIFIED):  # JSON has no comments: the note as a key
+        desk["_comment"] = " ".join(header_lines(p))
+    return desk
 
 
 def _pose_matrix(T: object, name: str) -> np.ndarray:
@@ -199,6 +202,6 @@ def moveit_yaml(
         obj["primitive_poses"] = [_pose(np.zeros(3), z_to_axis.toRotationMatrix())]
     obj["operation"] = 0  # ADD
     msg = {"link_name": link, "object": obj, "touch_links": [link], "weight": float(p.mass)}
-    head = "".join(f"# {line}\n" for line in _note(p))
+    head = "".join(f"# {line}\n" for line in header_lines(p))
     head += "# moveit_msgs/msg/AttachedCollisionObject; weight: the mass in kg\n"
     return head + yaml.safe_dump(msg, sort_keys=False, default_flow_style=None)

@@ -26,8 +26,9 @@ import numpy as np
 from comgrasp_pin import file_checks
 from comgrasp_pin.errors import LogError
 from comgrasp_pin.robot_io import logs
+from comgrasp_pin.robot_io.log_values import check_joint_rows, check_messages
 from comgrasp_pin.robot_io.wrench_csv import assemble_wrench_log, sensor_frame_name
-from comgrasp_pin.robot_io.wrench_log import WrenchLog
+from comgrasp_pin.robot_io.wrench_log import WRENCH_COLUMNS, WrenchLog
 
 WRENCH_STAMPED = "geometry_msgs/msg/WrenchStamped"
 MAX_JOINT_GAP_S = 0.1
@@ -63,8 +64,9 @@ def read_wrench_bag(
             WrenchStamped topic, or several and none named (listed); no such topic or
             another type; no JointState message holds all the joints; the messages name
             different frames, an empty one (and ``sensor_frame`` is None), or another one
-            than ``sensor_frame``; fewer than two joint states, or no wrench sample within
-            the joint states' span and gaps.
+            than ``sensor_frame``; a value that is NaN, inf or past any sensor's range
+            (``log_values``: its message's time, topic and field named); fewer than two
+            joint states, or no wrench sample within the joint states' span and gaps.
     """
     from rosbags.highlevel import AnyReader
 
@@ -77,6 +79,8 @@ def read_wrench_bag(
             wrenches = [_wrench_row(reader.deserialize(raw, c.msgtype), t)
                         for c, t, raw in reader.messages(connections=w_conns)]  # fmt: skip
             joints = logs._joint_rows(reader, j_conns, names, need_effort=False)
+            check_joint_rows(joints, names, joint_topic, f"bag {bag}")
+            _check_wrenches(wrenches, w_conns[0].topic, f"bag {bag}")
     except LogError:
         raise
     except Exception as exc:  # rosbags raises its own error types for broken bags
@@ -113,6 +117,15 @@ def _wrench_row(msg, t_bag: int) -> tuple[int, int, str, np.ndarray]:
         str(msg.header.frame_id),
         np.array([f.x, f.y, f.z, tau.x, tau.y, tau.z]),
     )
+
+
+def _check_wrenches(rows: list[tuple], topic: str, source: str) -> None:
+    """``log_values.check_messages`` on ``_wrench_row``s: forces (N) and torques (N m)."""
+    stamps = np.array([r[0] for r in rows], dtype=np.int64)
+    times = stamps if np.all(stamps > 0) else np.array([r[1] for r in rows], dtype=np.int64)
+    kinds = ["force"] * 3 + ["torque"] * 3
+    check_messages(np.array([r[3] for r in rows]), kinds, list(WRENCH_COLUMNS), times, topic,
+                   source)  # fmt: skip
 
 
 def _sensor_frame(frames: set[str], named: str | None, bag: Path) -> str:

@@ -29,11 +29,11 @@ import numpy as np
 from comgrasp_pin.errors import UnobservableError
 from comgrasp_pin.robot_io.arm_model import ArmModel
 from comgrasp_pin.robot_io.dynamic_fit import error_sources
+from comgrasp_pin.robot_io.estimate_result import JOINT_TORQUES, PRIOR, WRENCH
 from comgrasp_pin.robot_io.motion_system import about_com, row_noise
 from comgrasp_pin.robot_io.payload_system import PayloadSystem
 from comgrasp_pin.robot_io.wrench_system import WrenchSystem
 
-WRENCH, JOINT_TORQUES, PRIOR = "wrench", "joint_torques", "prior"
 MAX_SOURCES_CHI2 = 16.25
 """Largest chi-square (4 degrees of freedom) of the two sources' (m, m c) difference before they
 are said to disagree: its 99.73 % quantile, the false-alarm rate of the halves' 3 std rule."""

@@ -17,6 +17,7 @@ import numpy as np
 from comgrasp_pin import file_checks
 from comgrasp_pin.errors import InvalidInputError, LogError
 from comgrasp_pin.robot_io import rtde
+from comgrasp_pin.robot_io.log_values import check_table
 from comgrasp_pin.robot_io.wrench_log import WRENCH_COLUMNS, WrenchLog
 
 OPTIONAL_FIELDS = ("velocity", "effort")
@@ -86,8 +87,9 @@ def read_wrench_csv(
         LogError: the file fails ``file_checks.first_line`` (missing, a FIFO, larger than
             ``file_checks.MAX_CSV_BYTES``, not UTF-8); it is a UR recording (read by
             ``wrench_rtde.read_rtde_wrench``, which needs the robot); a column is missing
-            (named, with what a wrench log needs); a value is not a number, NaN or inf (its
-            line and column named); fewer than two rows.
+            (named, with what a wrench log needs); a value is not a number, NaN, inf or past
+            any sensor's range (``log_values.check_table``: its line and column named);
+            fewer than two rows.
     """
     path = Path(path)
     frame = sensor_frame_name(sensor_frame)
@@ -113,7 +115,7 @@ def read_wrench_csv(
     fields = [f for f in OPTIONAL_FIELDS if all(f"{n}.{f}" in header for n in names)]
     wanted += [f"{n}.{f}" for f in fields for n in names]
     data = rtde._load(path, ",", [header.index(w) for w in wanted], "CSV wrench log")
-    rtde.check_finite(data, wanted, f"CSV {path}")
+    check_table(data, wanted, path, f"CSV {path}")
     n = len(names)
     extra = {f: data[:, 7 + n * (i + 1) : 7 + n * (i + 2)] for i, f in enumerate(fields)}
     q, wrench = data[:, 1 : 1 + n], data[:, 1 + n : 7 + n]

@@ -43,13 +43,19 @@ from comgrasp_pin.robot_io import wrench_combined as wc
 from comgrasp_pin.robot_io import wrench_findings as wf
 from comgrasp_pin.robot_io.arm_model import ArmModel
 from comgrasp_pin.robot_io.dynamic import _halves
-from comgrasp_pin.robot_io.dynamic_fit import error_sources, fit_payload
+from comgrasp_pin.robot_io.dynamic_fit import error_sources, fit_payload, motion_estimate
+from comgrasp_pin.robot_io.estimate_result import (
+    TOOL_EMPTY_RUN,
+    TOOL_GIVEN,
+    TOOL_NOMINAL,
+    Motion,
+    PayloadEstimate,
+    Wrench,
+)
 from comgrasp_pin.robot_io.motion_signals import CUTOFF_HZ, MIN_PEAK_SPEED
-from comgrasp_pin.robot_io.motion_system import about_com, prior_of, row_noise
+from comgrasp_pin.robot_io.motion_system import prior_of, row_noise
 from comgrasp_pin.robot_io.payload_system import ARM_MODEL, EMPTY_RUN, payload_system
-from comgrasp_pin.robot_io.verdict import UNRELIABLE, Checks, verdict
-from comgrasp_pin.robot_io.wrench_estimate import WrenchDynamicEstimate
-from comgrasp_pin.robot_io.wrench_findings import TOOL_EMPTY_RUN, TOOL_GIVEN, TOOL_NOMINAL
+from comgrasp_pin.robot_io.trust import Checks, motion_reasons
 from comgrasp_pin.robot_io.wrench_log import WrenchLog
 from comgrasp_pin.robot_io.wrench_system import (
     as_joint_log,
@@ -78,7 +84,7 @@ def estimate_wrench_dynamic(
     empty_window: tuple[float, float] | None = None,
     tool_params: np.ndarray | None = None,
     tool_cov: np.ndarray | None = None,
-) -> WrenchDynamicEstimate:
+) -> PayloadEstimate:
     """Identify the held payload's ten inertial parameters (ee frame) from a motion's wrench.
 
     Args:
@@ -114,38 +120,36 @@ def estimate_wrench_dynamic(
     A_pi, A_x, b, w = st.A_pi.reshape(-1, 10), st.A_x.reshape(k * r, -1), st.b.reshape(-1), st.w
     A = np.column_stack([A_pi, A_x])
     err = _observable(robot, W, lambda: error_sources(
-        A, b, w, (k, r), duration, np.zeros((k, r)), None, arm, st.arm_jac))  # fmt: skip
+        A, b, w, (k, r), duration, None, None, arm, st.arm_jac))  # fmt: skip
     cov_tool = wf.tool_cov(err.sensitivity, st, tool.cov)
     fit = fit_payload(A_pi, A_x, b, w, prior_of(prior), replace(err, arm=err.arm + cov_tool))
     params_cov = fit.data_cov + err.arm + cov_tool
-    mass, com, inertia_c, cov4, inertia_cov = about_com(fit.pi, params_cov)
-    m_std = float(np.sqrt(params_cov[0, 0]))
     validation = du.held_out(A_pi, A_x, b, w, W.S.t, k, r)
-    halves, halves_std = _halves(A, b, w, k, r, err.factor, np.zeros((k, r)), np.zeros((r, r)))
+    halves, halves_std = _halves(A, b, w, k, r, err.factor)
     agree = wc.agreement(fits, tool.cov) if J is not None else None
-    word, reasons = verdict(Checks(mass, m_std, "wrench", 1.0, halves, halves_std))
-    reasons += wf.wrench_reasons(mass, m_std, validation, tool, agree, J and J.source)
+    m_std = float(np.sqrt(params_cov[0, 0]))
+    checks = Checks(float(fit.pi[0]), m_std, None, validation.explained_total, halves, halves_std)
+    findings = motion_reasons(checks) + wf.wrench_reasons(tool, agree, J and J.source)
     payload, predicted = (b - A_x @ fit.x).reshape(k, r), (A_pi @ fit.pi).reshape(k, r)
     bias, bias_std, drift, delay = wf.sensor_bias(A, b, w, st, duration, fit.x, tool.cov)
-    return WrenchDynamicEstimate(
-        mass=mass, com_ee=com, inertia_com_ee=inertia_c, params=fit.pi, params_cov=params_cov,
-        cov=cov4, inertia_std=np.sqrt(np.clip(np.diag(inertia_cov), 0, None)).reshape(3, 3),
-        inertia_cov=inertia_cov,
-        condition_number=condition_number(A_pi * w[:, None], parameter_scale()),
-        sensor_frame=log.sensor_frame, sensor_bias=bias, sensor_bias_std=bias_std,
-        sensor_bias_drift=drift, delay_s=delay, wrench_std=st.noise[:6],
-        residual_rms_wrench=np.sqrt(np.mean((predicted - payload)[:, :6] ** 2, axis=0)),
-        tool=tool.source, tool_params=tool.params, tool_cov=tool.cov,
-        contributions=wc.contributions(st, fit.pi, prior_of(prior)), agreement=agree,
-        alone_refused={name: (f if isinstance(f, str) else None) for name, f in fits.items()},
-        joint_torques=wf.joint_part(J, fit.x, W.A_x.shape[1], st, predicted, payload, note),
-        n_samples=k, duration_s=duration, cutoff_hz=W.S.cutoff_hz,
-        velocity_from=W.S.velocity_from, solver_status=fit.status,
-        unconstrained_params=fit.pi_ls, t=W.S.t, wrench_payload=payload[:, :6],
-        wrench_payload_fit=predicted[:, :6], validation=validation, halves_mass=halves,
-        std_parts=wf.std_parts(fit.data_cov, cov_tool, tool, err.arm if arm else None),
-        verdict=UNRELIABLE if reasons else word, reasons=tuple(reasons),
+    motion = Motion(
+        k, duration, W.S.cutoff_hz, W.S.velocity_from, fit.status,
+        condition_number(A_pi * w[:, None], parameter_scale()), W.S.t, validation, halves,
     )  # fmt: skip
+    wrench = Wrench(
+        log.sensor_frame, bias, bias_std, drift, tool=tool.source, tool_params=tool.params,
+        tool_cov=tool.cov,
+        residual_rms=np.sqrt(np.mean((predicted - payload)[:, :6] ** 2, axis=0)),
+        wrench_std=st.noise[:6], delay_s=delay, wrench_payload=payload[:, :6],
+        wrench_payload_fit=predicted[:, :6], agreement=agree,
+        alone_refused={name: (f if isinstance(f, str) else None) for name, f in fits.items()},
+    )  # fmt: skip
+    joints = wf.joint_part(J, fit.x, W.A_x.shape[1], st, predicted, payload, note)
+    return motion_estimate(robot, fit, params_cov, motion, findings,
+                           wc.contributions(st, fit.pi, prior_of(prior)),
+                           wf.std_parts(fit.data_cov, cov_tool, tool, err.arm if arm else None),
+                           joint_torques=joints,
+                           wrench=wrench)  # fmt: skip
 
 
 def _stacked(robot, log, window, cutoff_hz, tool, J, arm_model):
@@ -188,7 +192,7 @@ def _tool(robot, log, empty_log, empty_window, cutoff_hz, tool_params, tool_cov)
     A, b = np.column_stack([E.A_pi.reshape(-1, 10), E.A_x]), E.b.reshape(-1)
     w = np.tile(1 / row_noise(A, b, k, 6), k)
     err = _observable(robot, E, lambda: error_sources(
-        A, b, w, (k, 6), float(E.S.t[-1] - E.S.t[0]), np.zeros((k, 6)), None, None, None),
+        A, b, w, (k, 6), float(E.S.t[-1] - E.S.t[0]), None, None, None, None),
         "the empty run")  # fmt: skip
     return _Tool(err.sensitivity @ b, err.white * np.outer(err.factor, err.factor),
                  TOOL_EMPTY_RUN)  # fmt: skip

@@ -2,8 +2,8 @@
 
 The sensor's bias (its mean over the motion, std, drift) and the wrench's delay; the joint
 torques' own unknowns where they were fitted alongside; the mass's std by error source; the
-rules the joint-torque path's ``verdict`` does not have (the readings the payload explains,
-the URDF's tool, the two sources' agreement). Used by ``wrench_dynamic``.
+rules ``trust`` does not have (the URDF's tool, the two sources' agreement). Used by
+``wrench_dynamic``.
 """
 
 from __future__ import annotations
@@ -12,14 +12,9 @@ import numpy as np
 
 from comgrasp_pin.robot_io import dynamic_uncertainty as du
 from comgrasp_pin.robot_io import wrench_combined as wc
+from comgrasp_pin.robot_io.estimate_result import TOOL_NOMINAL, JointTorques
 from comgrasp_pin.robot_io.motion_system import DRIFT_DEGREE
 from comgrasp_pin.robot_io.payload_system import NOMINAL
-from comgrasp_pin.robot_io.verdict import MIN_EXPLAINED, Z95
-from comgrasp_pin.robot_io.wrench_estimate import JointTorquePart
-
-TOOL_EMPTY_RUN = "empty run (the tool's parameters fitted)"
-TOOL_GIVEN = "given"
-TOOL_NOMINAL = "URDF links beyond the sensor (nominal)"
 
 
 def tool_cov(P: np.ndarray, st: wc.Stacked, cov: np.ndarray) -> np.ndarray:
@@ -61,16 +56,12 @@ def sensor_bias(A, b, w, st, duration, x, tool_params_cov):
     return extras[0], np.sqrt(var), drift, float(x[6 * (1 + DRIFT_DEGREE)])
 
 
-def wrench_reasons(mass, mass_std, validation, tool, agree, joint_source) -> list[str]:
-    """The wrench path's own rules, beyond ``verdict``'s mass and halves."""
+def wrench_reasons(tool, agree, joint_source) -> list[str]:
+    """The wrench path's own objections: the URDF's tool, the two sources' agreement.
+
+    ``trust.motion_reasons`` has the ones every motion shares.
+    """
     reasons = []
-    seen = mass - Z95 * mass_std > 0
-    if seen and validation.explained_total < MIN_EXPLAINED:
-        reasons.append(
-            f"the payload explains {100 * validation.explained_total:.0f} % of the held-out "
-            f"readings (at least {100 * MIN_EXPLAINED:.0f} % expected): they hold more than a "
-            "rigid payload (a cable pulling, a contact, the payload moving in the gripper)"
-        )
     if tool.source == TOOL_NOMINAL and tool.params[0] > 0:
         reasons.append(
             f"the tool's own wrench is the URDF's links beyond the sensor ({tool.params[0]:.3f} "
@@ -91,7 +82,7 @@ def wrench_reasons(mass, mass_std, validation, tool, agree, joint_source) -> lis
     return reasons
 
 
-def joint_part(J, x, e_w, st, predicted, payload, note) -> JointTorquePart | None:
+def joint_part(J, x, e_w, st, predicted, payload, note) -> JointTorques | None:
     """The joint torques' own findings in the combined fit, or None without them."""
     if J is None:
         return None
@@ -99,9 +90,11 @@ def joint_part(J, x, e_w, st, predicted, payload, note) -> JointTorquePart | Non
     n = len(cols)
     extras = x[e_w : e_w + J.per_joint * n].reshape(J.per_joint, n)
     res = predicted[:, cols] - payload[:, cols]
-    return JointTorquePart(
-        J.source, st.noise[6:], extras[0], 2 * extras[1 : 1 + DRIFT_DEGREE : 2].sum(axis=0),
-        extras[1 + DRIFT_DEGREE :].T if J.source == NOMINAL else None,
-        np.sqrt(np.mean(res**2, axis=0)), None if J.alignment is not None else float(x[-1]),
-        J.alignment, payload[:, cols], predicted[:, cols], note,
+    return JointTorques(
+        st.noise[6:], "residuals", J.source, offsets=extras[0],
+        offset_drift=2 * extras[1 : 1 + DRIFT_DEGREE : 2].sum(axis=0),
+        friction=extras[1 + DRIFT_DEGREE :].T if J.source == NOMINAL else None,
+        residual_rms=np.sqrt(np.mean(res**2, axis=0)),
+        delay_s=None if J.alignment is not None else float(x[-1]), alignment=J.alignment,
+        tau_payload=payload[:, cols], tau_payload_fit=predicted[:, cols], note=note,
     )  # fmt: skip

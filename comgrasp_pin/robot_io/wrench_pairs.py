@@ -11,45 +11,27 @@ after configuration (the tool's gravity wrench, the arm's gravity torques).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from comgrasp_pin.estimation import ComEstimate
 from comgrasp_pin.estimation.regressor import stacked_regressor
 from comgrasp_pin.estimation.wrench_com import (
-    UNKNOWNS,
     estimate_com_wrench,
     source_shares,
     tool_wrench,
     wrench_regressor,
 )
 from comgrasp_pin.robot import RobotModel
+from comgrasp_pin.robot_io.estimate import judged_at_rest
+from comgrasp_pin.robot_io.estimate_result import (
+    JOINT_TORQUES,
+    WRENCH,
+    JointTorques,
+    PayloadEstimate,
+    Wrench,
+)
 from comgrasp_pin.robot_io.joint_log import JointLog
-from comgrasp_pin.robot_io.static_report import estimate_fields
 from comgrasp_pin.robot_io.windows import MAX_SPEED, read_pairs
 from comgrasp_pin.robot_io.wrench_log import WrenchLog
-
-WRENCH, JOINT_TORQUES = "wrench", "joint torques"
-
-
-@dataclass(frozen=True)
-class WrenchPairEstimate:
-    """The payload from before/after pairs of still windows (ee frame, SI units).
-
-    Attributes:
-        estimate: mass, CoM (ee frame) and covariance (``ComEstimate``).
-        sources: what it came from: ("wrench",) or ("wrench", "joint torques").
-        shares: per source, its share of the information on each of (m, m c) (sums to 1).
-        sensor_frame: the wrench's frame.
-        q: (k, n) the after windows' mean configurations (rad).
-    """
-
-    estimate: ComEstimate
-    sources: tuple[str, ...]
-    shares: dict
-    sensor_frame: str
-    q: np.ndarray
 
 
 def estimate_wrench_pairs(
@@ -60,7 +42,7 @@ def estimate_wrench_pairs(
     max_speed: float = MAX_SPEED,
     use_joint_torques: bool = True,
     method: str = "lstsq",
-) -> WrenchPairEstimate:
+) -> PayloadEstimate:
     """Mass and CoM (ee frame) from the wrench (and the efforts) before/after at k poses.
 
     Raises:
@@ -88,20 +70,11 @@ def estimate_wrench_pairs(
         blocks[JOINT_TORQUES] = (stacked_regressor(robot, q)[0], cov_t)
     est = estimate_com_wrench(robot, q, w_b, np.array([a.tau for a in wa]), frame,
                               wrench_std=w_std, method=method, torques=torques)  # fmt: skip
-    shares = source_shares(blocks)
-    return WrenchPairEstimate(est, tuple(blocks), shares, frame, q)
-
-
-def pairs_result_dict(result: WrenchPairEstimate, frame: str) -> dict:
-    """RESULT.json (DESIGN.md 4b's fields, plus the sources and their shares)."""
-    est = result.estimate
-    std = est.std
-    return {
-        **estimate_fields(est, frame),
-        "std": None if std is None else {"mass_kg": float(std[0]), "com_m": std[1:].tolist()},
-        "sensor_frame": result.sensor_frame,
-        "sources": list(result.sources),
-        "contributions": result.shares,
-        "contributions_of": list(UNKNOWNS),
-        "q_rad": result.q.tolist(),
-    }
+    windows = {"before": [[r.t0, r.t1, r.n_samples] for r in wb],
+               "after": [[r.t0, r.t1, r.n_samples] for r in wa]}  # fmt: skip
+    parts = {"wrench": Wrench(frame, tool="cancels in the before/after differences")}
+    if torques is not None:  # torque_std: (k n,) each pose's difference's, per joint
+        std = np.sqrt(np.diag(torques[2]))
+        parts["joint_torques"] = JointTorques(std, "samples", tau_before=tau_b,
+                                              tau_after=torques[1])  # fmt: skip
+    return judged_at_rest(robot, est, q, windows, source_shares(blocks), **parts)

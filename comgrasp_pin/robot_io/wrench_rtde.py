@@ -54,6 +54,7 @@ import pinocchio as pin
 from comgrasp_pin.errors import LogError
 from comgrasp_pin.robot import RobotModel, _check_frame
 from comgrasp_pin.robot_io import rtde
+from comgrasp_pin.robot_io.log_values import check_table
 from comgrasp_pin.robot_io.wrench_csv import assemble_wrench_log, sensor_frame_name
 from comgrasp_pin.robot_io.wrench_log import WrenchLog
 
@@ -94,7 +95,8 @@ def read_rtde_wrench(
             none where the default does not exist.
         LogError: the file fails ``rtde.recording_header`` (missing, not a UR recording,
             another number of joints); no ``actual_TCP_force_0..5``; a value that is not a
-            number, NaN or inf; fewer than two samples.
+            number, NaN, inf or past any sensor's range (``log_values.check_table``: its line
+            and column named); fewer than two samples.
     """
     path = Path(path)
     frames = _frames(robot, sensor_frame, tcp_frame, base_frame)
@@ -114,7 +116,7 @@ def read_rtde_wrench(
     cols = [header.index(rtde.TIME), *(rtde._vector(header, rtde.POSITION, n) or []), *force]
     cols += [c for field in present for c in optional[field] or []]
     data = rtde._load(path, delimiter, cols)
-    rtde.check_finite(data, [header[c] for c in cols], f"UR log {path}")
+    check_table(data, [header[c] for c in cols], path, f"UR log {path}")
     if len(data) < 2:
         raise LogError(f"UR log {path} has {len(data)} sample(s); a wrench log needs two")
     q = data[:, 1 : 1 + n]

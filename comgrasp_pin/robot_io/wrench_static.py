@@ -22,8 +22,6 @@ share goes into the fitted bias); and the residuals' excess over all of them
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 import pinocchio as pin
 
@@ -32,7 +30,16 @@ from comgrasp_pin.estimation.drift import difference_covariance
 from comgrasp_pin.estimation.wrench import StaticWrenchFit, fit_static_wrench
 from comgrasp_pin.estimation.wrench_com import T_sensor_ee, tool_beyond
 from comgrasp_pin.robot import RobotModel
+from comgrasp_pin.robot_io.estimate_result import (
+    TOOL_NOMINAL,
+    WRENCH,
+    AtRest,
+    PayloadEstimate,
+    Wrench,
+    sole_source,
+)
 from comgrasp_pin.robot_io.joint_log import JointLog
+from comgrasp_pin.robot_io.trust import Z95, arm_mass, judge
 from comgrasp_pin.robot_io.windows import (
     MAX_SPEED,
     MIN_STATIC_S,
@@ -45,59 +52,7 @@ MAX_CHI2_DOF = 25.0
 """Residuals above 5 times the windows' own noise (chi-square per degree of freedom above
 25): the rigid-body model does not explain the readings (a contact, a cable pulling, a
 payload that moves in the gripper); the verdict is then ``unreliable``."""
-IDENTIFIED, NOTHING_HELD, UNRELIABLE = "identified", "nothing held", "unreliable"
-
-
-@dataclass(frozen=True)
-class WrenchStaticEstimate:
-    """A payload from the wrench at rest (ee frame for the CoM, like the joint-torque path).
-
-    Attributes:
-        mass: kg (beyond the URDF's tool where ``tool_mass`` > 0).
-        com_ee: (3,) CoM in the ee frame (m); NaN where nothing is held.
-        cov: (4, 4) covariance of (mass, com_ee) (kg, m).
-        com_sensor: (3,) the CoM in the sensor frame (m).
-        sensor_frame: the URDF frame the wrench is measured in.
-        sensor_bias: (6,) the sensor's offsets, force (N) and torque (N m), sensor frame;
-            sensor_bias_std: (6,) their standard deviations.
-        windows: the still windows used, one per orientation (s from the log's start).
-        q: (k, n) the mean configuration of each window (rad).
-        residual_rms_N, residual_rms_Nm: RMS of the force and torque residuals.
-        fit: the fit in the sensor frame (``estimation.wrench.StaticWrenchFit``).
-        tool_mass: kg subtracted as the tool beyond the sensor (the URDF's, or one identified
-            before; 0 where none).
-        tool_com_sensor: (3,) that tool's CoM (sensor frame, m).
-        noise_from: how each window's noise was set, one line.
-        verdict: ``identified``, ``nothing held`` or ``unreliable``; reasons: why.
-    """
-
-    mass: float
-    com_ee: np.ndarray
-    cov: np.ndarray
-    com_sensor: np.ndarray
-    sensor_frame: str
-    sensor_bias: np.ndarray
-    sensor_bias_std: np.ndarray
-    windows: tuple[tuple[float, float], ...]
-    q: np.ndarray
-    residual_rms_N: float
-    residual_rms_Nm: float
-    fit: StaticWrenchFit
-    tool_mass: float
-    tool_com_sensor: np.ndarray
-    noise_from: str
-    verdict: str
-    reasons: tuple[str, ...]
-
-    @property
-    def unobservable_ee(self) -> None:
-        """None: three orientations see the whole CoM (as ``ComEstimate``'s field)."""
-        return None
-
-    @property
-    def n_poses(self) -> int:
-        """The number of orientations."""
-        return len(self.windows)
+TOOL_BEFORE, TOOL_NONE = "the tool identified before", "none (everything beyond the sensor)"
 
 
 def _as_joint_log(log: WrenchLog) -> JointLog:
@@ -116,7 +71,7 @@ def estimate_wrench_static(
     tool: tuple[np.ndarray, np.ndarray] | None = None,
     drift_std: tuple[float, float] = (0.0, 0.0),
     drift_rate_std: tuple[float, float] = (0.0, 0.0),
-) -> WrenchStaticEstimate:
+) -> PayloadEstimate:
     """Mass, CoM (ee frame) and the sensor's bias from the still windows of ``log``.
 
     Args:
@@ -170,17 +125,20 @@ def estimate_wrench_static(
             raise InvalidInputError("tool must be ((4,) m, m c; (4, 4) their covariance)")
         tool_mass, tool_moment = float(theta_tool[0]), theta_tool[1:]
         noise_from_tool = "the tool identified before (its covariance added)"
+        tool_from = TOOL_BEFORE
     else:
         urdf_tool = tool_beyond(robot, log.sensor_frame) if subtract_tool else pin.Inertia.Zero()
         tool_mass, tool_moment = urdf_tool.mass, urdf_tool.mass * urdf_tool.lever
         noise_from_tool = ""
+        tool_from = TOOL_NOMINAL if subtract_tool else TOOL_NONE
     wrench -= np.array([np.r_[tool_mass * g, np.cross(tool_moment, g)] for g in g_sensor])
     std, cov, noise_from = _window_noise(readings, wrench_std, drift_std, drift_rate_std)
     fit = fit_static_wrench(g_sensor, wrench, std, log.sensor_frame, known_cov, cov)
     if noise_from_tool:
         noise_from += f"; {noise_from_tool}"
     tool_com = tool_moment / tool_mass if tool_mass > 0 else np.zeros(3)
-    return _estimate(fit, T_se, log, windows, readings, (tool_mass, tool_com), noise_from)
+    tool_found = (tool_from, tool_mass, tool_com)
+    return _estimate(robot, fit, T_se, log, windows, readings, tool_found, noise_from)
 
 
 def _pair(value, name: str) -> np.ndarray:
@@ -231,41 +189,36 @@ def _rotated_cov(fit: StaticWrenchFit, G: np.ndarray) -> np.ndarray:
     return cov
 
 
-def _estimate(fit, T_sensor_ee, log, windows, readings, tool, noise_from):
+def _estimate(robot, fit, T_sensor_ee, log, windows, readings, tool, noise_from):
+    """The ``PayloadEstimate``: the fit in the ee frame, judged by ``trust``."""
     T_ee_sensor = np.linalg.inv(T_sensor_ee)
     R = T_ee_sensor[:3, :3]
     G = np.eye(4)
     G[1:, 1:] = R
-    verdict, reasons = IDENTIFIED, []
-    if not fit.held:
-        verdict = NOTHING_HELD
-        reasons.append(
-            f"the mass {fit.mass:.4g} kg is within 3 standard deviations "
-            f"({np.sqrt(fit.cov[0, 0]):.2g} kg) of zero: no payload beyond the URDF's tool"
-        )
+    findings = []
     if fit.chi2_dof > MAX_CHI2_DOF:
-        verdict = UNRELIABLE
-        reasons.append(
+        findings.append(
             f"the residuals are {np.sqrt(fit.chi2_dof):.1f} times the windows' noise: the "
             "readings do not follow a rigid payload (contact, cable, a part moving)"
         )
+    if not fit.held and fit.mass - Z95 * np.sqrt(fit.cov[0, 0]) > 0:
+        findings.append(
+            f"the mass {fit.mass:.4g} kg is within 3 standard deviations "
+            f"({np.sqrt(fit.cov[0, 0]):.2g} kg) of zero: the CoM is not determined"
+        )
+    com_ee = R @ fit.com_sensor + T_ee_sensor[:3, 3]
+    cov = _rotated_cov(fit, G)
+    verdict, reasons = judge(fit.mass, com_ee, cov, arm_mass(robot), findings)
     res = fit.residuals
-    return WrenchStaticEstimate(
-        mass=fit.mass,
-        com_ee=R @ fit.com_sensor + T_ee_sensor[:3, 3],
-        cov=_rotated_cov(fit, G),
-        com_sensor=fit.com_sensor,
-        sensor_frame=log.sensor_frame,
-        sensor_bias=fit.bias,
-        sensor_bias_std=fit.bias_std,
-        windows=tuple((float(a), float(b)) for a, b in windows),
-        q=np.array([r.q for r in readings]),
-        residual_rms_N=float(np.sqrt(np.mean(res[:, :3] ** 2))),
-        residual_rms_Nm=float(np.sqrt(np.mean(res[:, 3:] ** 2))),
-        fit=fit,
-        tool_mass=float(tool[0]),
-        tool_com_sensor=np.array(tool[1]),
-        noise_from=noise_from,
-        verdict=verdict,
-        reasons=tuple(reasons),
-    )
+    residual_rms = np.sqrt([np.mean(res[:, :3] ** 2), np.mean(res[:, 3:] ** 2)])
+    q = np.array([r.q for r in readings])
+    still = [[float(a), float(b)] for a, b in windows]
+    wrench = Wrench(
+        log.sensor_frame, fit.bias, fit.bias_std, com_sensor=fit.com_sensor, tool=tool[0],
+        tool_mass=float(tool[1]), tool_com_sensor=np.array(tool[2]), noise_from=noise_from,
+        residual_rms=residual_rms, fit=fit,
+    )  # fmt: skip
+    return PayloadEstimate(
+        fit.mass, com_ee, cov, robot.ee_frame, verdict, reasons, sole_source(WRENCH),
+        at_rest=AtRest(q, {"still": still}, "closed form", "closed_form"), wrench=wrench,
+    )  # fmt: skip

@@ -1,0 +1,137 @@
+"""My log, my payload: one reader for any log and one estimate call that picks the mode.
+
+    robot = load_robot("ur10e.urdf", "tool0")
+    log = read_any_log("run.csv", robot, gains=gains)  # joint states, a wrench, a UR recording
+    est = estimate_payload(robot, log, motion=True, empty=read_any_log("empty.csv", robot))
+    print(summary(est))  # est.verdict, est.reasons; payload_in_flange(robot, est, "tool0")
+
+``read_any_log`` reads a wrench (a ``WrenchLog``, with the joints' efforts where the log has
+them) where the file holds one: a bag with a ``geometry_msgs/msg/WrenchStamped`` topic, a
+CSV with ``force_x`` ... ``torque_z`` columns, or any log with ``sensor_frame`` named (a UR
+recording's ``actual_TCP_force``); the joints' positions and efforts (a ``JointLog``)
+otherwise. ``estimate_payload`` picks the mode from what it is given:
+
+========================================  ===========================  ======================
+given                                     joint torques (JointLog)     wrench (WrenchLog)
+========================================  ===========================  ======================
+``before`` and ``after`` windows          ``estimate_from_log``        ``estimate_wrench_pairs``
+``motion=True`` (or ``empty``/``arm``)    ``estimate_payload_dynamic`` ``estimate_wrench_dynamic``
+neither                                   refused: say which           ``estimate_wrench_static``
+========================================  ===========================  ======================
+
+``options`` go to the chosen function by name (its docstring lists them).
+"""
+
+from __future__ import annotations
+
+import inspect
+from pathlib import Path
+
+from comgrasp_pin.errors import InvalidInputError
+from comgrasp_pin.robot import RobotModel
+from comgrasp_pin.robot_io.dynamic import estimate_payload_dynamic
+from comgrasp_pin.robot_io.estimate import estimate_from_log
+from comgrasp_pin.robot_io.estimate_result import PayloadEstimate
+from comgrasp_pin.robot_io.gains import Gains
+from comgrasp_pin.robot_io.joint_log import JointLog
+from comgrasp_pin.robot_io.logs import DEFAULT_TOPIC, read_log
+from comgrasp_pin.robot_io.wrench_bag import WRENCH_STAMPED
+from comgrasp_pin.robot_io.wrench_dynamic import estimate_wrench_dynamic
+from comgrasp_pin.robot_io.wrench_log import WRENCH_COLUMNS, WrenchLog
+from comgrasp_pin.robot_io.wrench_pairs import estimate_wrench_pairs
+from comgrasp_pin.robot_io.wrench_sources import BAG_SUFFIXES, read_wrench_log
+from comgrasp_pin.robot_io.wrench_static import estimate_wrench_static
+
+
+def _holds_wrench(path: Path) -> bool:
+    """True where the file is a bag with a WrenchStamped topic or a CSV with wrench columns."""
+    if path.is_dir() or path.suffix.lower() in BAG_SUFFIXES:
+        from rosbags.highlevel import AnyReader
+
+        try:
+            with AnyReader([path]) as reader:
+                return any(c.msgtype == WRENCH_STAMPED for c in reader.connections)
+        except Exception:  # noqa: BLE001 - the joint reader says what is wrong with the bag
+            return False
+    try:
+        with open(path, encoding="utf-8", errors="replace") as f:
+            header = f.readline(1 << 16)
+    except OSError:
+        return False
+    columns = {c.strip() for c in header.split(",")}
+    return set(WRENCH_COLUMNS) <= columns
+
+
+def read_any_log(
+    path: str | Path,
+    robot: RobotModel,
+    sensor_frame: str | None = None,
+    gains: Gains | None = None,
+    topic: str = DEFAULT_TOPIC,
+    wrench_topic: str | None = None,
+    tcp_frame: str | None = None,
+) -> JointLog | WrenchLog:
+    """Any log a robot wrote, read by what it holds (the module docstring).
+
+    Args:
+        path: a bag (a folder, .db3 or .mcap), the project's CSV or a UR recording.
+        robot: the arm (``load_robot``).
+        sensor_frame: the URDF frame of a wrench (a CSV's, a UR recording's); naming it
+            reads the wrench.
+        gains: drive gains turning a joint log's motor currents into torques, or None.
+        topic: a bag's JointState topic.
+        wrench_topic: a bag's WrenchStamped topic (None: its only one).
+        tcp_frame: a UR recording's TCP frame (``read_rtde_wrench``).
+    """
+    path = Path(path)
+    if sensor_frame is not None or wrench_topic is not None or _holds_wrench(path):
+        return read_wrench_log(path, robot, sensor_frame, wrench_topic, topic, tcp_frame)
+    return read_log(path, robot.joint_names, topic, None, gains)
+
+
+def estimate_payload(
+    robot: RobotModel,
+    log: JointLog | WrenchLog,
+    before: list[tuple[float, float]] | None = None,
+    after: list[tuple[float, float]] | None = None,
+    motion: bool = False,
+    empty: JointLog | WrenchLog | None = None,
+    **options,
+) -> PayloadEstimate:
+    """The payload from ``log``, the mode picked from what is given (module docstring).
+
+    Args:
+        robot: the arm the log is of.
+        log: ``read_any_log``'s.
+        before: still windows (t0, t1) s with the gripper empty, one per pose.
+        after: still windows holding the payload, paired with ``before``.
+        motion: the log is a motion (``comgrasp plan-motion``): the inertia too.
+        empty: the same arm (or tool) without the payload, along a motion.
+        **options: the chosen function's own (``arm_model``, ``gain_cov``, ``windows``...).
+
+    Raises:
+        InvalidInputError: a mode the inputs do not make (joint torques at rest without
+            their empty windows), or an option the chosen function does not take.
+    """
+    wrench = isinstance(log, WrenchLog)
+    if (before is None) != (after is None):
+        raise InvalidInputError("give both before= and after= windows (one pair per pose)")
+    if before is not None:
+        if motion or empty is not None:
+            raise InvalidInputError("before/after windows are readings at rest, not a motion")
+        chosen, args = (estimate_wrench_pairs if wrench else estimate_from_log), (before, after)
+    elif motion or empty is not None or "arm_model" in options:
+        chosen = estimate_wrench_dynamic if wrench else estimate_payload_dynamic
+        args, options = (), {**options, "empty_log": empty}
+    elif wrench:
+        chosen, args = estimate_wrench_static, ()
+    else:
+        raise InvalidInputError(
+            "joint torques at rest need the empty arm at the same poses: give before= and "
+            "after= windows (pair_by_configuration finds them), or motion=True for a motion"
+        )
+    valid = list(inspect.signature(chosen).parameters)[2 + len(args) :]
+    unknown = sorted(set(options) - set(valid))
+    if unknown:
+        raise InvalidInputError(f"{chosen.__name__} takes no {unknown}; valid options: {valid}")
+    return chosen(robot, log, *args, **options)
