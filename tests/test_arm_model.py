@@ -204,7 +204,10 @@ def test_identify_arm_then_estimate_from_the_command_line(runs, tmp_path, capsys
                  str(tmp_path / "loaded.csv"), "--arm-model", str(arm_json), "--plot", str(png),
                  "--out", str(out)]) == 0  # fmt: skip
     result = json.loads(out.read_text())
-    assert result["verdict"] == "identified" and result["joint_torques"]["arm_model"] == "identified arm model"
+    assert (
+        result["verdict"] == "identified"
+        and result["joint_torques"]["arm_model"] == "identified arm model"
+    )
     assert abs(result["mass_kg"] / box().mass - 1) < 0.02
     lo, hi = result["interval95_mass_kg"]
     assert lo < box().mass < hi

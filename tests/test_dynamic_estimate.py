@@ -99,18 +99,18 @@ def test_payload_from_a_motion_within_its_stated_uncertainty(robot, empty_run):
     empty = rnea_log(robot, None, motion, seed=2, offset=0.25) if empty_run else None
     est = estimate_payload_dynamic(robot, log, empty)
     truth = PAYLOAD.toDynamicParameters()
-    z = (est.params - truth) / np.sqrt(np.diag(est.params_cov))
+    z = (est.inertia.params - truth) / np.sqrt(np.diag(est.inertia.params_cov))
     assert np.all(np.abs(z) < 4.5), z
     # a random motion (condition number ~2000); the friction and offsets found with the
     # payload take some of its information: the tolerances are the stated std's, above
     tolerance = 1 if empty_run else 3
     assert abs(est.mass - 0.8) < tolerance * 0.01 * 0.8
     assert np.linalg.norm(est.com_ee - PAYLOAD.lever) < tolerance * 2e-3
-    assert est.arm_model == ("empty run" if empty_run else "URDF model + friction")
+    assert est.joint_torques.arm_model == ("empty run" if empty_run else "URDF model + friction")
     if not empty_run:  # friction found where the model lacks it: 0.5 N m s/rad viscous and
         # 0.3 N m Coulomb, whose shape (tanh(qd / 0.01)) differs from the model's (0.02)
-        np.testing.assert_allclose(est.friction[:, 0], 0.5, atol=0.25)
-        np.testing.assert_allclose(est.friction[:, 1], 0.3, atol=0.1)
+        np.testing.assert_allclose(est.joint_torques.friction[:, 0], 0.5, atol=0.25)
+        np.testing.assert_allclose(est.joint_torques.friction[:, 1], 0.3, atol=0.1)
 
 
 MC_PAYLOAD = pin.Inertia(0.8, np.array([0.02, -0.01, 0.08]), np.diag([4e-3, 5e-3, 3e-3]))
@@ -139,11 +139,11 @@ def dynamic_z(robot, draws=MC_DRAWS, seed=100, duration=8.0, empty_run=True):
         log = rnea_log(robot, MC_PAYLOAD, motion, seed=seed + 2 * i)
         empty = rnea_log(robot, None, motion, seed=seed + 2 * i + 1, offset=0.25)
         est = estimate_payload_dynamic(robot, log, empty if empty_run else None)
-        z_params = (est.params - truth) / np.sqrt(np.diag(est.params_cov))
+        z_params = (est.inertia.params - truth) / np.sqrt(np.diag(est.inertia.params_cov))
         z_com = np.r_[est.mass - MC_PAYLOAD.mass, est.com_ee - MC_PAYLOAD.lever]
         z_com /= np.sqrt(np.diag(est.cov))
-        z_inertia = (est.inertia_com_ee - MC_PAYLOAD.inertia).ravel()
-        z_inertia = (z_inertia / np.sqrt(np.diag(est.inertia_cov)))[upper]
+        z_inertia = (est.inertia.inertia_com_ee - MC_PAYLOAD.inertia).ravel()
+        z_inertia = (z_inertia / np.sqrt(np.diag(est.inertia.inertia_cov)))[upper]
         z.append(np.r_[z_params, z_com, z_inertia])
     return np.array(z)
 
@@ -188,7 +188,7 @@ def test_logged_velocities_are_used(robot):
     log = rnea_log(robot, PAYLOAD, motion, seed=4)
     noisy = motion[2] + 0.01 * np.random.default_rng(0).standard_normal(motion[2].shape)
     est = estimate_payload_dynamic(robot, replace(log, velocity=noisy))
-    assert est.velocity_from == "log"
+    assert est.motion.velocity_from == "log"
     assert abs(est.mass - 0.8) < 0.01 * 0.8
 
 
@@ -236,10 +236,13 @@ def test_cli_writes_the_inertia_and_exports_carry_it(robot, tmp_path, capsys):
             "--out", str(out), "--export-franka", str(franka)]  # fmt: skip
     assert main(args) == 0
     result = json.loads(out.read_text())
-    I = np.array(result["inertia_kgm2"])
+    I = np.array(result["inertia"]["inertia_kgm2"])
     assert I.shape == (3, 3) and np.allclose(I, I.T)
-    assert np.array(result["params_cov"]).shape == (10, 10)
-    assert result["condition_number"] > 1 and result["arm_model"] == "empty run"
+    assert np.array(result["inertia"]["params_cov"]).shape == (10, 10)
+    assert (
+        result["motion"]["condition_number"] > 1
+        and result["joint_torques"]["arm_model"] == "empty run"
+    )
     load = json.loads(franka.read_text())
     np.testing.assert_allclose(np.reshape(load["load_inertia"], (3, 3), order="F"), I, atol=1e-12)
     assert "identified" in load["comment"]

@@ -26,6 +26,7 @@ from comgrasp_pin.errors import (
     MissingAssetError,
     MissingExtraError,
     MotionLogError,
+    NotIdentifiedError,
     NotStaticError,
     ObjectCutByBorderError,
     ObjectNotFoundError,
@@ -47,7 +48,7 @@ INPUT = [InvalidInputError, UnobservableError, EmptyGripperError, SolverError, P
          ObjectNotFoundError, ObjectCutByBorderError, AmbiguousObjectError, ClutterError,
          UntrustedImageError, ColourDepthMismatchError, InvalidDepthError,
          HeldRodUnmeasuredError, CameraFileError, IKError, CollisionError,
-         LogError, MotionLogError, NotStaticError]  # fmt: skip
+         LogError, MotionLogError, NotStaticError, NotIdentifiedError]  # fmt: skip
 HARNESS = {
     UnstablePhysicsError: RuntimeError,
     WorkerDiedError: RuntimeError,

@@ -41,8 +41,8 @@ def _check_targets(est, payload):
     assert np.linalg.norm(est.com_ee - payload.p_com_ee) < 2e-3
     true, axes = np.linalg.eigh(payload.I_com_ee)
     for moment, u in zip(true, axes.T):
-        estimated = u @ est.inertia_com_ee @ u
-        std = np.sqrt(np.kron(u, u) @ est.inertia_cov @ np.kron(u, u))
+        estimated = u @ est.inertia.inertia_com_ee @ u
+        std = np.sqrt(np.kron(u, u) @ est.inertia.inertia_cov @ np.kron(u, u))
         assert abs(estimated - moment) < 4 * std  # the stated uncertainty holds the truth
         if moment >= DOMINANT_KGM2:
             assert abs(estimated / moment - 1) < 0.10, (estimated, moment)
@@ -63,13 +63,16 @@ def test_ur5_box_through_bags_and_the_command_line(ur5_motion, tmp_path, capsys)
             "--flange-frame", "tool0", "--export-ur", str(script)]  # fmt: skip
     assert main(args) == 0
     result = json.loads(out.read_text())
-    assert result["velocity_from"] == "log" and result["arm_model"] == "empty run"
+    assert (
+        result["motion"]["velocity_from"] == "log"
+        and result["joint_torques"]["arm_model"] == "empty run"
+    )
     est = estimate_payload_dynamic(arm_robot("ur5"), log, empty)
     assert result["mass_kg"] == pytest.approx(est.mass, rel=1e-6)  # bags keep the samples
     _check_targets(est, box())
     # the URScript's inertia: about the CoM in tool0's axes
     R = T_flange_ee(arm_robot("ur5"), "tool0")[:3, :3]
-    I = R @ np.array(result["inertia_kgm2"]) @ R.T
+    I = R @ np.array(result["inertia"]["inertia_kgm2"]) @ R.T
     line = [s for s in script.read_text().splitlines() if s.startswith("set_target_payload")][0]
     six = [float(v) for v in line.split("[")[2].rstrip("])").split(",")]
     np.testing.assert_allclose(six, [I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]],

@@ -26,8 +26,10 @@ def test_one_name_for_the_std_of_a_torque_reading():
     import dataclasses
     import inspect
 
+    from comgrasp_pin.robot_io import estimate_result as rio_parts
+
     assert "torque_std" in inspect.signature(cg.estimate_com).parameters
-    for cls in (cg.ComEstimate, cg.PosePlan, cg.LogEstimate):
+    for cls in (cg.ComEstimate, cg.PosePlan, cg.PayloadEstimate, rio_parts.JointTorques):
         names = {f.name for f in dataclasses.fields(cls)}
         assert "noise_std" not in names, cls
     assert "torque_std" in {f.name for f in dataclasses.fields(cg.ComEstimate)}

@@ -42,11 +42,12 @@ def test_python_blocks_run(tmp_path, monkeypatch, capsys):
     scope: dict = {"__name__": "readme"}
     for code in blocks:
         exec(compile(code, str(README), "exec"), scope)
-    est, result = scope["est"], scope["result"]
+    est = scope["est"]  # the front door's PayloadEstimate
     truth = np.r_[0.8, 0.02, -0.01, 0.05]
-    for e in (est, result.estimate):
-        assert np.all(np.abs(np.r_[e.mass, e.com_ee] - truth) < 4 * e.std)
+    assert np.all(np.abs(np.r_[est.mass, est.com_ee] - truth) < 4 * est.std)
+    assert est.verdict == "identified" and est.at_rest.fit is not None
     assert (tmp_path / "payload.yaml").is_file() and (tmp_path / "log.csv").is_file()
+    assert json.loads((tmp_path / "RESULT.json").read_text())["schema_version"] == 2
     assert "mass" in capsys.readouterr().out
 
 

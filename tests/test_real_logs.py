@@ -72,7 +72,7 @@ def test_ur_calibrated_gains_halves_agree(bench, ur):
     cal = calibrate_gains(robot, loaded, empty, UR_LOAD_KG, bench.UR_LOAD_STD_KG)
     loaded_c, empty_c = bench.with_gains(loaded, cal.gains), bench.with_gains(empty, cal.gains)
     full = estimate_payload_dynamic(robot, loaded_c, empty_c, gain_cov=cal.cov)
-    t0, t1 = full.alignment["loaded_motion_s"]
+    t0, t1 = full.joint_torques.alignment["loaded_motion_s"]
     middle = 0.5 * (t0 + t1)
     halves = [
         estimate_payload_dynamic(robot, loaded_c, empty_c, window=w, gain_cov=cal.cov)

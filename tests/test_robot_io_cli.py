@@ -47,10 +47,13 @@ def _estimate_args(log_args, before, after, out):
 
 def _check_result(path):
     r = json.loads(path.read_text())
-    assert set(r) >= {"mass_kg", "com_m", "frame", "cov", "unobservable", "n_poses",
-                      "residual_rms_Nm"}  # fmt: skip
+    assert set(r) >= {"schema_version", "mass_kg", "com_m", "frame", "cov", "std",
+                      "interval95_mass_kg", "verdict", "reasons", "sources", "unobservable",
+                      "at_rest", "joint_torques"}  # fmt: skip
+    assert r["schema_version"] == 2 and r["verdict"] == "identified"
+    assert set(r["at_rest"]) >= {"n_poses", "q_rad", "windows", "residual_rms"}
     std = np.sqrt(np.diag(r["cov"]))
-    assert r["frame"] == "eelink" and r["n_poses"] == 3 and r["unobservable"] is None
+    assert r["frame"] == "eelink" and r["at_rest"]["n_poses"] == 3 and r["unobservable"] is None
     assert abs(r["mass_kg"] - MASS) < 3 * std[0]
     assert np.all(np.abs(np.array(r["com_m"]) - COM) < 3 * std[1:])
     return r
@@ -91,7 +94,7 @@ def test_estimate_from_csv_with_ipopt(ur5_session, tmp_path):
         main([*_estimate_args(["--csv", str(csv)], before, after, out), "--method", "ipopt"]) == 0
     )
     r = _check_result(out)
-    assert r["solver_status"] == "Solve_Succeeded"
+    assert r["at_rest"]["solver_status"] == "Solve_Succeeded"
 
 
 def test_estimate_as_a_subprocess(ur5_session, tmp_path):
@@ -124,7 +127,7 @@ def test_estimate_with_the_sensors_drift(ur5_session, tmp_path):
         assert main([*_estimate_args(["--csv", str(csv)], before, after, out),
                      "--drift-std", drift]) == 0  # fmt: skip
         r = _check_result(out)
-        assert r["torque_drift_Nm_per_sqrt_s"] == float(drift)
+        assert r["joint_torques"]["torque_drift_Nm_per_sqrt_s"] == float(drift)
         stds[drift] = np.array(r["std"]["com_m"])
     assert np.all(stds["0.01"] > 1.5 * stds["0"])
     _bad_out = tmp_path / "R.json"

@@ -44,7 +44,7 @@ def test_simulated_ur5_payload_within_the_interval(sim_bag, tmp_path, mode):
     assert main(args) == 0
     r = json.loads(out.read_text())
     std = np.sqrt(np.diag(r["cov"]))
-    assert r["n_poses"] == 3 and r["unobservable"] is None
+    assert r["at_rest"]["n_poses"] == 3 and r["unobservable"] is None
     assert abs(r["mass_kg"] - MASS) < 3 * std[0]
     assert np.all(np.abs(np.array(r["com_m"]) - COM) < 3 * std[1:])
     assert std[0] < 0.005 and np.all(std[1:] < 0.002)  # informative, not merely wide

@@ -303,8 +303,8 @@ def test_dynamic_estimate_writes_through_the_same_exports(tmp_path):
             "--export-abb", str(abb)]  # fmt: skip
     assert main(args) == 0
     result = json.loads((tmp_path / "R.json").read_text())
-    p = Payload(result["mass_kg"], np.array(result["com_m"]), np.array(result["inertia_kgm2"]),
-                "eelink", None, "identified")  # fmt: skip
+    inertia = np.array(result["inertia"]["inertia_kgm2"])
+    p = Payload(result["mass_kg"], np.array(result["com_m"]), inertia, "eelink", None, "identified")
     _check_kuka([float(v) for v in KRL.fullmatch(_last_line(krl.read_text(), ";")).groups()], p)
     values = RAPID.fullmatch(_last_line(abb.read_text(), "!")).groups()[1:]
     _check_abb([float(v) for v in values], p)

@@ -17,13 +17,13 @@ import pytest
 from comgrasp_pin.errors import InvalidInputError, LogError, MotionLogError, UnobservableError
 from comgrasp_pin.estimation.inertial_fit import pseudo_inertia
 from comgrasp_pin.robot import RobotModel
+from comgrasp_pin.robot_io.result_file import result_dict
 from comgrasp_pin.robot_io.wrench_dynamic import (
     TOOL_EMPTY_RUN,
     TOOL_GIVEN,
     TOOL_NOMINAL,
     estimate_wrench_dynamic,
 )
-from comgrasp_pin.robot_io.result_file import result_dict
 from comgrasp_pin.robot_io.wrench_log import WrenchLog
 from comgrasp_pin.robot_io.wrench_system import nominal_tool, params_map
 
@@ -168,7 +168,7 @@ def test_payload_and_bias_from_the_wrench_within_their_stated_uncertainty(robot)
     est = estimate_wrench_dynamic(robot, log, combine_joint_torques=False)
     _check_payload(est)
     # the bias is the mean over the fitted samples of BIAS + the linear drift
-    u = est.t / motion[0][-1]
+    u = est.motion.t / motion[0][-1]
     z_bias = (est.wrench.sensor_bias - BIAS - 0.6 * u.mean()) / est.wrench.sensor_bias_std
     assert np.all(np.abs(z_bias) < 4.5), z_bias
     np.testing.assert_allclose(est.wrench.sensor_bias_drift, 0.6 * (u[-1] - u[0]), atol=0.03)
@@ -211,12 +211,12 @@ def test_both_sources_used_their_shares_follow_their_noise(robot):
     _check_payload(both)
     assert both.joint_torques is not None and both.joint_torques.arm_model.startswith("URDF")
     for quantity in ("mass_kg", "com_m", "principal_moments_kgm2"):
-        total = np.add(both.contributions["wrench"][quantity],
-                       both.contributions["joint_torques"][quantity])  # fmt: skip
+        total = np.add(both.sources["wrench"][quantity],
+                       both.sources["joint_torques"][quantity])  # fmt: skip
         np.testing.assert_allclose(total, 1.0, atol=1e-9)
     # a 0.1 N sensor against 0.05 N m joint torques: the wrench carries most of the mass
-    assert both.contributions["wrench"]["mass_kg"] > 0.8
-    assert both.agreement["chi2"] < both.agreement["max_chi2"]
+    assert both.sources["wrench"]["mass_kg"] > 0.8
+    assert both.wrench.agreement["chi2"] < both.wrench.agreement["max_chi2"]
     assert both.cov[0, 0] <= wrench_only.cov[0, 0] * 1.05
     # a sensor 100 times noisier: the joint torques carry most of it
     noisy = wrench_log(robot, PAYLOAD, motion, noise=(10.0, 0.5), seed=4)
@@ -351,4 +351,4 @@ def test_mujoco_wrench_against_the_truth_and_the_joint_torques_on_one_motion():
     d = np.r_[wrench.mass, wrench.com_ee] - np.r_[joint.mass, joint.com_ee]
     assert np.all(np.abs(d) < 4 * np.sqrt(np.diag(wrench.cov) + np.diag(joint.cov))), d
     assert both.joint_torques.arm_model == "empty run"
-    assert both.agreement["chi2"] < both.agreement["max_chi2"]
+    assert both.wrench.agreement["chi2"] < both.wrench.agreement["max_chi2"]

@@ -169,14 +169,14 @@ def test_a_log_at_four_planned_poses_gives_the_payload_in_the_ee_frame():
     c_sensor, bias = np.array([0.02, -0.01, 0.12]), rng.normal(size=6)
     std = np.r_[[0.1] * 3, [0.005] * 3]
     est = estimate_wrench_static(robot, _log(robot, "tool0", 1.5, c_sensor, bias, std, rng))
-    assert est.n_poses == 4 and est.verdict == "identified"
+    assert est.at_rest.n_poses == 4 and est.verdict == "identified"
     T_world_s = robot.frame_pose(np.zeros(6), "tool0")
     T_world_ee = robot.frame_pose(np.zeros(6), robot.ee_frame)
     c_ee = np.linalg.solve(T_world_ee, T_world_s @ np.r_[c_sensor, 1])[:3]
     sd = np.sqrt(np.diag(est.cov))
     assert abs(est.mass - 1.5) < 4 * sd[0] and sd[0] < 0.01
     assert np.all(np.abs(est.com_ee - c_ee) < 4 * sd[1:]) and np.all(sd[1:] < 1e-3)
-    assert np.all(np.abs(est.sensor_bias - bias) < 4 * est.sensor_bias_std)
+    assert np.all(np.abs(est.wrench.sensor_bias - bias) < 4 * est.wrench.sensor_bias_std)
 
 
 def test_a_log_that_never_rests_is_refused():

@@ -59,7 +59,7 @@ def test_ideal_sensor_gives_the_simulated_payload(robot, draw):
     payload, excess, _, loaded = _sessions(robot, draw, "ideal")
     assert excess is None
     est = estimate_wrench_static(robot, loaded)
-    assert est.verdict == "identified" and est.n_poses == 4
+    assert est.verdict == "identified" and est.at_rest.n_poses == 4
     assert abs(est.mass / payload.mass - 1) < 0.01
     assert np.linalg.norm(est.com_ee - payload.p_com_ee) < 0.002
     assert np.all(np.abs(_z(est, payload.mass, payload.p_com_ee)) < 4)
@@ -74,9 +74,9 @@ def test_realistic_sensor_with_a_calibrated_tool_holds_the_truth(robot, draw):
     sheet = sensor_preset("realistic").wrench  # the data sheet's drift, as a user knows it
     drift = {"drift_std": sheet.drift_std, "drift_rate_std": sheet.drift_rate_std}
     tool = estimate_wrench_static(robot, empty, subtract_tool=False, **drift)
-    calibrated = (tool.fit.theta[:4], tool.fit.theta_cov[:4, :4])
+    calibrated = (tool.wrench.fit.theta[:4], tool.wrench.fit.theta_cov[:4, :4])
     est = estimate_wrench_static(robot, loaded, tool=calibrated, **drift)
-    assert est.verdict == "identified" and est.fit.chi2_dof < 4
+    assert est.verdict == "identified" and est.wrench.fit.chi2_dof < 4
     assert abs(est.mass / payload.mass - 1) < 0.01
     assert np.linalg.norm(est.com_ee - payload.p_com_ee) < 0.002
     assert np.all(np.abs(_z(est, payload.mass, payload.p_com_ee)) < 3)

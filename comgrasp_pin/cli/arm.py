@@ -41,7 +41,7 @@ def _deepest_frame(urdf, package_dirs) -> str:
 
 
 def _cmd_identify(args: argparse.Namespace) -> int:
-    from comgrasp_pin.cli.dynamic import _window, one_log
+    from comgrasp_pin.cli.dynamic import one_log, window
     from comgrasp_pin.cli.gains_args import gains_from_args
     from comgrasp_pin.cli.robot import _write_json
     from comgrasp_pin.errors import LogError
@@ -59,7 +59,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
             f"{exc}. The arm's end was taken as {args.ee_frame!r}, the end of the URDF's "
             "longest chain: give --ee-frame, the flange (e.g. tool0, panda_link8)"
         ) from None
-    model = identify_arm(robot, log, _window(args.window, "--window"), args.cutoff)
+    model = identify_arm(robot, log, window(args.window, "--window"), args.cutoff)
     _write_json(args.out, arm_model_dict(model))
     n = robot.nq
     v = model.validation

@@ -4,8 +4,9 @@
     log = read_log("run.mcap" or "run.csv", robot.joint_names)
     gains = parse_gains("10,10.7,8.46,9.0,9.48,10.1", robot.nq, gain_std=0.1)  # N m per A
     ur_log = read_log("record.csv", robot.joint_names, gains=gains)  # a UR's motor currents
-    result = estimate_from_log(robot, log, before=[(1, 2)], after=[(8, 9)])
-    payload = payload_in_flange(robot, result.estimate, "tool0", inertia="point")
+    est = estimate_from_log(robot, log, before=[(1, 2), (5, 6), (9, 10)],
+                            after=[(21, 22), (25, 26), (29, 30)])  # a PayloadEstimate
+    payload = payload_in_flange(robot, est, "tool0", inertia="point")  # identified only
     write_urscript(payload, "payload.script")
     plan = plan_measurement_poses(robot, k=3)  # limits, no self-collision, D-optimal
     motion = plan_excitation(robot, duration_s=20)  # the inertia too: a motion to record

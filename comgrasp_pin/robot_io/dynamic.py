@@ -96,7 +96,7 @@ def estimate_payload_dynamic(
     if empty_log is not None and arm_model is not None:
         raise InvalidInputError("give an empty run or an arm model, not both")
     system = payload_system(robot, log, empty_log, window, empty_window, cutoff_hz, arm_model)
-    S, source, b_gain, columns = system.S, system.source, system.b_gain, system.per_joint
+    S, source, b_gain = system.S, system.source, system.b_gain
     k, n = S.q.shape
     A_pi, A_x, b_rows = system.Y.reshape(-1, 10), system.A_x, system.b.reshape(-1)
     A = np.column_stack([A_pi, A_x])
@@ -106,12 +106,8 @@ def estimate_payload_dynamic(
     err = error_sources(A, b_rows, w, (k, n), float(S.t[-1] - S.t[0]), b_gain, rel, arm_model,
                         system.arm_jac)  # fmt: skip
     fit = fit_payload(A_pi, A_x, b_rows, w, prior_of(prior), err)
-    pi, x = fit.pi, fit.x
+    pi = fit.pi
     params_cov = fit.data_cov + err.gains + err.arm
-    tau_fit = (A_pi @ pi).reshape(k, n)
-    tau_payload = (b_rows - A_x @ x).reshape(k, n)
-    residual = tau_fit - tau_payload
-    extras = x[: columns * n].reshape(columns, n)
     validation = du.held_out(A_pi, A_x, b_rows, w, S.t, k, n)
     halves, halves_std = _halves(A, b_rows, w, k, n, err.factor, b_gain, err.rel_gain_cov)
     parts = std_parts(fit.data_cov, err, log.current_gains is not None, arm_model is not None)
@@ -119,22 +115,31 @@ def estimate_payload_dynamic(
     motion = Motion(k, duration, S.cutoff_hz, S.velocity_from, fit.status,
                     condition_number(system.Y, parameter_scale()), S.t, validation,
                     halves)  # fmt: skip
-    joints = JointTorques(
-        sigma, "residuals", source,
-        gains_source if log.current_gains is not None else None,
-        offsets=extras[0], offset_drift=2 * extras[1 : 1 + DRIFT_DEGREE : 2].sum(axis=0),
-        friction=extras[1 + DRIFT_DEGREE :].T if source == NOMINAL else None,
-        residual_rms=np.sqrt(np.mean(residual**2, axis=0)),
-        delay_s=float(x[-1]) if source != EMPTY_RUN else None, alignment=system.alignment,
-        tau_payload=tau_payload, tau_payload_fit=tau_fit,
-    )  # fmt: skip
+    gains = gains_source if log.current_gains is not None else None
+    joints = _joint_part(system, sigma, fit, gains)
     checks = Checks(float(pi[0]), float(np.sqrt(params_cov[0, 0])), source,
                     validation.explained_total, halves, halves_std)  # fmt: skip
     sources = sole_source(JOINT_TORQUES, motion=True)
-    return motion_estimate(
-        robot, fit, params_cov, motion, motion_reasons(checks), sources, parts,
-        joint_torques=joints,
-    )
+    findings = motion_reasons(checks)
+    return motion_estimate(robot, fit, params_cov, motion, findings, sources, parts,
+                           joint_torques=joints)  # fmt: skip
+
+
+def _joint_part(system, sigma, fit, gains_source) -> JointTorques:
+    """What the joint torques' fit found besides the payload: offsets, friction, delay."""
+    k, n = system.b.shape
+    x = fit.x
+    tau_fit = (system.Y.reshape(-1, 10) @ fit.pi).reshape(k, n)
+    tau_payload = (system.b.reshape(-1) - system.A_x @ x).reshape(k, n)
+    extras = x[: system.per_joint * n].reshape(system.per_joint, n)
+    return JointTorques(
+        sigma, "residuals", system.source, gains_source,
+        offsets=extras[0], offset_drift=2 * extras[1 : 1 + DRIFT_DEGREE : 2].sum(axis=0),
+        friction=extras[1 + DRIFT_DEGREE :].T if system.source == NOMINAL else None,
+        residual_rms=np.sqrt(np.mean((tau_fit - tau_payload) ** 2, axis=0)),
+        delay_s=float(x[-1]) if system.source != EMPTY_RUN else None,
+        alignment=system.alignment, tau_payload=tau_payload, tau_payload_fit=tau_fit,
+    )  # fmt: skip
 
 
 def _halves(A, b_rows, w, k, n, factor, b_gain=None, rel=None):

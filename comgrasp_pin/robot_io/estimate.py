@@ -80,7 +80,7 @@ def estimate_from_log(
             estimator (d (m, m c) / d delta by a central difference of the closed-form
             estimate re-run with each joint's efforts scaled, exact as (m, m c) is linear in
             them; ``_gains_covariance``) and added to the estimate's covariance
-            (``LogEstimate.gains_cov`` holds that part). Ignored when None or when the log
+            (``JointTorques.gains_cov`` holds that part). Ignored when None or when the log
             holds torques.
 
     Raises:

@@ -25,7 +25,9 @@ neither                                   refused: say which           ``estimat
 from __future__ import annotations
 
 import inspect
+from collections.abc import Callable
 from pathlib import Path
+from typing import cast
 
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.robot import RobotModel
@@ -107,13 +109,15 @@ def estimate_payload(
         after: still windows holding the payload, paired with ``before``.
         motion: the log is a motion (``comgrasp plan-motion``): the inertia too.
         empty: the same arm (or tool) without the payload, along a motion.
-        **options: the chosen function's own (``arm_model``, ``gain_cov``, ``windows``...).
+        **options (Any): the chosen function's own (``arm_model``, ``gain_cov``, ``windows``...).
 
     Raises:
         InvalidInputError: a mode the inputs do not make (joint torques at rest without
             their empty windows), or an option the chosen function does not take.
     """
     wrench = isinstance(log, WrenchLog)
+    chosen: Callable[..., PayloadEstimate]
+    args: tuple
     if (before is None) != (after is None):
         raise InvalidInputError("give both before= and after= windows (one pair per pose)")
     if before is not None:
@@ -134,4 +138,4 @@ def estimate_payload(
     unknown = sorted(set(options) - set(valid))
     if unknown:
         raise InvalidInputError(f"{chosen.__name__} takes no {unknown}; valid options: {valid}")
-    return chosen(robot, log, *args, **options)
+    return cast(Callable[..., PayloadEstimate], chosen)(robot, log, *args, **options)

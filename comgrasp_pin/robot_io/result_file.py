@@ -18,7 +18,14 @@ import numpy as np
 
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.estimation.payload_regressor import PARAMETER_NAMES
-from comgrasp_pin.robot_io.estimate_result import PayloadEstimate
+from comgrasp_pin.robot_io.estimate_result import (
+    AtRest,
+    Inertia,
+    JointTorques,
+    Motion,
+    PayloadEstimate,
+    Wrench,
+)
 from comgrasp_pin.robot_io.trust import Z95
 
 SCHEMA_VERSION = 2
@@ -31,7 +38,9 @@ def _list(values) -> list | None:
     if values is None:
         return None
     a = np.asarray(values, dtype=float)
-    return np.where(np.isfinite(a), a, None).tolist()
+    out = a.astype(object)
+    out[~np.isfinite(a)] = None
+    return out.tolist()
 
 
 def result_dict(est: PayloadEstimate) -> dict:
@@ -49,7 +58,8 @@ def result_dict(est: PayloadEstimate) -> dict:
             "mass_kg": float(std[0]), "com_m": _list(std[1:]) if held else None,
             "mass_kg_by_source": est.std_parts or None,
         },
-        "interval95_mass_kg": None if std is None else list(est.interval95_mass),
+        "interval95_mass_kg": None if std is None else [est.mass - Z95 * float(std[0]),
+                                                        est.mass + Z95 * float(std[0])],
         "interval95_com_m": None if std is None or not held else [
             [float(c - Z95 * s), float(c + Z95 * s)] for c, s in zip(est.com_ee, std[1:])],
         "verdict": est.verdict,
@@ -57,14 +67,16 @@ def result_dict(est: PayloadEstimate) -> dict:
         "sources": est.sources,
         "unobservable": _list(est.unobservable_ee),
     }  # fmt: skip
-    for name, part in (("at_rest", _at_rest), ("motion", _motion), ("inertia", _inertia),
-                       ("joint_torques", _joint_torques), ("wrench", _wrench)):  # fmt: skip
-        out[name] = None if getattr(est, name) is None else part(est)
+    out["at_rest"] = None if est.at_rest is None else _at_rest(est.at_rest)
+    out["motion"] = None if est.motion is None else _motion(est.motion, est.wrench is not None)
+    out["inertia"] = None if est.inertia is None else _inertia(est.inertia)
+    j = est.joint_torques
+    out["joint_torques"] = None if j is None else _joint_torques(j)
+    out["wrench"] = None if est.wrench is None else _wrench(est.wrench)
     return out
 
 
-def _at_rest(est: PayloadEstimate) -> dict:
-    r = est.at_rest
+def _at_rest(r: AtRest) -> dict:
     out = {"n_poses": r.n_poses, "q_rad": _list(r.q), "windows": r.windows,
            "method": r.method, "solver_status": r.solver_status,
            "condition_number": r.condition_number}  # fmt: skip
@@ -73,28 +85,25 @@ def _at_rest(est: PayloadEstimate) -> dict:
     return out
 
 
-def _motion(est: PayloadEstimate) -> dict:
-    m = est.motion
-    out = {
+def _motion(m: Motion, wrench: bool) -> dict:
+    validation = m.validation.as_dict()
+    if wrench:  # the rows: the wrench's six axes first, then the joints
+        v = m.validation
+        validation["rows"] = "wrench force_x..torque_z, then the joints (if used)"
+        validation["wrench"] = {"rms_N": _list(v.rms_Nm[:3]), "rms_Nm": _list(v.rms_Nm[3:6]),
+                                "explained": _list(v.explained[:6])}  # fmt: skip
+    return {
         "n_samples": m.n_samples, "duration_s": m.duration_s, "cutoff_hz": m.cutoff_hz,
         "velocity_from": m.velocity_from, "solver_status": m.solver_status,
         "condition_number": m.condition_number, "halves_mass_kg": list(m.halves_mass),
-        "validation": m.validation.as_dict(),
+        "validation": validation,
         "validation_log": None if m.second_log is None else {
             "rms_Nm": _list(m.second_log.rms_Nm), "explained": _list(m.second_log.explained),
             "explained_total": m.second_log.explained_total},
     }  # fmt: skip
-    if est.wrench is not None:  # the rows: the wrench's six axes first, then the joints
-        v = m.validation
-        out["validation"]["rows"] = "wrench force_x..torque_z, then the joints (if used)"
-        out["validation"]["wrench"] = {"rms_N": _list(v.rms_Nm[:3]),
-                                       "rms_Nm": _list(v.rms_Nm[3:6]),
-                                       "explained": _list(v.explained[:6])}  # fmt: skip
-    return out
 
 
-def _inertia(est: PayloadEstimate) -> dict:
-    i = est.inertia
+def _inertia(i: Inertia) -> dict:
     return {
         "verdict": i.verdict, "reasons": list(i.reasons),
         "inertia_kgm2": _list(i.inertia_com_ee), "inertia_std_kgm2": _list(i.inertia_std),
@@ -106,8 +115,7 @@ def _inertia(est: PayloadEstimate) -> dict:
     }  # fmt: skip
 
 
-def _joint_torques(est: PayloadEstimate) -> dict:
-    j = est.joint_torques
+def _joint_torques(j: JointTorques) -> dict:
     return {
         "torque_std_Nm": _list(j.torque_std), "torque_std_from": j.noise_from,
         "arm_model": j.arm_model, "gains": j.gains_source,
@@ -120,8 +128,7 @@ def _joint_torques(est: PayloadEstimate) -> dict:
     }  # fmt: skip
 
 
-def _wrench(est: PayloadEstimate) -> dict:
-    w = est.wrench
+def _wrench(w: Wrench) -> dict:
     out = {
         "sensor_frame": w.sensor_frame, "sensor_bias": _list(w.sensor_bias),
         "sensor_bias_std": _list(w.sensor_bias_std), "sensor_bias_units": BIAS_UNITS,

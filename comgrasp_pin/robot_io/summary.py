@@ -10,8 +10,18 @@ from __future__ import annotations
 
 import numpy as np
 
-from comgrasp_pin.robot_io.estimate_result import PayloadEstimate
-from comgrasp_pin.robot_io.trust import principal_moments
+from comgrasp_pin.robot_io.estimate_result import (
+    Inertia,
+    JointTorques,
+    Motion,
+    PayloadEstimate,
+    Wrench,
+)
+from comgrasp_pin.robot_io.trust import Z95, principal_moments
+
+LABELS = {"mass_kg": "mass", "com_m": "CoM", "first_moment_kgm": "m c",
+          "principal_moments_kgm2": "principal moments"}  # fmt: skip
+"""The sources' shares, by their keys in ``PayloadEstimate.sources``."""
 
 
 def _vec(values, scale: float = 1.0, precision: int = 3) -> str:
@@ -20,12 +30,14 @@ def _vec(values, scale: float = 1.0, precision: int = 3) -> str:
 
 def _head(est: PayloadEstimate) -> str:
     m, r, w = est.motion, est.at_rest, est.wrench
-    if m is not None:
+    if r is not None:
+        text = f"payload from {r.n_poses} pose(s) at rest ({est.mode}, {r.method})"
+    elif m is not None:
         text = (f"payload from a {m.duration_s:.1f} s motion ({est.mode}; {m.n_samples} samples "
                 f"after a {m.cutoff_hz:g} Hz zero-phase filter; velocities from "
                 f"{m.velocity_from})")  # fmt: skip
     else:
-        text = f"payload from {r.n_poses} pose(s) at rest ({est.mode}, {r.method})"
+        text = f"payload ({est.mode})"
     if w is not None:
         text += f"; sensor frame {w.sensor_frame}, the tool's own wrench: {w.tool}"
     return text
@@ -37,7 +49,7 @@ def _mass_and_com(est: PayloadEstimate) -> list[str]:
         lines = [f"  mass  {est.mass:.4f} kg (no uncertainty)"]
         std = np.full(4, np.nan)
     else:
-        lo, hi = est.interval95_mass
+        lo, hi = est.mass - Z95 * std[0], est.mass + Z95 * std[0]
         lines = [f"  mass  {est.mass:.4f} +- {std[0]:.4f} kg (std; 95 %: {lo:.3f} to {hi:.3f} kg)"]
     if est.std_parts:
         lines.append("        std by source: "
@@ -52,24 +64,22 @@ def _mass_and_com(est: PayloadEstimate) -> list[str]:
     return lines
 
 
-def _inertia(est: PayloadEstimate) -> list[str]:
-    i = est.inertia
+def _inertia(i: Inertia, frame: str) -> list[str]:
     moments, axes, std = principal_moments(i.inertia_com_ee, i.inertia_cov)
-    lines = [f"  principal moments of inertia about the CoM (kg m^2), axes in {est.frame} "
+    lines = [f"  principal moments of inertia about the CoM (kg m^2), axes in {frame} "
              f"(inertia {i.verdict}):"]  # fmt: skip
     for value, u, s in zip(moments, axes.T, std):
         lines.append(f"    {value:.3e} +- {s:.1e}  along {_vec(u)}")
     return lines + [f"    - {r}" for r in i.reasons]
 
 
-def _joint_torques(est: PayloadEstimate) -> list[str]:
-    j = est.joint_torques
+def _joint_torques(j: JointTorques, at_rest: bool) -> list[str]:
     lines = []
     if j.arm_model is not None:
         lines.append(f"  joint torques: the arm's own from {j.arm_model}")
     if j.note:
         lines.append(f"    ({j.note})")
-    if est.at_rest is not None:
+    if at_rest:
         drift = f"; drift {j.drift_std:g} N m/sqrt(s)" if j.drift_std else ""
         lines.append(f"  torque std ({j.noise_from}): {np.mean(j.torque_std):.3g} N m per averaged "
                      f"reading{drift}")  # fmt: skip
@@ -86,11 +96,10 @@ def _joint_torques(est: PayloadEstimate) -> list[str]:
     return lines
 
 
-def _wrench(est: PayloadEstimate) -> list[str]:
-    w = est.wrench
+def _wrench(w: Wrench) -> list[str]:
     lines = []
-    if w.sensor_bias is not None:
-        b, bs = w.sensor_bias, w.sensor_bias_std
+    b, bs = w.sensor_bias, w.sensor_bias_std
+    if b is not None and bs is not None:
         lines.append(
             f"  sensor bias: force ({b[0]:.3f}, {b[1]:.3f}, {b[2]:.3f}) N "
             f"(std {bs[:3].max():.3f}), torque ({b[3]:.4f}, {b[4]:.4f}, {b[5]:.4f}) N m "
@@ -98,7 +107,7 @@ def _wrench(est: PayloadEstimate) -> list[str]:
         )
     if w.tool_mass > 0:
         lines.append(f"  a tool beyond the sensor ({w.tool_mass:.3f} kg) subtracted")
-    if w.fit is not None:
+    if w.fit is not None and w.residual_rms is not None:
         lines.append(
             f"  residuals {w.residual_rms[0]:.3g} N, {w.residual_rms[1]:.3g} N m RMS (chi2/dof "
             f"{w.fit.chi2_dof:.2f}; covariance scaled by {w.fit.scale:.2f}; gravity spread "
@@ -110,8 +119,7 @@ def _wrench(est: PayloadEstimate) -> list[str]:
     return lines
 
 
-def _motion(est: PayloadEstimate) -> list[str]:
-    m = est.motion
+def _motion(m: Motion) -> list[str]:
     v = m.validation
     lines = [
         f"  condition number of the logged motion {m.condition_number:.1f} (scaled regressor)",
@@ -126,14 +134,15 @@ def _motion(est: PayloadEstimate) -> list[str]:
 
 
 def _shares(est: PayloadEstimate) -> list[str]:
+    """Each source's share of the information, where more than one gave some."""
     if len(est.sources) < 2:
         return []
     lines = []
     for name, share in est.sources.items():
-        values = list(share.values())
-        com = np.atleast_1d(values[1]) if len(values) > 1 else np.array([])
-        lines.append(f"  share of the information from {name.replace('_', ' ')}: mass "
-                     f"{100 * values[0]:.0f} %, CoM {_vec(100 * com, precision=0)} %")  # fmt: skip
+        parts = [f"{LABELS.get(key, key)} {_vec(100 * np.atleast_1d(value), precision=0)} %"
+                 for key, value in share.items()]  # fmt: skip
+        lines.append(f"  share of the information from {name.replace('_', ' ')}: "
+                     + ", ".join(parts))  # fmt: skip
     return lines
 
 
@@ -141,13 +150,13 @@ def summary(est: PayloadEstimate) -> str:
     """Mass, CoM (and inertia) with their std, what each source found, the verdict."""
     lines = [_head(est), *_mass_and_com(est)]
     if est.inertia is not None:
-        lines += _inertia(est)
+        lines += _inertia(est.inertia, est.frame)
     if est.joint_torques is not None:
-        lines += _joint_torques(est)
+        lines += _joint_torques(est.joint_torques, est.at_rest is not None)
     if est.wrench is not None:
-        lines += _wrench(est)
+        lines += _wrench(est.wrench)
     if est.motion is not None:
-        lines += _motion(est)
+        lines += _motion(est.motion)
     lines += _shares(est)
     if est.unobservable_ee is not None:
         lines.append(

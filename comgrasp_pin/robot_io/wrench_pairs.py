@@ -15,6 +15,7 @@ import numpy as np
 
 from comgrasp_pin.estimation.regressor import stacked_regressor
 from comgrasp_pin.estimation.wrench_com import (
+    UNKNOWNS,
     estimate_com_wrench,
     source_shares,
     tool_wrench,
@@ -72,9 +73,11 @@ def estimate_wrench_pairs(
                               wrench_std=w_std, method=method, torques=torques)  # fmt: skip
     windows = {"before": [[r.t0, r.t1, r.n_samples] for r in wb],
                "after": [[r.t0, r.t1, r.n_samples] for r in wa]}  # fmt: skip
-    parts = {"wrench": Wrench(frame, tool="cancels in the before/after differences")}
+    parts: dict = {"wrench": Wrench(frame, tool="cancels in the before/after differences")}
     if torques is not None:  # torque_std: (k n,) each pose's difference's, per joint
         std = np.sqrt(np.diag(torques[2]))
         parts["joint_torques"] = JointTorques(std, "samples", tau_before=tau_b,
                                               tau_after=torques[1])  # fmt: skip
-    return judged_at_rest(robot, est, q, windows, source_shares(blocks), **parts)
+    shares = {name: {"mass_kg": s["mass"], "first_moment_kgm": [s[u] for u in UNKNOWNS[1:]]}
+              for name, s in source_shares(blocks).items()}  # fmt: skip
+    return judged_at_rest(robot, est, q, windows, shares, **parts)
