@@ -54,7 +54,7 @@ class RobotModel:
     """
 
     def __init__(self, full_model: pin.Model, ee_frame: str, urdf_path: Path | None = None):
-        _check_frame(full_model, ee_frame, "ee_frame")
+        check_frame(full_model, ee_frame, "ee_frame")
         self.full_model = full_model
         self.ee_frame = ee_frame
         self.urdf_path = urdf_path
@@ -174,7 +174,7 @@ class RobotModel:
 
     def frame_pose(self, q: np.ndarray, frame: str) -> np.ndarray:
         """(4, 4) T_world_frame of any frame of the model, e.g. ``"side_camera"``."""
-        _check_frame(self.model, frame, "frame")
+        check_frame(self.model, frame, "frame")
         q = self.check_q(q)
         fid = self.model.getFrameId(frame)
         pin.forwardKinematics(self.model, self.data, q)
@@ -183,7 +183,7 @@ class RobotModel:
     def T_frame_ee(self, frame: str, what: str = "frame") -> np.ndarray:
         """(4, 4) the ee frame's pose in ``frame``, fixed by the URDF: both must be on the
         last link (a flange, a wrist sensor), else InvalidInputError naming ``what``."""
-        _check_frame(self.model, frame, what)
+        check_frame(self.model, frame, what)
         f_id = self.model.getFrameId(frame)
         if self.model.frames[f_id].parentJoint != self.model.frames[self.ee_frame_id].parentJoint:
             raise InvalidInputError(
@@ -200,7 +200,7 @@ class RobotModel:
         return rng.uniform(lo, hi)
 
 
-def _check_frame(model: pin.Model, frame: object, name: str) -> None:
+def check_frame(model: pin.Model, frame: object, name: str) -> None:
     """InvalidInputError unless ``frame`` names a frame of ``model`` (the valid names listed)."""
     if not isinstance(frame, str) or not model.existFrame(frame):
         names = sorted({f.name for f in model.frames})

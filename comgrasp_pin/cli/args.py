@@ -19,7 +19,7 @@ from comgrasp_pin.config import SENSOR_PRESETS
 from comgrasp_pin.errors import InvalidInputError
 
 
-def _argument_type(parse: Callable[[str], object], label: str) -> Callable[[str], object]:
+def argument_type(parse: Callable[[str], object], label: str) -> Callable[[str], object]:
     """An argparse ``type=``: ``parse`` with InvalidInputError turned into argparse's error."""
 
     def convert(text: str) -> object:
@@ -50,12 +50,12 @@ def _parse_float(text: str, low: float) -> float:
 
 def int_at_least(low: int, high: int | None = None) -> Callable[[str], object]:
     """An integer option >= ``low`` (and <= ``high`` if given)."""
-    return _argument_type(lambda text: _parse_int(text, low, high), "integer")
+    return argument_type(lambda text: _parse_int(text, low, high), "integer")
 
 
 def float_at_least(low: float) -> Callable[[str], object]:
     """A finite number option >= ``low``."""
-    return _argument_type(lambda text: _parse_float(text, low), "number")
+    return argument_type(lambda text: _parse_float(text, low), "number")
 
 
 def _parse_positive(text: str) -> float:
@@ -66,7 +66,7 @@ def _parse_positive(text: str) -> float:
     return validate.number(value, "", low=0.0, low_open=True)
 
 
-positive_seconds = _argument_type(_parse_positive, "seconds")
+positive_seconds = argument_type(_parse_positive, "seconds")
 """A finite time in seconds, > 0."""
 
 
@@ -86,7 +86,7 @@ def _parse_names(text: str, valid: tuple[str, ...]) -> tuple[str, ...]:
 
 def object_list(valid: tuple[str, ...]) -> Callable[[str], object]:
     """A comma-separated list of distinct names from ``valid``."""
-    return _argument_type(lambda text: _parse_names(text, valid), "object list")
+    return argument_type(lambda text: _parse_names(text, valid), "object list")
 
 
 def _parse_out_dir(text: str) -> Path:
@@ -103,7 +103,7 @@ def _parse_out_dir(text: str) -> Path:
     return path
 
 
-out_dir = _argument_type(_parse_out_dir, "folder")
+out_dir = argument_type(_parse_out_dir, "folder")
 """An output folder: existing or creatable (no file in the way, its first existing
 ancestor writable)."""
 

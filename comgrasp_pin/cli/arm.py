@@ -20,7 +20,7 @@ _DEFAULTS = argparse.ArgumentDefaultsHelpFormatter
 
 
 def _robot(args):
-    from comgrasp_pin.cli.robot import _robot as robot_of
+    from comgrasp_pin.cli.robot import robot_of
 
     if args.ee_frame is None:
         args.ee_frame = _deepest_frame(args.urdf, args.package_dir)
@@ -43,7 +43,7 @@ def _deepest_frame(urdf, package_dirs) -> str:
 def _cmd_identify(args: argparse.Namespace) -> int:
     from comgrasp_pin.cli.dynamic import one_log, window
     from comgrasp_pin.cli.gains_args import gains_from_args
-    from comgrasp_pin.cli.robot import _write_json
+    from comgrasp_pin.cli.robot import write_json
     from comgrasp_pin.errors import LogError
     from comgrasp_pin.robot_io.arm_model import arm_model_dict, identify_arm
 
@@ -60,7 +60,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
             "longest chain: give --ee-frame, the flange (e.g. tool0, panda_link8)"
         ) from None
     model = identify_arm(robot, log, window(args.window, "--window"), args.cutoff)
-    _write_json(args.out, arm_model_dict(model))
+    write_json(args.out, arm_model_dict(model))
     n = robot.nq
     v = model.validation
     print(f"the arm's own model from a {model.duration_s:.1f} s motion of {log.source} "
@@ -78,7 +78,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
 def _cmd_calibrate(args: argparse.Namespace) -> int:
     from comgrasp_pin.cli.dynamic import one_log
     from comgrasp_pin.cli.gains_args import gains_from_args
-    from comgrasp_pin.cli.robot import _write_json
+    from comgrasp_pin.cli.robot import write_json
     from comgrasp_pin.robot_io.gain_calibration import calibrate_gains
     from comgrasp_pin.robot_io.gains import Gains, gains_json
 
@@ -99,7 +99,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
         "loaded": str(args.csv),
         "empty": str(args.empty_csv),
     }
-    _write_json(args.out, gains_json(cal.gains, cal.cov, list(robot.joint_names), **extra))
+    write_json(args.out, gains_json(cal.gains, cal.cov, list(robot.joint_names), **extra))
     std = np.sqrt(np.diag(cal.cov))
     print(f"drive gains from {cal.known_mass_kg:g} kg moved {cal.duration_s:.1f} s, loaded "
           "and empty (N m per A):")  # fmt: skip
@@ -111,7 +111,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
 
 def _common(p: argparse.ArgumentParser, ee_required: bool) -> None:
     from comgrasp_pin.cli.gains_args import add_gains_args
-    from comgrasp_pin.cli.robot import _add_robot_args
+    from comgrasp_pin.cli.robot import add_robot_args
     from comgrasp_pin.robot_io.motion_signals import CUTOFF_HZ
 
     ee_help = (
@@ -120,7 +120,7 @@ def _common(p: argparse.ArgumentParser, ee_required: bool) -> None:
         else "a frame at the arm's end (default: one on the URDF's longest chain; give the "
         "flange, e.g. tool0 or panda_link8, where the URDF has a gripper)"
     )
-    _add_robot_args(p, ee_help, ee_required)
+    add_robot_args(p, ee_help, ee_required)
     p.add_argument("--cutoff", type=float, default=CUTOFF_HZ, help="low-pass cutoff (Hz)")
     add_gains_args(p)
 

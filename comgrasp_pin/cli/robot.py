@@ -34,14 +34,14 @@ def _vector(text: str, option: str, n: int | None = None) -> np.ndarray:
     return v
 
 
-def _robot(args: argparse.Namespace):
+def robot_of(args: argparse.Namespace):
     from comgrasp_pin.robot_io import load_robot
 
     gravity = _vector(args.gravity, "--gravity", 3)
     return load_robot(args.urdf, args.ee_frame, args.package_dir, gravity)
 
 
-def _write_json(path: str, data: dict) -> None:
+def write_json(path: str, data: dict) -> None:
     try:
         Path(path).write_text(json.dumps(data, indent=2) + "\n")
     except OSError as exc:
@@ -75,7 +75,7 @@ def _log_and_windows(args: argparse.Namespace, robot):
 def _cmd_estimate(args: argparse.Namespace) -> int:
     from comgrasp_pin import robot_io as rio
 
-    robot = _robot(args)
+    robot = robot_of(args)
     if args.wrench:
         return (run_wrench_dynamic if args.dynamic else run_wrench)(args, robot)
     if args.dynamic:
@@ -90,7 +90,7 @@ def _cmd_estimate(args: argparse.Namespace) -> int:
 def _cmd_plan(args: argparse.Namespace) -> int:
     from comgrasp_pin.robot_io import planning
 
-    robot = _robot(args)
+    robot = robot_of(args)
     if args.urscript and robot.nq != planning.UR_JOINTS:
         raise InvalidInputError(
             f"--urscript writes a movej program for a {planning.UR_JOINTS}-joint UR arm; "
@@ -109,7 +109,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
         sensor_frame=args.sensor_frame,
         wrench_std=tuple(_vector(args.wrench_std, "--wrench-std", 2)),
     )
-    _write_json(args.out, planning.plan_dict(plan))
+    write_json(args.out, planning.plan_dict(plan))
     s = plan.predicted_std
     noise = (f"{args.torque_std:g} N m per averaged reading" if args.sensor_frame is None else
              f"the wrist sensor at {args.sensor_frame}, {args.wrench_std} N, N m per averaged "
@@ -130,12 +130,12 @@ def _cmd_plan(args: argparse.Namespace) -> int:
 
 def _cmd_plan_motion(args: argparse.Namespace) -> int:
 
-    robot = _robot(args)
+    robot = robot_of(args)
     start = None if args.start is None else _vector(args.start, "--start", robot.nq)
     return run_plan_motion(args, robot, start)
 
 
-def _add_robot_args(
+def add_robot_args(
     p: argparse.ArgumentParser,
     ee_help: str = "the frame the CoM is estimated in",
     ee_required: bool = True,
@@ -154,7 +154,7 @@ def add_subcommands(sub: argparse._SubParsersAction) -> None:
     """Add `estimate`, `plan-poses` and `plan-motion` to the `comgrasp` subparsers ``sub``."""
     _add_estimate(sub)
     _add_plan_poses(sub)
-    add_plan_motion(sub, _add_robot_args, _cmd_plan_motion)
+    add_plan_motion(sub, add_robot_args, _cmd_plan_motion)
 
 
 def _add_estimate(sub: argparse._SubParsersAction) -> None:
@@ -175,7 +175,7 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
         "motion (comgrasp plan-motion) played holding the payload, with their covariance.",
         formatter_class=_DEFAULTS,
     )
-    _add_robot_args(est)
+    add_robot_args(est)
     est.add_argument("--bag", default=None, help="ROS 2 bag (folder, .db3 or .mcap)")
     est.add_argument("--topic", default=DEFAULT_TOPIC, help="sensor_msgs/msg/JointState topic")
     est.add_argument("--csv", default=None,
@@ -219,7 +219,7 @@ def _add_plan_poses(sub: argparse._SubParsersAction) -> None:
         "a UR arm, with the CoM std they predict.",
         formatter_class=_DEFAULTS,
     )
-    _add_robot_args(plan)
+    add_robot_args(plan)
     plan.add_argument("--k", type=int, default=3, help="number of poses")
     plan.add_argument("--start", default=None,
                       help="Q1,...,Qn: first pose; others are searched near it (rad)")  # fmt: skip

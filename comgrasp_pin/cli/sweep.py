@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from comgrasp_pin.cli.args import _argument_type
+from comgrasp_pin.cli.args import argument_type
 from comgrasp_pin.cli.experiments import add_experiment_args, exit_status, run_options
 
 
@@ -14,7 +14,7 @@ def _param(text: str):
     return parse_param(text)
 
 
-param = _argument_type(_param, "param")
+param = argument_type(_param, "param")
 """``NAME=V1,V2,...``: a config value by its dotted path or alias, and its values."""
 
 

@@ -34,7 +34,7 @@ from comgrasp_pin.estimation.estimator import RCOND, carried, solve_rows
 from comgrasp_pin.estimation.inputs import check_arrays, check_dtau_cov, check_options
 from comgrasp_pin.estimation.prior import AxisPrior
 from comgrasp_pin.estimation.regressor import stacked_regressor
-from comgrasp_pin.robot import RobotModel, _check_frame
+from comgrasp_pin.robot import RobotModel, check_frame
 
 UNKNOWNS = ("mass", "m c_x", "m c_y", "m c_z")
 
@@ -68,7 +68,7 @@ def tool_beyond(robot: RobotModel, sensor_frame: str) -> pin.Inertia:
     its mounting face); a sensor's frame is best a massless link of its own.
     """
     model = robot.model
-    _check_frame(model, sensor_frame, "sensor frame")
+    check_frame(model, sensor_frame, "sensor frame")
     s_id = model.getFrameId(sensor_frame)
     joint = model.frames[s_id].parentJoint
     total = pin.Inertia.Zero()

@@ -109,7 +109,7 @@ def estimate_payload_dynamic(
     pi = fit.pi
     params_cov = fit.data_cov + err.gains + err.arm
     validation = du.held_out(A_pi, A_x, b_rows, w, S.t, k, n)
-    halves, halves_std = _halves(A, b_rows, w, k, n, err.factor, b_gain, err.rel_gain_cov)
+    halves, halves_std = halves_check(A, b_rows, w, k, n, err.factor, b_gain, err.rel_gain_cov)
     parts = std_parts(fit.data_cov, err, log.current_gains is not None, arm_model is not None)
     duration = float(S.t[-1] - S.t[0])
     motion = Motion(k, duration, S.cutoff_hz, S.velocity_from, fit.status,
@@ -142,7 +142,7 @@ def _joint_part(system, sigma, fit, gains_source) -> JointTorques:
     )  # fmt: skip
 
 
-def _halves(A, b_rows, w, k, n, factor, b_gain=None, rel=None):
+def halves_check(A, b_rows, w, k, n, factor, b_gain=None, rel=None):
     """((m1, m2), std of m1 - m2): each half alone, its data std widened as the whole's.
 
     The drive gains' part is added where the rows have one (``b_gain``, ``rel``).

@@ -81,7 +81,8 @@ def ros2_yaml(p: Payload) -> str:
     )
 
 
-def _write(path: str | Path, text: str) -> Path:
+def write_text(path: str | Path, text: str) -> Path:
+    """Write ``text`` to ``path``; OutputError naming the path where it cannot be written."""
     path = Path(path)
     try:
         path.write_text(text)
@@ -92,14 +93,14 @@ def _write(path: str | Path, text: str) -> Path:
 
 def write_urscript(p: Payload, path: str | Path) -> Path:
     """Write ``urscript(p)`` to ``path``."""
-    return _write(path, urscript(p))
+    return write_text(path, urscript(p))
 
 
 def write_franka(p: Payload, path: str | Path) -> Path:
     """Write ``franka_load(p)`` as JSON to ``path``."""
-    return _write(path, json.dumps(franka_load(p), indent=2) + "\n")
+    return write_text(path, json.dumps(franka_load(p), indent=2) + "\n")
 
 
 def write_ros2(p: Payload, path: str | Path) -> Path:
     """Write ``ros2_yaml(p)`` to ``path``."""
-    return _write(path, ros2_yaml(p))
+    return write_text(path, ros2_yaml(p))

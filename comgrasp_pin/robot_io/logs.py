@@ -88,7 +88,7 @@ def read_bag(
     try:
         with AnyReader([bag]) as reader:
             conns = topic_connections(reader, topic, JOINT_STATE, bag)
-            raw = _joint_rows(reader, conns, names, windows)
+            raw = joint_rows(reader, conns, names, windows)
             check_joint_rows(raw, names, topic, f"bag {bag}")
             rows = _seconds(raw)
     except LogError:
@@ -114,7 +114,7 @@ def topic_connections(reader, topic: str, msgtype: str, bag: Path) -> list:
     return conns
 
 
-def _joint_rows(
+def joint_rows(
     reader, conns, names: tuple[str, ...], windows=None, margin: float = 1.0, need_effort=True
 ) -> list[tuple]:
     """(stamp (ns), receive time (ns), position, effort, velocity) per message with all names.
@@ -152,7 +152,7 @@ def _joint_rows(
 
 
 def _seconds(rows: list[tuple]) -> list[tuple]:
-    """``_joint_rows``' rows as (t (s) from the first, position, effort, velocity).
+    """``joint_rows``' rows as (t (s) from the first, position, effort, velocity).
 
     Times are the header stamps, or the receive times where a stamp is zero.
     """
@@ -232,7 +232,7 @@ def read_csv(
     if all(v in header for v in velocity):
         wanted += velocity
     cols = [header.index(w) for w in wanted]
-    data = rtde._load(path, ",", cols, "CSV")
+    data = rtde.load_columns(path, ",", cols, "CSV")
     check_table(data, wanted, path, f"CSV {path}")
     n = len(names)
     has_velocity = data.shape[1] > 1 + 2 * n

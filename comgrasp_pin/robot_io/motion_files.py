@@ -25,7 +25,7 @@ import numpy as np
 from comgrasp_pin.errors import InvalidInputError, OutputError
 from comgrasp_pin.estimation.payload_regressor import PARAMETER_NAMES
 from comgrasp_pin.robot_io.excitation import ExcitationMotion
-from comgrasp_pin.robot_io.exports import _write
+from comgrasp_pin.robot_io.exports import write_text
 from comgrasp_pin.robot_io.planning import UR_JOINTS
 
 SERIES = "q(t) = q0 + sum_l a_l/(w l) sin(w l t) - b_l/(w l) (cos(w l t) - 1), w = 2 pi/period"
@@ -72,7 +72,7 @@ def motion_dict(m: ExcitationMotion) -> dict:
 
 def write_json(m: ExcitationMotion, path: str | Path) -> Path:
     """Write ``motion_dict(m)`` to ``path``."""
-    return _write(path, json.dumps(motion_dict(m), indent=1) + "\n")
+    return write_text(path, json.dumps(motion_dict(m), indent=1) + "\n")
 
 
 def write_csv(m: ExcitationMotion, path: str | Path) -> Path:
@@ -150,9 +150,9 @@ def ros2_trajectory_yaml(m: ExcitationMotion, period_s: float = 0.02) -> str:
 
 def write_urscript(m: ExcitationMotion, path: str | Path, **options) -> Path:
     """Write ``urscript_program(m, **options)`` to ``path``."""
-    return _write(path, urscript_program(m, **options))
+    return write_text(path, urscript_program(m, **options))
 
 
 def write_ros2(m: ExcitationMotion, path: str | Path, **options) -> Path:
     """Write ``ros2_trajectory_yaml(m, **options)`` to ``path``."""
-    return _write(path, ros2_trajectory_yaml(m, **options))
+    return write_text(path, ros2_trajectory_yaml(m, **options))

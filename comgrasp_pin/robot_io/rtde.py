@@ -44,7 +44,7 @@ NO_GAINS = (
 )
 
 
-def _columns(line: str) -> list[str]:
+def header_columns(line: str) -> list[str]:
     """The header's names: comma-separated (ur_rtde) or whitespace-separated (record.py)."""
     if "," in line:
         try:
@@ -59,11 +59,11 @@ def is_rtde_header(first_line: str) -> bool:
 
     Comma-separated (ur_rtde) or space-separated (the RTDE client's record.py).
     """
-    names = _columns(first_line)
+    names = header_columns(first_line)
     return TIME in names and f"{POSITION}_0" in names
 
 
-def _vector(header: list[str], name: str, n: int) -> list[int] | None:
+def vector_columns(header: list[str], name: str, n: int) -> list[int] | None:
     """The column indices of ``name_0`` .. ``name_{n-1}``, or None where one is missing."""
     wanted = [f"{name}_{i}" for i in range(n)]
     return [header.index(w) for w in wanted] if all(w in header for w in wanted) else None
@@ -112,10 +112,11 @@ def read_rtde(
             f"the drive gains ({gains.source}) belong to the joints {list(gains.joint_names)}, "
             f"the log is read as {list(names)}: calibrate the gains on this arm's URDF"
         )
-    velocity = _vector(header, VELOCITY, n)
+    velocity = vector_columns(header, VELOCITY, n)
     efforts, current_gains = _effort_columns(header, n, gains, path)
-    cols = [header.index(TIME), *(_vector(header, POSITION, n) or []), *efforts, *(velocity or [])]
-    data = _load(path, delimiter, cols)
+    positions = vector_columns(header, POSITION, n) or []
+    cols = [header.index(TIME), *positions, *efforts, *(velocity or [])]
+    data = load_columns(path, delimiter, cols)
     check_table(data, [header[c] for c in cols], path, f"UR log {path}")
     t, q = data[:, 0], data[:, 1 : 1 + n]
     effort = data[:, 1 + n : 1 + 2 * n]
@@ -134,7 +135,7 @@ def recording_header(path: Path, names: tuple[str, ...]) -> tuple[list[str], str
     """
     line = file_checks.first_line(path, "UR log", file_checks.MAX_CSV_BYTES,
                                   file_checks.MAX_CSV_HEADER_BYTES, LogError)  # fmt: skip
-    header = _columns(line)
+    header = header_columns(line)
     if not is_rtde_header(line):
         raise LogError(
             f"{path} is not a UR RTDE recording: its header lacks {TIME!r} and "
@@ -152,8 +153,8 @@ def recording_header(path: Path, names: tuple[str, ...]) -> tuple[list[str], str
 
 def _effort_columns(header: list[str], n: int, gains: Gains | None, path: Path):
     """(the efforts' column indices, the gains (n,) that make them torques or None)."""
-    currents = _vector(header, CURRENT, n)
-    torques = _vector(header, TORQUE, n)
+    currents = vector_columns(header, CURRENT, n)
+    torques = vector_columns(header, TORQUE, n)
     if gains is None:
         if torques is not None:
             return torques, None
@@ -178,7 +179,9 @@ def _effort_columns(header: list[str], n: int, gains: Gains | None, path: Path):
     return currents, gains.values
 
 
-def _load(path: Path, delimiter: str | None, cols: list[int], what: str = "UR log") -> np.ndarray:
+def load_columns(
+    path: Path, delimiter: str | None, cols: list[int], what: str = "UR log"
+) -> np.ndarray:
     """The ``cols`` of a text log below its header row, (N, len(cols)); ``what`` names it."""
     try:
         data = np.loadtxt(path, delimiter=delimiter, skiprows=1, usecols=cols, ndmin=2)

@@ -78,7 +78,7 @@ def read_wrench_bag(
             j_conns = logs.topic_connections(reader, joint_topic, logs.JOINT_STATE, bag)
             wrenches = [_wrench_row(reader.deserialize(raw, c.msgtype), t)
                         for c, t, raw in reader.messages(connections=w_conns)]  # fmt: skip
-            joints = logs._joint_rows(reader, j_conns, names, need_effort=False)
+            joints = logs.joint_rows(reader, j_conns, names, need_effort=False)
             check_joint_rows(joints, names, joint_topic, f"bag {bag}")
             _check_wrenches(wrenches, w_conns[0].topic, f"bag {bag}")
     except LogError:
@@ -155,7 +155,7 @@ def _sensor_frame(frames: set[str], named: str | None, bag: Path) -> str:
 
 def _on_wrench_times(wrenches: list, joints: list, names: tuple[str, ...], frame: str,
                      source: str) -> WrenchLog:  # fmt: skip
-    """The WrenchLog of wrench rows and joint rows (``logs._joint_rows``), on one clock."""
+    """The WrenchLog of wrench rows and joint rows (``logs.joint_rows``), on one clock."""
     if len(joints) < 2:
         raise LogError(f"{source} has {len(joints)} joint state(s) with all the arm's joints; "
                        "interpolating them to the wrench's times needs at least two")  # fmt: skip

@@ -101,7 +101,7 @@ def read_wrench_csv(
             "at the TCP in base axes; read it with read_rtde_wrench (or read_wrench_log with "
             "the robot model), which moves it into the sensor frame by the URDF's kinematics"
         )
-    header = rtde._columns(line)
+    header = rtde.header_columns(line)
     names = tuple(joint_names)
     wanted = ["time", *(f"{n}.position" for n in names), *WRENCH_COLUMNS]
     missing = [w for w in wanted if w not in header]
@@ -114,7 +114,7 @@ def read_wrench_csv(
         )
     fields = [f for f in OPTIONAL_FIELDS if all(f"{n}.{f}" in header for n in names)]
     wanted += [f"{n}.{f}" for f in fields for n in names]
-    data = rtde._load(path, ",", [header.index(w) for w in wanted], "CSV wrench log")
+    data = rtde.load_columns(path, ",", [header.index(w) for w in wanted], "CSV wrench log")
     check_table(data, wanted, path, f"CSV {path}")
     n = len(names)
     extra = {f: data[:, 7 + n * (i + 1) : 7 + n * (i + 2)] for i, f in enumerate(fields)}

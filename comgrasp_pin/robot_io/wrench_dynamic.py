@@ -42,7 +42,7 @@ from comgrasp_pin.robot_io import dynamic_uncertainty as du
 from comgrasp_pin.robot_io import wrench_combined as wc
 from comgrasp_pin.robot_io import wrench_findings as wf
 from comgrasp_pin.robot_io.arm_model import ArmModel
-from comgrasp_pin.robot_io.dynamic import _halves
+from comgrasp_pin.robot_io.dynamic import halves_check
 from comgrasp_pin.robot_io.dynamic_fit import error_sources, fit_payload, motion_estimate
 from comgrasp_pin.robot_io.estimate_result import (
     TOOL_EMPTY_RUN,
@@ -125,7 +125,7 @@ def estimate_wrench_dynamic(
     fit = fit_payload(A_pi, A_x, b, w, prior_of(prior), replace(err, arm=err.arm + cov_tool))
     params_cov = fit.data_cov + err.arm + cov_tool
     validation = du.held_out(A_pi, A_x, b, w, W.S.t, k, r)
-    halves, halves_std = _halves(A, b, w, k, r, err.factor)
+    halves, halves_std = halves_check(A, b, w, k, r, err.factor)
     agree = wc.agreement(fits, tool.cov) if J is not None else None
     m_std = float(np.sqrt(params_cov[0, 0]))
     checks = Checks(float(fit.pi[0]), m_std, None, validation.explained_total, halves, halves_std)

@@ -52,7 +52,7 @@ import numpy as np
 import pinocchio as pin
 
 from comgrasp_pin.errors import LogError
-from comgrasp_pin.robot import RobotModel, _check_frame
+from comgrasp_pin.robot import RobotModel, check_frame
 from comgrasp_pin.robot_io import rtde
 from comgrasp_pin.robot_io.log_values import check_table
 from comgrasp_pin.robot_io.wrench_csv import assemble_wrench_log, sensor_frame_name
@@ -103,7 +103,7 @@ def read_rtde_wrench(
     names = tuple(robot.joint_names)
     header, delimiter = rtde.recording_header(path, names)
     n = len(names)
-    force = rtde._vector(header, FORCE, 6)
+    force = rtde.vector_columns(header, FORCE, 6)
     if force is None:
         raise LogError(
             f"UR log {path} has no {FORCE}_0..{FORCE}_5 (the controller's wrench at the TCP, "
@@ -111,11 +111,11 @@ def read_rtde_wrench(
             f"{rtde.POSITION}"
         )
     fields = (("velocity", rtde.VELOCITY), ("effort", rtde.TORQUE))
-    optional = {field: rtde._vector(header, name, n) for field, name in fields}
+    optional = {field: rtde.vector_columns(header, name, n) for field, name in fields}
     present = [field for field, cols in optional.items() if cols is not None]
-    cols = [header.index(rtde.TIME), *(rtde._vector(header, rtde.POSITION, n) or []), *force]
+    cols = [header.index(rtde.TIME), *(rtde.vector_columns(header, rtde.POSITION, n) or []), *force]
     cols += [c for field in present for c in optional[field] or []]
-    data = rtde._load(path, delimiter, cols)
+    data = rtde.load_columns(path, delimiter, cols)
     check_table(data, [header[c] for c in cols], path, f"UR log {path}")
     if len(data) < 2:
         raise LogError(f"UR log {path} has {len(data)} sample(s); a wrench log needs two")
@@ -135,7 +135,7 @@ def _frames(robot: RobotModel, sensor: str, tcp: str | None, base: str | None) -
         base = CONTROLLER_BASE_FRAME if model.existFrame(CONTROLLER_BASE_FRAME) else root
     for name, what in ((sensor_frame_name(sensor), "sensor_frame"), (tcp, "tcp_frame (the "
                        "point of actual_TCP_force's torques)"), (base, "base_frame")):  # fmt: skip
-        _check_frame(model, name, what)
+        check_frame(model, name, what)
     return sensor, tcp, base
 
 

@@ -24,7 +24,7 @@ from pathlib import Path
 
 from comgrasp_pin import file_checks
 from comgrasp_pin.errors import LogError
-from comgrasp_pin.robot import RobotModel, _check_frame
+from comgrasp_pin.robot import RobotModel, check_frame
 from comgrasp_pin.robot_io import logs, rtde
 from comgrasp_pin.robot_io.wrench_bag import read_wrench_bag
 from comgrasp_pin.robot_io.wrench_csv import read_wrench_csv, sensor_frame_name
@@ -82,7 +82,7 @@ def read_wrench_log(
     else:
         log = read_wrench_csv(path, names, sensor_frame_name(sensor_frame))
     if robot is not None:
-        _check_frame(robot.model, log.sensor_frame, "the wrench's sensor frame")
+        check_frame(robot.model, log.sensor_frame, "the wrench's sensor frame")
     return log
 
 

@@ -21,10 +21,10 @@ from comgrasp_pin.experiments.report.common import (
     _compress,
     _expand,
     _ok,
-    _pyplot,
     _select,
     describe,
     estimator_label,
+    load_pyplot,
     object_groups,
     recorded,
 )
@@ -70,7 +70,7 @@ def _plot_curve(ax, series, colour, style, marker, filled, dodge):
 
 def _accuracy_plot(rows: Sequence[dict]):
     """The accuracy figure and its curves: (fig, {object: {"ours": Line2D, "line": ...}})."""
-    plt = _pyplot()
+    plt = load_pyplot()
     ok = _ok(rows)
     paper_objs, extra = object_groups(rows)  # an object whose grasps all failed keeps a panel
     has_line = recorded(ok, "accuracy_line")
@@ -276,7 +276,7 @@ def accuracy_figure(rows: Sequence[dict], path: Path) -> Path:
     """Accuracy (%) against |θ| (deg), one panel per object (extra objects in panels of
     their own): ours and the paper's method in our world, bin means with 95 % t intervals,
     every grasp faint, and the paper's published obj1 and obj6 values as markers."""
-    plt = _pyplot()
+    plt = load_pyplot()
     fig, _ = _accuracy_plot(rows)
     fig.savefig(path, dpi=120)
     plt.close(fig)

@@ -19,8 +19,8 @@ from comgrasp_pin.experiments.report.common import (
     _bin_name,
     _group,
     _ok,
-    _pyplot,
     _select,
+    load_pyplot,
     object_groups,
     recorded,
 )
@@ -203,7 +203,7 @@ def calibration_figure(rows: Sequence[dict], path: Path) -> Path:
     """z = (pos_esti − pos_real) / pos_std against N(0, 1): histogram with the N(0, 1)
     reference, coverage of the ±1σ and ±1.96σ intervals per |θ| bin with the targets, rms z
     per bin; the paper's six objects in the top row, extra objects in a row of their own."""
-    plt = _pyplot()
+    plt = load_pyplot()
     ok = _ok(rows)
     paper_objs, extra = object_groups(ok)
     groups = [

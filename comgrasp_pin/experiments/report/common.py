@@ -170,7 +170,7 @@ def _abs_theta(rows: Sequence[dict]) -> np.ndarray:
     return np.abs(_column(rows, "theta_deg"))
 
 
-def _pyplot():
+def load_pyplot():
     """pyplot, on the Agg backend unless pyplot was already imported (a notebook's inline
     backend, a user's GUI): the report's figures are written to files and closed, and must not
     switch off the caller's figures."""

@@ -13,8 +13,8 @@ from comgrasp_pin.experiments.report.common import (
     _column,
     _float,
     _group,
-    _pyplot,
     _select,
+    load_pyplot,
     object_groups,
     outcomes,
     recorded,
@@ -45,7 +45,7 @@ def regrasp_figure(rows: Sequence[dict], path: Path) -> Path:
     """Success rate (%) per object, baseline and regrasp side by side with 95 % Wilson
     intervals and the trial counts on the bars; the paper's values as diamonds; extra
     objects to the right, apart."""
-    plt = _pyplot()
+    plt = load_pyplot()
     rates = success_rates(rows)
     paper_objs, extra = object_groups(rows)
     xs = _bar_positions(paper_objs, extra)

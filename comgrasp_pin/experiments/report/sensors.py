@@ -116,9 +116,9 @@ def sources_table(runs: dict[str, Sequence[dict]]) -> str:
 def sources_figure(runs: dict[str, Sequence[dict]], path) -> None:
     """PNG: mean accuracy below 30 deg per sensor preset (ours and the paper's method, 95 %
     t intervals), the share of grasps refused or failed written on each bar."""
-    from comgrasp_pin.experiments.report.common import C_LINE, C_OURS, _pyplot
+    from comgrasp_pin.experiments.report.common import C_LINE, C_OURS, load_pyplot
 
-    plt = _pyplot()
+    plt = load_pyplot()
     names = list(runs)
     selected = {name: _select(runs[name], paper_objects()) for name in names}
     fig, ax = plt.subplots(figsize=(8.5, 4.2), layout="constrained")

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from comgrasp_pin.experiments.report.common import _pyplot
+from comgrasp_pin.experiments.report.common import load_pyplot
 
 
 def _line(ax, table, path: str, measure: str) -> None:
@@ -56,7 +56,7 @@ def sweep_figures(table, params, out: Path, measures: dict[str, str]) -> list[Pa
     paths = [path for path, _ in params]
     if len(paths) > 2:
         return []
-    plt = _pyplot()
+    plt = load_pyplot()
     written = []
     for measure, label in measures.items():
         fig, ax = plt.subplots(figsize=(6, 4.5))
