@@ -15,6 +15,7 @@ import numpy as np
 
 from comgrasp_pin.errors import InvalidInputError, LogError, NotStaticError
 from comgrasp_pin.robot_io.logs import JointLog
+from comgrasp_pin.robot_io.wrench_log import WrenchLog
 
 MAX_SPEED = 0.01
 """Default static threshold on every joint's speed (rad/s): 0.6 deg/s."""
@@ -88,9 +89,17 @@ def joint_speed(time: np.ndarray, position: np.ndarray, span: float = SPEED_SPAN
 
 
 def read_window(
-    log: JointLog, t0: float, t1: float, max_speed: float = MAX_SPEED, label: str = "window"
+    log: JointLog | WrenchLog,
+    t0: float,
+    t1: float,
+    max_speed: float = MAX_SPEED,
+    label: str = "window",
+    readings: np.ndarray | None = None,
 ) -> StaticReading:
     """The averaged readings of ``log`` over [t0, t1] (s), checked to be static.
+
+    ``readings``: (N, m) the samples to average, one row per log sample (a wrench log's
+    ``wrench``); default the joint log's efforts.
 
     Raises:
         LogError: the window is not inside the log, or holds fewer than MIN_SAMPLES samples.
@@ -113,7 +122,10 @@ def read_window(
             f"{label} {t0:g}:{t1:g} s is not static: a joint moves at {speed:.3g} rad/s, above "
             f"the threshold {max_speed:g} rad/s; choose a window where the arm stands still"
         )
-    tau = log.effort[sel]
+    samples = log.effort if readings is None else readings
+    if samples is None:
+        raise LogError(f"{log.source} has no efforts to average in {label} {t0:g}:{t1:g} s")
+    tau = samples[sel]
     return StaticReading(
         t0=float(t0),
         t1=float(t1),
@@ -126,14 +138,16 @@ def read_window(
 
 
 def read_pairs(
-    log: JointLog,
+    log: JointLog | WrenchLog,
     before: list[tuple[float, float]],
     after: list[tuple[float, float]],
     max_speed: float = MAX_SPEED,
+    readings: np.ndarray | None = None,
 ) -> tuple[tuple[StaticReading, ...], tuple[StaticReading, ...]]:
     """(before readings, after readings) of paired windows (``read_window``), or a LogError.
 
-    ``before[i]`` is the empty arm at the pose of ``after[i]``.
+    ``before[i]`` is the empty arm at the pose of ``after[i]``; ``readings`` as
+    ``read_window``'s.
     """
     if len(before) != len(after):
         raise LogError(
@@ -142,15 +156,15 @@ def read_pairs(
         )
     if not before:
         raise LogError("no windows given: at least one before/after pair is needed")
-    rb = tuple(read_window(log, t0, t1, max_speed, f"before window {i}")
+    rb = tuple(read_window(log, t0, t1, max_speed, f"before window {i}", readings)
                for i, (t0, t1) in enumerate(before))  # fmt: skip
-    ra = tuple(read_window(log, t0, t1, max_speed, f"after window {i}")
+    ra = tuple(read_window(log, t0, t1, max_speed, f"after window {i}", readings)
                for i, (t0, t1) in enumerate(after))  # fmt: skip
     return rb, ra
 
 
 def find_static_windows(
-    log: JointLog,
+    log: JointLog | WrenchLog,
     max_speed: float = MAX_SPEED,
     min_duration: float = MIN_STATIC_S,
     split_at: float | None = None,

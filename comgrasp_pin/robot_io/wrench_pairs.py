@@ -30,7 +30,6 @@ from comgrasp_pin.robot_io.estimate_result import (
     PayloadEstimate,
     Wrench,
 )
-from comgrasp_pin.robot_io.joint_log import JointLog
 from comgrasp_pin.robot_io.windows import MAX_SPEED, read_pairs
 from comgrasp_pin.robot_io.wrench_log import WrenchLog
 
@@ -51,8 +50,7 @@ def estimate_wrench_pairs(
             UnobservableError, EmptyGripperError: as ``estimate_com_wrench``.
     """
     frame = log.sensor_frame
-    wlog = JointLog(log.time, log.joint_names, log.position, log.wrench, log.source)
-    wb, wa = read_pairs(wlog, before, after, max_speed)
+    wb, wa = read_pairs(log, before, after, max_speed, log.wrench)
     q = np.array([r.q for r in wa])
     w_b = np.array([b.tau + tool_wrench(robot, a.q, frame) - tool_wrench(robot, b.q, frame)
                     for b, a in zip(wb, wa)])  # fmt: skip
@@ -61,8 +59,7 @@ def estimate_wrench_pairs(
     blocks = {WRENCH: (wrench_regressor(robot, q, frame)[0], np.diag(w_std**2))}
     torques = None
     if use_joint_torques and log.effort is not None:
-        jlog = JointLog(log.time, log.joint_names, log.position, log.effort, log.source)
-        tb, ta = read_pairs(jlog, before, after, max_speed)
+        tb, ta = read_pairs(log, before, after, max_speed, log.effort)
         tau_b = np.array([b.tau + robot.gravity_torques(a.q) - robot.gravity_torques(b.q)
                           for b, a in zip(tb, ta)])  # fmt: skip
         t_std = np.concatenate([np.hypot(b.tau_mean_std, a.tau_mean_std) for b, a in zip(tb, ta)])

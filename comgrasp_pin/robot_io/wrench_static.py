@@ -38,7 +38,6 @@ from comgrasp_pin.robot_io.estimate_result import (
     Wrench,
     sole_source,
 )
-from comgrasp_pin.robot_io.joint_log import JointLog
 from comgrasp_pin.robot_io.trust import Z95, arm_mass, judge
 from comgrasp_pin.robot_io.windows import (
     MAX_SPEED,
@@ -53,11 +52,6 @@ MAX_CHI2_DOF = 25.0
 25): the rigid-body model does not explain the readings (a contact, a cable pulling, a
 payload that moves in the gripper); the verdict is then ``unreliable``."""
 TOOL_BEFORE, TOOL_NONE = "the tool identified before", "none (everything beyond the sensor)"
-
-
-def _as_joint_log(log: WrenchLog) -> JointLog:
-    """The wrench in the efforts' place, for the still-window machinery of ``windows``."""
-    return JointLog(log.time, log.joint_names, log.position, log.wrench, log.source)
 
 
 def estimate_wrench_static(
@@ -104,15 +98,14 @@ def estimate_wrench_static(
             f"{list(robot.joint_names)}"
         )
     T_se = T_sensor_ee(robot, log.sensor_frame)  # checks the frame is on the ee's link
-    jlog = _as_joint_log(log)
     if windows is None:
-        windows = find_static_windows(jlog, max_speed, min_duration)
+        windows = find_static_windows(log, max_speed, min_duration)
         if not windows:
             raise LogError(
                 f"{log.source}: no still window (every joint below {max_speed:g} rad/s for "
                 f"{min_duration:g} s); give --windows T0:T1,... or record the arm at rest"
             )
-    readings = [read_window(jlog, t0, t1, max_speed, "window") for t0, t1 in windows]
+    readings = [read_window(log, t0, t1, max_speed, "window", log.wrench) for t0, t1 in windows]
     g_world = robot.model.gravity.linear
     g_sensor = np.array(
         [robot.frame_pose(r.q, log.sensor_frame)[:3, :3].T @ g_world for r in readings]
