@@ -123,7 +123,8 @@ def _motion(m: Motion) -> list[str]:
     v = m.validation
     lines = [
         f"  condition number of the logged motion {m.condition_number:.1f} (scaled regressor)",
-        f"  held out ({v.folds} folds): {100 * v.explained_total:.1f} % of the readings explained",
+        f"  held out ({v.folds} folds): RMS per row {_vec(v.rms_Nm)} (N m; a wrench's rows N, "
+        f"N m), {100 * v.explained_total:.1f} % of the readings explained",
         f"  the motion's halves alone: {m.halves_mass[0]:.4f} and {m.halves_mass[1]:.4f} kg",
     ]
     if m.second_log is not None:
