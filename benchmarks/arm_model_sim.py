@@ -94,8 +94,9 @@ def wrong_robot(arm: str):
 def principal(est, payload):
     """Estimated moments along the true principal axes, their std, the true moments."""
     true, axes = np.linalg.eigh(payload.I_com_ee)
-    est_m = np.array([u @ est.inertia_com_ee @ u for u in axes.T])
-    std = np.array([np.sqrt(np.kron(u, u) @ est.inertia_cov @ np.kron(u, u)) for u in axes.T])
+    inertia, inertia_cov = est.inertia.inertia_com_ee, est.inertia.inertia_cov
+    est_m = np.array([u @ inertia @ u for u in axes.T])
+    std = np.array([np.sqrt(np.kron(u, u) @ inertia_cov @ np.kron(u, u)) for u in axes.T])
     return est_m, std, true
 
 
@@ -112,7 +113,7 @@ def payload_row(est, payload, fit_s: float) -> dict:
         "z_com": ((est.com_ee - payload.p_com_ee) / m_std[1:]).tolist(),
         "z_moments": ((moments - true) / moment_std).tolist(),
         "verdict": est.verdict,
-        "delay_s": est.delay_s,
+        "delay_s": est.joint_torques.delay_s,
         "std_arm_model_kg": est.std_parts.get("arm model", 0.0),
         "fit_s": fit_s,
     }
@@ -145,7 +146,7 @@ def run_arm(arm: str, runs: int, settings: ExcitationSettings) -> dict:
             "mass_kg": est.mass, "mass_std_kg": m_std, "z": est.mass / m_std,
             "holds_zero": bool(abs(est.mass) <= Z95 * m_std), "verdict": est.verdict,
             "reasons": [_reason(r) for r in est.reasons],
-            "delay_s": est.delay_s, "fit_s": fit_s,
+            "delay_s": est.joint_torques.delay_s, "fit_s": fit_s,
         })  # fmt: skip
         for i, p in enumerate(payloads):
             loaded_B = simulate_motion(arm, p, *b, seed=seed + 2 + i, offsets_seed=seed + 2 + i)

@@ -10,7 +10,8 @@ results). Every file of BEFORE is looked for in AFTER and compared by kind:
   number, so that exact zeros stay zeros); a number of BEFORE missing from AFTER is an error,
   a key new in AFTER is listed. Renamed keys: ``--rename OLD=NEW`` (repeatable) or
   ``--renames FILE`` (one OLD=NEW a line), applied to a key and everything under it, to CSV
-  columns and to file paths;
+  columns and to file paths; ``GLOB:OLD=NEW`` only in the files whose path matches GLOB (a
+  key that moved to different places in different files), the first match winning;
 - ``rc.txt``: the exit status, exactly;
 - CSV: row by row (an experiment's by object, trial and method), column by column (by
   name), numbers within ``--rtol``;
@@ -90,7 +91,7 @@ def scale_of(values) -> float:
 class Comparer:
     """The comparison of two trees with one set of tolerances, renames and ignores."""
 
-    def __init__(self, args: argparse.Namespace, renames: dict[str, str]) -> None:
+    def __init__(self, args: argparse.Namespace, renames: list[tuple[str, str, str]]) -> None:
         self.rtol, self.atol_scale = args.rtol, args.atol_scale
         self.renames = renames
         self.ignore = list(args.ignore or []) + (
@@ -99,15 +100,17 @@ class Comparer:
         self.strict_text, self.strict_stdout = args.strict_text, args.strict_stdout
         self.report = Report()
 
-    def rename(self, key: str) -> str:
-        for old, new in self.renames.items():
+    def rename(self, key: str, path: str = "") -> str:
+        for glob, old, new in self.renames:
+            if glob and not fnmatch(path, glob):
+                continue
             if key == old or key.startswith(old + ".") or key.startswith(old + "/"):
                 return new + key[len(old) :]
         return key
 
-    def key_in(self, key: str, after) -> str:
+    def key_in(self, key: str, after, path: str = "") -> str:
         """``key`` renamed, or as it was where AFTER has it so and not the new name."""
-        new = self.rename(key)
+        new = self.rename(key, path)
         return key if new not in after and key in after else new
 
     def ignored(self, path: str, key: str) -> bool:
@@ -127,7 +130,7 @@ class Comparer:
             self.report.add(path, f"unreadable JSON: {exc}")
             return
         fb = {k: v for k, v in fb.items() if not self.ignored(path, k)}
-        fa = {self.key_in(k, fb): v for k, v in fa.items() if not self.ignored(path, k)}
+        fa = {self.key_in(k, fb, path): v for k, v in fa.items() if not self.ignored(path, k)}
         atol = self.atol_scale * scale_of(fa.values())
         for key, va in fa.items():
             vb = fb.get(key, "<missing in AFTER>")
@@ -145,7 +148,7 @@ class Comparer:
         if not ra or not rb:
             self.text_numbers(path, before, after, fail=True)
             return
-        head_a = [self.key_in(c, rb[0]) for c in ra[0]]
+        head_a = [self.key_in(c, rb[0], path) for c in ra[0]]
         col_b = {c: i for i, c in enumerate(rb[0])}
         for c in set(head_a) - set(col_b):
             self.report.add(path, f"column {c!r} missing in AFTER")
@@ -230,17 +233,19 @@ def files_of(root: Path) -> set[str]:
     return {p.relative_to(root).as_posix() for p in root.rglob("*") if p.is_file()}
 
 
-def parse_renames(args: argparse.Namespace) -> dict[str, str]:
+def parse_renames(args: argparse.Namespace) -> list[tuple[str, str, str]]:
+    """(path glob or "", OLD, NEW) in the order given."""
     pairs = list(args.rename or [])
     if args.renames:
         lines = Path(args.renames).read_text().splitlines()
         pairs += [ln.strip() for ln in lines if ln.strip() and not ln.lstrip().startswith("#")]
-    out = {}
+    out = []
     for p in pairs:
         old, sep, new = p.partition("=")
         if not sep:
-            raise SystemExit(f"--rename wants OLD=NEW, got {p!r}")
-        out[old.strip()] = new.strip()
+            raise SystemExit(f"--rename wants [GLOB:]OLD=NEW, got {p!r}")
+        glob, _, old = old.rpartition(":")
+        out.append((glob.strip(), old.strip(), new.strip()))
     return out
 
 
@@ -286,8 +291,8 @@ def main() -> int:
     ap.add_argument("--rtol", type=float, default=1e-12)
     ap.add_argument("--atol-scale", type=float, default=1e-15,
                     help="absolute tolerance, times the file's largest number")  # fmt: skip
-    ap.add_argument("--rename", action="append", metavar="OLD=NEW")
-    ap.add_argument("--renames", metavar="FILE", help="OLD=NEW per line")
+    ap.add_argument("--rename", action="append", metavar="[GLOB:]OLD=NEW")
+    ap.add_argument("--renames", metavar="FILE", help="[GLOB:]OLD=NEW per line")
     ap.add_argument("--ignore", action="append", metavar="GLOB", help="path:key to leave out")
     ap.add_argument("--no-default-ignore", action="store_true", help="compare timings too")
     ap.add_argument("--strict-text", action="store_true", help="text values must match too")

@@ -35,8 +35,9 @@ m r^2 at r = 3 cm): smaller ones are reported as absolute errors against their s
 def principal(est, payload):
     """Estimated moments along the true principal axes, their std, the true moments."""
     true, axes = np.linalg.eigh(payload.I_com_ee)
-    est_m = np.array([u @ est.inertia_com_ee @ u for u in axes.T])
-    std = np.array([np.sqrt(np.kron(u, u) @ est.inertia_cov @ np.kron(u, u)) for u in axes.T])
+    inertia, inertia_cov = est.inertia.inertia_com_ee, est.inertia.inertia_cov
+    est_m = np.array([u @ inertia @ u for u in axes.T])
+    std = np.array([np.sqrt(np.kron(u, u) @ inertia_cov @ np.kron(u, u)) for u in axes.T])
     return est_m, std, true
 
 
@@ -57,7 +58,8 @@ def run_arm(arm: str, runs: int, settings: ExcitationSettings) -> dict:
             fit_s = time.perf_counter() - t1
             m_std = np.sqrt(np.diag(est.cov))
             moments, moment_std, true = principal(est, p)
-            z_params = (est.params - p.dynamic_parameters()) / np.sqrt(np.diag(est.params_cov))
+            params, params_cov = est.inertia.params, est.inertia.params_cov
+            z_params = (params - p.dynamic_parameters()) / np.sqrt(np.diag(params_cov))
             rows[p.name].append({
                 "mass_err_rel": est.mass / p.mass - 1,
                 "com_err_m": float(np.linalg.norm(est.com_ee - p.p_com_ee)),

@@ -153,14 +153,14 @@ def mass_figures(est, truth_kg: float | None = None) -> dict:
         "com_std_m": np.sqrt(np.diag(est.cov)[1:]).tolist(),
         "verdict": est.verdict,
         "reasons": list(est.reasons),
-        "arm_model": est.arm_model,
-        "explained_total": est.validation.explained_total,
-        "validation_rms_Nm": est.validation.rms_Nm.tolist(),
-        "halves_mass_kg": list(est.halves_mass),
-        "solver_status": est.solver_status,
-        "duration_s": est.duration_s,
-        "n_samples": est.n_samples,
-        "alignment": est.alignment,
+        "arm_model": est.joint_torques.arm_model,
+        "explained_total": est.motion.validation.explained_total,
+        "validation_rms_Nm": est.motion.validation.rms_Nm.tolist(),
+        "halves_mass_kg": list(est.motion.halves_mass),
+        "solver_status": est.motion.solver_status,
+        "duration_s": est.motion.duration_s,
+        "n_samples": est.motion.n_samples,
+        "alignment": est.joint_torques.alignment,
     }
     if truth_kg is not None:
         out["truth_kg"] = truth_kg
@@ -200,7 +200,7 @@ def ur_section(data: Path) -> dict:
     loaded_c, empty_c = with_gains(loaded, cal.gains), with_gains(empty, cal.gains)
     full_c = estimate_payload_dynamic(robot, loaded_c, empty_c, gain_cov=cal.cov,
                                       gains_source="calibrate_gains on this pair")  # fmt: skip
-    t0, t1 = full_c.alignment["loaded_motion_s"]
+    t0, t1 = full_c.joint_torques.alignment["loaded_motion_s"]
     middle = 0.5 * (t0 + t1)
     halves = []
     for window in ((t0, middle), (middle, t1)):
@@ -387,7 +387,7 @@ def panda_draw(robot, log: JointLog, Y: np.ndarray, rng: np.random.Generator, in
         "std_parts_kg": est.std_parts,
         "verdict": est.verdict,
         "reasons": list(est.reasons),
-        "explained_total": est.validation.explained_total,
+        "explained_total": est.motion.validation.explained_total,
         "arm_model_explained_total": arm.validation["explained_total"],
         "wall_s": wall_s,
     }

@@ -56,8 +56,9 @@ def payloads() -> tuple[Payload, ...]:
 def errors(est, p: Payload) -> dict:
     """Errors and z-scores of the mass, the CoM and the moments along the true axes."""
     true, axes = np.linalg.eigh(p.I_com_ee)
-    moments = np.array([u @ est.inertia_com_ee @ u for u in axes.T])
-    m_std = np.array([np.sqrt(np.kron(u, u) @ est.inertia_cov @ np.kron(u, u)) for u in axes.T])
+    inertia, inertia_cov = est.inertia.inertia_com_ee, est.inertia.inertia_cov
+    moments = np.array([u @ inertia @ u for u in axes.T])
+    m_std = np.array([np.sqrt(np.kron(u, u) @ inertia_cov @ np.kron(u, u)) for u in axes.T])
     std = np.sqrt(np.diag(est.cov))
     return {
         "mass_err_rel": float(est.mass / p.mass - 1),
@@ -92,8 +93,8 @@ def run_seed(robot, motion, seed: int, wrench_name: str) -> list[dict]:
         t3 = time.perf_counter()
         row = {"payload": p.name, "seed": seed, "fit_s": [t1 - t0, t2 - t1, t3 - t2]}
         row.update({m: errors(fits[m], p) for m in METHODS})
-        row["combined_shares_mass"] = fits["combined"].contributions["wrench"]["mass_kg"]
-        row["combined_agreement_chi2"] = fits["combined"].agreement["chi2"]
+        row["combined_shares_mass"] = fits["combined"].sources["wrench"]["mass_kg"]
+        row["combined_agreement_chi2"] = fits["combined"].wrench.agreement["chi2"]
         row["combined_joint_source"] = fits["combined"].joint_torques.arm_model
         rows.append(row)
         print(p.name, seed, {m: (round(row[m]["mass_err_rel"] * 1e3, 2),

@@ -180,8 +180,7 @@ def run_draw(robot, draw: int, preset: str, limits: MotionConfig, plan_for="wren
     after = [(a + shift, b + shift) for a, b in before]
     jt = estimate_from_log(robot, joined, before, after,
                            drift_std=sensors.torque.drift_std)  # fmt: skip
-    e = jt.estimate
-    row["joint_torques"] = scored(e.mass, e.com_ee, e.cov, payload, "", {})
+    row["joint_torques"] = scored(jt.mass, jt.com_ee, jt.cov, payload, "", {})
     return row
 
 
@@ -194,13 +193,14 @@ def wrench_handlings(robot, empty_w, load_w, payload, excess, sensors) -> dict:
     truth = tool_theta(robot, excess)
     for name, noise in (("calibrated_tool", data_sheet), ("calibrated_tool_no_drift", {})):
         tool = estimate_wrench_static(robot, empty_w, subtract_tool=False, **noise)
-        z = (tool.fit.theta[:4] - truth) / np.sqrt(np.diag(tool.fit.theta_cov)[:4])
+        fit = tool.wrench.fit
+        z = (fit.theta[:4] - truth) / np.sqrt(np.diag(fit.theta_cov)[:4])
         out[f"tool_{name}"] = {"mass": tool.mass, "mass_err": float(tool.mass - truth[0]),
                                "mass_std": float(np.sqrt(tool.cov[0, 0])),
-                               "verdict": tool.verdict, "chi2_dof": tool.fit.chi2_dof,
-                               "scale": tool.fit.scale, "z_theta": z.tolist(),
-                               "z_theta_unscaled": (z * np.sqrt(tool.fit.scale)).tolist()}  # fmt: skip
-        calibrated = (tool.fit.theta[:4], tool.fit.theta_cov[:4, :4])
+                               "verdict": tool.verdict, "chi2_dof": fit.chi2_dof,
+                               "scale": fit.scale, "z_theta": z.tolist(),
+                               "z_theta_unscaled": (z * np.sqrt(fit.scale)).tolist()}  # fmt: skip
+        calibrated = (fit.theta[:4], fit.theta_cov[:4, :4])
         out[name] = wrench_scored(robot, load_w, payload, tool=calibrated, **noise)
     out["urdf_tool"] = wrench_scored(robot, load_w, payload, **data_sheet)
     return out
@@ -220,8 +220,9 @@ def tool_theta(robot, excess: Solid | None) -> np.ndarray:
 def wrench_scored(robot, log, payload: Payload, **kw) -> dict:
     """``estimate_wrench_static(robot, log, **kw)`` scored against the payload."""
     est = estimate_wrench_static(robot, log, **kw)
-    extra = {"chi2_dof": est.fit.chi2_dof, "windows": len(est.windows),
-             "spread_deg": est.fit.spread_deg.tolist()}  # fmt: skip
+    fit = est.wrench.fit
+    extra = {"chi2_dof": fit.chi2_dof, "windows": est.at_rest.n_poses,
+             "spread_deg": fit.spread_deg.tolist()}  # fmt: skip
     return scored(est.mass, est.com_ee, est.cov, payload, est.verdict, extra)
 
 

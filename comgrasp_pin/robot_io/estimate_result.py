@@ -221,9 +221,10 @@ class PayloadEstimate:
         frame: the ee frame's name.
         verdict: ``identified``, ``nothing held`` or ``unreliable`` (``trust``); reasons: one
             line each, saying what would help.
-        sources: {source: {"mass_kg": share, "com_m": [3 shares], ...}}: each source's
-            share of the information ("joint torques", "wrench"); the shares of a quantity
-            sum to 1.
+        sources: {source: {quantity: share}}: each source's share of the information
+            ("joint_torques", "wrench", "prior"); the shares of a quantity sum to 1 over the
+            sources. Quantities: "mass_kg" always; "com_m" (3) and, from a motion,
+            "principal_moments_kgm2" (3); before/after pairs "first_moment_kgm" (3, m c).
         std_parts: the mass's std (kg) from each error source, where more than one was
             modelled ({"data and model (block jackknife)": ..., "gains": ...}), else {}.
         unobservable_ee: (3,) the direction the CoM was not seen along (one pose), or None.

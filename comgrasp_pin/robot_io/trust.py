@@ -140,8 +140,9 @@ def judge(
     if mass + Z95 * std < 0:
         reasons.append(
             f"the mass comes out negative ({mass:.3f} +- {Z95 * std:.3f} kg): the model of "
-            "what the sensor carries besides the payload predicts more than it measures; "
-            "identify the arm (comgrasp identify-arm), record an empty run, or check the tool"
+            "what the sensor carries besides the payload predicts more than it measures: "
+            "identify the arm (comgrasp identify-arm) or record an empty run (with a wrist "
+            "sensor: identify the tool, --keep-tool then --tool)"
         )
     reasons += list(findings)
     if not payload_seen(mass, std):
