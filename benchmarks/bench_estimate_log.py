@@ -28,7 +28,8 @@ import pinocchio as pin
 
 from comgrasp_pin._paths import example_robot_urdf
 from comgrasp_pin.cli import main
-from comgrasp_pin.robot_io import JointLog, load_robot, read_bag, write_bag
+from comgrasp_pin.robot_io import JointLog, load_robot, write_bag
+from comgrasp_pin.robot_io.log_files import read_bag
 
 URDF = example_robot_urdf("panda_description/urdf/panda.urdf")
 EE = "panda_hand_tcp"

@@ -24,7 +24,7 @@ from excitation_baseline import random_condition_numbers  # benchmarks/, beside 
 
 from comgrasp_pin._paths import example_robot_urdf, urdf_path
 from comgrasp_pin.robot import RobotModel
-from comgrasp_pin.robot_io.excitation import (
+from comgrasp_pin.robot_io.plans.excitation import (
     ExcitationSettings,
     plan_excitation,
 )

@@ -17,16 +17,16 @@ from comgrasp_pin.estimation.payload_regressor import (
 )
 from comgrasp_pin.motion.fourier import FourierMotion
 from comgrasp_pin.robot import RobotModel
-from comgrasp_pin.robot_io.collision import SelfCollision
-from comgrasp_pin.robot_io.excitation import (
+from comgrasp_pin.robot_io.plans.collision import SelfCollision
+from comgrasp_pin.robot_io.plans.excitation import (
     MAX_DURATION_S,
     ExcitationSettings,
     default_start,
     excitation_limits,
     within_limits,
 )
-from comgrasp_pin.robot_io.excitation_search import Grid, random_motions
-from comgrasp_pin.robot_io.planning import feasible
+from comgrasp_pin.robot_io.plans.excitation_search import Grid, random_motions
+from comgrasp_pin.robot_io.plans.poses import feasible
 
 
 def random_condition_numbers(

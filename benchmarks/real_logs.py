@@ -53,12 +53,12 @@ from comgrasp_pin._paths import example_robot_urdf
 from comgrasp_pin.errors import MotionLogError
 from comgrasp_pin.estimation.payload_regressor import regressor_rows
 from comgrasp_pin.robot_io import load_robot
-from comgrasp_pin.robot_io.arm_model import identify_arm
-from comgrasp_pin.robot_io.dynamic import estimate_payload_dynamic
-from comgrasp_pin.robot_io.gain_calibration import calibrate_gains
-from comgrasp_pin.robot_io.gains import GAIN_CORRELATION, Gains, parse_gains, relative_cov
-from comgrasp_pin.robot_io.logs import JointLog, read_csv
-from comgrasp_pin.robot_io.motion_signals import filtered_signals, find_motion
+from comgrasp_pin.robot_io.from_motion.arm_model import identify_arm
+from comgrasp_pin.robot_io.from_motion.dynamic import estimate_payload_dynamic
+from comgrasp_pin.robot_io.from_motion.gain_calibration import calibrate_gains
+from comgrasp_pin.robot_io.from_motion.motion_signals import filtered_signals, find_motion
+from comgrasp_pin.robot_io.log_files.gains import GAIN_CORRELATION, Gains, parse_gains, relative_cov
+from comgrasp_pin.robot_io.log_files.joint_readers import JointLog, read_csv
 
 REALDATA = Path(__file__).resolve().parents[2] / "shared" / "realdata"
 Z95 = 1.959963984540054

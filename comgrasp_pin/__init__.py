@@ -25,13 +25,13 @@ from comgrasp_pin.robot_io import (
     JointLog,
     Payload,
     PayloadEstimate,
-    PosePlan,
     estimate_from_log,
     load_robot,
     payload_in_flange,
     plan_measurement_poses,
     read_log,
 )
+from comgrasp_pin.robot_io.plans import PosePlan
 
 __all__ = [
     "AxisPrior",

@@ -1,4 +1,5 @@
-"""The empty run laid on the loaded one (robot_io.alignment, motion_signals.find_motion).
+"""The empty run laid on the loaded one (robot_io.from_motion.alignment,
+motion_signals.find_motion).
 
 Synthetic runs: one smooth multi-sine motion (analytic positions and velocities, at rest at
 both ends) played with still parts of different lengths before and after it, sampled at
@@ -16,8 +17,8 @@ import pytest
 from comgrasp_pin.errors import MotionLogError
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io import JointLog
-from comgrasp_pin.robot_io.alignment import MAX_GAP_RAD, align_empty
-from comgrasp_pin.robot_io.motion_signals import (
+from comgrasp_pin.robot_io.from_motion.alignment import MAX_GAP_RAD, align_empty
+from comgrasp_pin.robot_io.from_motion.motion_signals import (
     MOTION_MARGIN_S,
     MOTION_SPEED,
     filtered_signals,

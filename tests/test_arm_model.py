@@ -17,16 +17,16 @@ import pytest
 from comgrasp_pin.cli import main
 from comgrasp_pin.errors import InvalidInputError, LogError
 from comgrasp_pin.robot_io import write_csv
-from comgrasp_pin.robot_io.arm_model import (
+from comgrasp_pin.robot_io.from_motion.arm_model import (
     arm_model_dict,
     check_matches,
     identify_arm,
     load_arm_model,
 )
-from comgrasp_pin.robot_io.dynamic import check_on_log, estimate_payload_dynamic
-from comgrasp_pin.robot_io.excitation import ExcitationSettings, plan_excitation
-from comgrasp_pin.robot_io.gain_calibration import calibrate_gains
-from comgrasp_pin.robot_io.trust import Checks, judge, motion_reasons
+from comgrasp_pin.robot_io.from_motion.dynamic import check_on_log, estimate_payload_dynamic
+from comgrasp_pin.robot_io.from_motion.gain_calibration import calibrate_gains
+from comgrasp_pin.robot_io.plans.excitation import ExcitationSettings, plan_excitation
+from comgrasp_pin.robot_io.results.trust import Checks, judge, motion_reasons
 from comgrasp_pin.simulation.arm_worlds import arm_robot, arm_urdf
 from comgrasp_pin.simulation.payload_motion import simulate_motion
 from comgrasp_pin.simulation.payloads import box

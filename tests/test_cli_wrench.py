@@ -16,7 +16,7 @@ from test_wrench_static import _log
 from comgrasp_pin._paths import urdf_path
 from comgrasp_pin.cli import main
 from comgrasp_pin.robot import RobotModel
-from comgrasp_pin.robot_io import write_wrench_bag, write_wrench_csv
+from comgrasp_pin.robot_io.log_files import write_wrench_bag, write_wrench_csv
 
 URDF = str(urdf_path("ur5_gripper.urdf"))
 MASS, COM_SENSOR = 1.2, np.array([0.01, -0.005, 0.15])

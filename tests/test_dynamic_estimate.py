@@ -1,4 +1,4 @@
-"""The payload's inertia from a motion (robot_io.dynamic, estimation.inertial_fit).
+"""The payload's inertia from a motion (robot_io.from_motion.dynamic, estimation.inertial_fit).
 
 Independent reference: the efforts are Pinocchio's RNEA of the arm with the payload appended
 as a body (not the payload regressor under test), plus friction, an offset and white noise;
@@ -19,7 +19,7 @@ from comgrasp_pin.errors import MotionLogError, UnobservableError
 from comgrasp_pin.estimation.inertial_fit import fit_inertial, pi_of_theta, theta_of_pi
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io import JointLog, write_csv
-from comgrasp_pin.robot_io.dynamic import estimate_payload_dynamic
+from comgrasp_pin.robot_io.from_motion.dynamic import estimate_payload_dynamic
 
 PAYLOAD = pin.Inertia(0.8, np.array([0.02, -0.01, 0.08]), np.diag([4e-3, 5e-3, 1e-3]))
 RATE = 250.0

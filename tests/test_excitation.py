@@ -20,9 +20,9 @@ from comgrasp_pin.estimation.payload_regressor import (
     payload_regressor,
 )
 from comgrasp_pin.robot import RobotModel
-from comgrasp_pin.robot_io import motion_files
-from comgrasp_pin.robot_io.collision import SelfCollision
-from comgrasp_pin.robot_io.excitation import (
+from comgrasp_pin.robot_io.plans import motion_files
+from comgrasp_pin.robot_io.plans.collision import SelfCollision
+from comgrasp_pin.robot_io.plans.excitation import (
     UR_HOME,
     ExcitationSettings,
     plan_excitation,

@@ -14,9 +14,9 @@ import pytest
 
 from comgrasp_pin.cli import main
 from comgrasp_pin.robot_io import write_bag, write_csv
-from comgrasp_pin.robot_io.dynamic import estimate_payload_dynamic
-from comgrasp_pin.robot_io.excitation import ExcitationSettings, plan_excitation
-from comgrasp_pin.robot_io.payload import T_flange_ee
+from comgrasp_pin.robot_io.from_motion.dynamic import estimate_payload_dynamic
+from comgrasp_pin.robot_io.payload_files.payload import T_flange_ee
+from comgrasp_pin.robot_io.plans.excitation import ExcitationSettings, plan_excitation
 from comgrasp_pin.simulation.arm_worlds import arm_robot, arm_urdf
 from comgrasp_pin.simulation.payload_motion import simulate_motion
 from comgrasp_pin.simulation.payloads import box, off_axis_weight, rod
@@ -90,7 +90,7 @@ def test_panda_rod_from_csv_files(tmp_path):
     motion = _motion("panda", 7.5)  # Franka's joint 2 limit
     log, empty = _runs("panda", motion, rod(), seed=2)
     robot = arm_robot("panda")
-    from comgrasp_pin.robot_io import read_csv
+    from comgrasp_pin.robot_io.log_files import read_csv
 
     loaded = read_csv(write_csv(log, tmp_path / "l.csv"), robot.joint_names)
     empty = read_csv(write_csv(empty, tmp_path / "e.csv"), robot.joint_names)

@@ -30,27 +30,18 @@ from comgrasp_pin.config import (
     MAX_ABS_TORQUE_NM,
 )
 from comgrasp_pin.errors import LogError
-from comgrasp_pin.robot_io import (
-    Gains,
-    JointLog,
-    load_robot,
-    parse_gains,
-    read_bag,
-    read_csv,
-    read_rtde,
-    write_bag,
-    write_csv,
-)
-from comgrasp_pin.robot_io.record import (
+from comgrasp_pin.robot_io import JointLog, load_robot, parse_gains, write_bag, write_csv
+from comgrasp_pin.robot_io.log_files import Gains, read_bag, read_csv, read_rtde
+from comgrasp_pin.robot_io.log_files.record import (
     DEFAULT_WRENCH_TOPIC,
     T0_NS,
     write_wrench_bag,
     write_wrench_csv,
 )
-from comgrasp_pin.robot_io.wrench_bag import read_wrench_bag
-from comgrasp_pin.robot_io.wrench_csv import read_wrench_csv
-from comgrasp_pin.robot_io.wrench_log import WrenchLog
-from comgrasp_pin.robot_io.wrench_rtde import read_rtde_wrench
+from comgrasp_pin.robot_io.log_files.wrench_bag import read_wrench_bag
+from comgrasp_pin.robot_io.log_files.wrench_csv import read_wrench_csv
+from comgrasp_pin.robot_io.log_files.wrench_log import WrenchLog
+from comgrasp_pin.robot_io.log_files.wrench_sources import read_rtde_wrench
 
 NAMES = ("j0", "j1", "j2", "j3", "j4", "j5")
 K = np.array([10.0, 10.6956, 8.4566, 9.0029, 9.48, 10.1232])  # UR10e, N m per A

@@ -1,4 +1,5 @@
-"""robot_io.model_exports: the URDF with the payload loaded back by Pinocchio and by MuJoCo,
+"""robot_io.payload_files.model_exports: the URDF with the payload loaded back by Pinocchio and by
+MuJoCo,
 the MJCF body compiled by MuJoCo, against references written here: the payload's ten
 parameters moved by the URDF's own joint origins (ElementTree + NumPy, tests/
 test_robot_io_payload.urdf_T), gravity torques as m J^T g, MuJoCo's principal moments against
@@ -14,7 +15,8 @@ from test_robot_io_payload import urdf_T
 
 from comgrasp_pin._paths import example_robot_urdf, urdf_path
 from comgrasp_pin.errors import InvalidInputError
-from comgrasp_pin.robot_io import Payload, load_robot, mjcf_payload_body, urdf_with_payload
+from comgrasp_pin.robot_io import Payload, load_robot
+from comgrasp_pin.robot_io.payload_files import mjcf_payload_body, urdf_with_payload
 
 G = 9.81
 

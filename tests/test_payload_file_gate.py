@@ -29,13 +29,14 @@ from comgrasp_pin.robot_io import (
     JointLog,
     WrenchLog,
     estimate_from_log,
+    estimate_payload,
     payload_in_flange,
-    urscript,
+    read_any_log,
     write_csv,
-    write_wrench_csv,
 )
-from comgrasp_pin.robot_io.front_door import estimate_payload, read_any_log
-from comgrasp_pin.robot_io.trust import inertia_verdict
+from comgrasp_pin.robot_io.log_files import write_wrench_csv
+from comgrasp_pin.robot_io.payload_files import urscript
+from comgrasp_pin.robot_io.results.trust import inertia_verdict
 
 URDF = str(urdf_path("ur5_gripper.urdf"))
 SENSOR = "ft_sensor"

@@ -10,7 +10,8 @@ from scipy.signal import butter, filtfilt
 
 from comgrasp_pin.config import sensor_preset
 from comgrasp_pin.errors import InvalidInputError, UnstablePhysicsError
-from comgrasp_pin.robot_io import read_bag, read_csv, write_bag, write_csv
+from comgrasp_pin.robot_io import write_bag, write_csv
+from comgrasp_pin.robot_io.log_files import read_bag, read_csv
 from comgrasp_pin.simulation.arm_worlds import ARMS, EE_FRAME, arm_robot, arm_world
 from comgrasp_pin.simulation.payload_motion import (
     MotionSimConfig,

@@ -26,7 +26,7 @@ def test_one_name_for_the_std_of_a_torque_reading():
     import dataclasses
     import inspect
 
-    from comgrasp_pin.robot_io import estimate_result as rio_parts
+    from comgrasp_pin.robot_io.results import estimate_result as rio_parts
 
     assert "torque_std" in inspect.signature(cg.estimate_com).parameters
     for cls in (cg.ComEstimate, cg.PosePlan, cg.PayloadEstimate, rio_parts.JointTorques):

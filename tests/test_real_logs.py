@@ -13,10 +13,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from comgrasp_pin.robot_io.arm_model import identify_arm
-from comgrasp_pin.robot_io.dynamic import estimate_payload_dynamic
-from comgrasp_pin.robot_io.gain_calibration import calibrate_gains
-from comgrasp_pin.robot_io.motion_signals import filtered_signals, find_motion
+from comgrasp_pin.robot_io.from_motion.arm_model import identify_arm
+from comgrasp_pin.robot_io.from_motion.dynamic import estimate_payload_dynamic
+from comgrasp_pin.robot_io.from_motion.gain_calibration import calibrate_gains
+from comgrasp_pin.robot_io.from_motion.motion_signals import filtered_signals, find_motion
 
 ROOT = Path(__file__).resolve().parents[1]
 REALDATA = ROOT.parent / "shared" / "realdata"

@@ -153,7 +153,7 @@ def test_empty_bins_break_the_accuracy_curves():
             assert np.isnan(y[1:5]).all() and np.isfinite(y[5]) and np.isnan(y[6:11]).all()
             assert np.isfinite(y[11])
     finally:
-        common._pyplot().close(fig)
+        common.load_pyplot().close(fig)
 
 
 def _acc_row(obj, theta, acc, **extra):
@@ -407,7 +407,7 @@ def test_extra_objects_never_enter_the_paper_comparison(tmp_path, monkeypatch):
             curves["obj7"]["line"] in obj7_ax.lines and curves["obj7"]["ours"] not in obj1_ax.lines
         )
     finally:
-        common._pyplot().close(fig)
+        common.load_pyplot().close(fig)
     accuracy_figure(both, tmp_path / "a.png")
     calibration_figure(both, tmp_path / "c.png")
     accuracy, calibration = figures

@@ -1,4 +1,4 @@
-"""robot_io.estimate: the Panda target (3 planned poses, 0.05 N m per sample at 200 Hz, 1 s
+"""robot_io.at_rest.estimate: the Panda target (3 planned poses, 0.05 N m per sample at 200 Hz, 1 s
 windows), the reported sigma against a Monte Carlo spread, carried-over tau_before, a
 tilted mount. Truth from Pinocchio RNEA with an appended payload body (tests/_payload)."""
 
@@ -10,7 +10,7 @@ from _payload import panda, payload_torques
 
 from comgrasp_pin.errors import InvalidInputError, LogError
 from comgrasp_pin.robot_io import estimate_from_log, load_robot
-from comgrasp_pin.robot_io.planning import plan_measurement_poses
+from comgrasp_pin.robot_io.plans.poses import plan_measurement_poses
 
 MASS, COM = 0.85, np.array([0.025, -0.012, 0.06])
 START = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])

@@ -1,4 +1,5 @@
-"""robot_io.logs / record / windows: real bags (rosbags, sqlite3 and mcap), CSV, windows."""
+"""robot_io.log_files.joint_readers / record / windows: real bags (rosbags, sqlite3 and mcap), CSV,
+windows."""
 
 import numpy as np
 import pytest
@@ -6,19 +7,15 @@ from _logs import rnea_torques, session
 from _payload import panda
 
 from comgrasp_pin.errors import InvalidInputError, LogError, NotStaticError
-from comgrasp_pin.robot_io import (
-    JointLog,
+from comgrasp_pin.robot_io import JointLog, read_log, write_bag, write_csv
+from comgrasp_pin.robot_io.at_rest import (
     find_static_windows,
     pair_by_configuration,
     parse_windows,
-    read_bag,
-    read_csv,
-    read_log,
     read_window,
-    write_bag,
-    write_csv,
 )
-from comgrasp_pin.robot_io.windows import joint_speed
+from comgrasp_pin.robot_io.at_rest.windows import joint_speed
+from comgrasp_pin.robot_io.log_files import read_bag, read_csv
 
 Q3 = np.array(
     [
@@ -120,7 +117,7 @@ def test_csv_missing_column_is_named(robot, tmp_path):
 def test_bag_without_efforts_is_refused(robot, synthetic, tmp_path):
     log = synthetic[0]
     empty = JointLog(log.time[:20], log.joint_names, log.position[:20], np.empty((20, 0)))
-    from comgrasp_pin.robot_io import record
+    from comgrasp_pin.robot_io.log_files import record
 
     # write_bag concatenates efforts: give a log whose effort field is empty
     path = record.write_bag(empty, tmp_path / "bag")

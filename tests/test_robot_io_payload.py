@@ -1,4 +1,5 @@
-"""robot_io.payload / exports: the CoM in the flange frame against a conversion written here
+"""robot_io.payload_files.payload / exports: the CoM in the flange frame against a conversion
+written here
 from the URDF's joint origins (ElementTree + NumPy, not Pinocchio); inertia approximations;
 the exported files parsed back (json, ruamel.yaml, a regex for URScript)."""
 
@@ -13,14 +14,8 @@ from _payload import panda
 
 from comgrasp_pin._paths import example_robot_urdf, urdf_path
 from comgrasp_pin.errors import InvalidInputError
-from comgrasp_pin.robot_io import (
-    estimate_from_log,
-    franka_load,
-    load_robot,
-    payload_in_flange,
-    ros2_yaml,
-    urscript,
-)
+from comgrasp_pin.robot_io import estimate_from_log, load_robot, payload_in_flange
+from comgrasp_pin.robot_io.payload_files import franka_load, ros2_yaml, urscript
 
 MASS, COM = 0.7, np.array([0.015, 0.02, 0.045])
 

@@ -1,4 +1,4 @@
-"""robot_io.planning: planned poses within the limits and free of self-collision (checked here
+"""robot_io.plans.poses: planned poses within the limits and free of self-collision (checked here
 with a collision model built independently: pin.buildGeomFromUrdf + pin.computeCollisions),
 and a predicted CoM std at least 2x better than four random wrist poses near the start."""
 
@@ -11,7 +11,7 @@ from comgrasp_pin import RobotModel
 from comgrasp_pin._paths import example_robot_data_dir, example_robot_urdf
 from comgrasp_pin.errors import CollisionError, InvalidInputError
 from comgrasp_pin.estimation.pose_planning import predicted_std
-from comgrasp_pin.robot_io.planning import plan_measurement_poses, urscript_program
+from comgrasp_pin.robot_io.plans.poses import plan_measurement_poses, urscript_program
 
 STARTS = {
     "panda": np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8]),

@@ -1,4 +1,4 @@
-"""robot_io.rtde / gains: Universal Robots recordings as they come (the RTDE client's
+"""robot_io.log_files.rtde / gains: Universal Robots recordings as they come (the RTDE client's
 record.py, space-separated; ur_rtde's startFileRecording, comma-separated), motor currents
 turned into joint torques by drive gains, the gains' text and JSON; the real UR10e log of
 ../shared/realdata where present."""
@@ -13,20 +13,9 @@ from _logs import rnea_torques, session
 from comgrasp_pin._paths import urdf_path
 from comgrasp_pin.cli import main
 from comgrasp_pin.errors import InvalidInputError, LogError
-from comgrasp_pin.robot_io import (
-    Gains,
-    JointLog,
-    gains_json,
-    load_robot,
-    parse_gains,
-    read_bag,
-    read_csv,
-    read_log,
-    read_rtde,
-    write_bag,
-    write_csv,
-)
-from comgrasp_pin.robot_io.rtde import is_rtde_header
+from comgrasp_pin.robot_io import JointLog, load_robot, parse_gains, read_log, write_bag, write_csv
+from comgrasp_pin.robot_io.log_files import Gains, gains_json, read_bag, read_csv, read_rtde
+from comgrasp_pin.robot_io.log_files.rtde import is_rtde_header
 
 NAMES = ("j0", "j1", "j2", "j3", "j4", "j5")
 K = np.array([10.0, 10.6956, 8.4566, 9.0029, 9.48, 10.1232])  # UR10e, N m per A

@@ -15,8 +15,9 @@ from _logs import rnea_torques, session
 
 from comgrasp_pin._paths import urdf_path
 from comgrasp_pin.cli import main
-from comgrasp_pin.robot_io import JointLog, estimate_from_log, result_dict, write_csv
+from comgrasp_pin.robot_io import JointLog, estimate_from_log, write_csv
 from comgrasp_pin.robot_io.mount import load_robot
+from comgrasp_pin.robot_io.results import result_dict
 
 URDF = str(urdf_path("ur5_gripper.urdf"))
 MASS, COM = 0.8, np.array([0.03, -0.02, 0.05])

@@ -24,16 +24,14 @@ from comgrasp_pin._paths import example_robot_urdf
 from comgrasp_pin.cli import main
 from comgrasp_pin.cli.exports import EXPORTS, write_exports
 from comgrasp_pin.errors import InvalidInputError, OutputError
-from comgrasp_pin.robot_io import (
-    Payload,
+from comgrasp_pin.robot_io import Payload, load_robot, write_csv
+from comgrasp_pin.robot_io.payload_files import (
     franka_desk,
     krl_load,
-    load_robot,
     moveit_yaml,
     principal_axes,
     rapid_loaddata,
     sunrise_load_data,
-    write_csv,
 )
 
 NUM = r"(-?\d+(?:\.\d+)?)"
@@ -118,7 +116,7 @@ def test_principal_axes_is_a_rotation_that_diagonalises(seed):
 def test_franka_desk_json():
     robot = load_robot(example_robot_urdf("panda_description/urdf/panda.urdf"), "panda_hand_tcp")
     p = _payload(2, "panda_link8")
-    from comgrasp_pin.robot_io import T_flange_ee
+    from comgrasp_pin.robot_io.payload_files import T_flange_ee
 
     data = json.loads(json.dumps(franka_desk(p, T_flange_ee(robot, "panda_link8"))))
     assert set(data) == {"mass", "centerOfMass", "transformation", "inertia"}

@@ -1,4 +1,5 @@
-"""The payload's inertia from a motion's wrench (robot_io.wrench_dynamic and its modules).
+"""The payload's inertia from a motion's wrench (robot_io.from_motion.wrench_dynamic and its
+modules).
 
 Independent reference: the wrench is Pinocchio's RNEA of the arm with everything beyond the
 sensor (tool and payload) on a locked joint at the sensor frame: the force that joint passes
@@ -17,15 +18,15 @@ import pytest
 from comgrasp_pin.errors import InvalidInputError, LogError, MotionLogError, UnobservableError
 from comgrasp_pin.estimation.inertial_fit import pseudo_inertia
 from comgrasp_pin.robot import RobotModel
-from comgrasp_pin.robot_io.result_file import result_dict
-from comgrasp_pin.robot_io.wrench_dynamic import (
+from comgrasp_pin.robot_io.from_motion.wrench_dynamic import (
     TOOL_EMPTY_RUN,
     TOOL_GIVEN,
     TOOL_NOMINAL,
     estimate_wrench_dynamic,
 )
-from comgrasp_pin.robot_io.wrench_log import WrenchLog
-from comgrasp_pin.robot_io.wrench_system import nominal_tool, params_map
+from comgrasp_pin.robot_io.from_motion.wrench_system import nominal_tool, params_map
+from comgrasp_pin.robot_io.log_files.wrench_log import WrenchLog
+from comgrasp_pin.robot_io.results.result_file import result_dict
 
 RATE = 250.0
 SENSOR = "ft_sensor"
@@ -318,8 +319,8 @@ def test_mujoco_wrench_against_the_truth_and_the_joint_torques_on_one_motion():
     force/torque sensor at ft_sensor (the realistic FT 300-S class: noise, an episode offset,
     drift) and its link-side joint torques, an empty run of the same motion for each path."""
     from comgrasp_pin.config import sensor_preset, wrench_preset
-    from comgrasp_pin.robot_io.dynamic import estimate_payload_dynamic
-    from comgrasp_pin.robot_io.excitation import ExcitationSettings, plan_excitation
+    from comgrasp_pin.robot_io.from_motion.dynamic import estimate_payload_dynamic
+    from comgrasp_pin.robot_io.plans.excitation import ExcitationSettings, plan_excitation
     from comgrasp_pin.simulation.arm_worlds import arm_robot
     from comgrasp_pin.simulation.payload_motion import MotionSimConfig, simulate_motion
     from comgrasp_pin.simulation.payloads import box

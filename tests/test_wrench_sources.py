@@ -13,17 +13,15 @@ import pytest
 
 from comgrasp_pin._paths import example_robot_data_dir, urdf_path
 from comgrasp_pin.errors import InvalidInputError, LogError
-from comgrasp_pin.robot_io import (
-    WrenchLog,
-    load_robot,
+from comgrasp_pin.robot_io import WrenchLog, load_robot, read_wrench_log
+from comgrasp_pin.robot_io.log_files import (
     read_rtde_wrench,
     read_wrench_bag,
     read_wrench_csv,
-    read_wrench_log,
     write_wrench_bag,
     write_wrench_csv,
 )
-from comgrasp_pin.robot_io.wrench_bag import MAX_JOINT_GAP_S
+from comgrasp_pin.robot_io.log_files.wrench_bag import MAX_JOINT_GAP_S
 
 Q0 = np.array([0.0, -1.2, 1.5, -1.9, -1.57, 0.0])
 RATE_Q = np.array([0.3, -0.2, 0.1, 0.4, -0.5, 0.6])  # rad/s: positions linear in time

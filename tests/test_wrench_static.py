@@ -1,4 +1,5 @@
-"""The payload from a wrist force/torque sensor at rest: estimation.wrench, robot_io.wrench_static.
+"""The payload from a wrist force/torque sensor at rest: estimation.wrench,
+robot_io.at_rest.wrench_static.
 
 References: the wrench of a hanging body written out in the test (f = m g, tau = c x m g in the
 sensor frame), the URDF's inertials read with xml.etree, and the coverage of the intervals over
@@ -19,9 +20,9 @@ from comgrasp_pin.errors import InvalidInputError, LogError, UnobservableError
 from comgrasp_pin.estimation.wrench import fit_static_wrench
 from comgrasp_pin.estimation.wrench_com import tool_beyond
 from comgrasp_pin.robot import RobotModel
-from comgrasp_pin.robot_io.planning import plan_measurement_poses
-from comgrasp_pin.robot_io.wrench_log import WrenchLog
-from comgrasp_pin.robot_io.wrench_static import estimate_wrench_static
+from comgrasp_pin.robot_io.at_rest.wrench_static import estimate_wrench_static
+from comgrasp_pin.robot_io.log_files.wrench_log import WrenchLog
+from comgrasp_pin.robot_io.plans.poses import plan_measurement_poses
 
 G = np.array([0.0, 0.0, -9.81])
 TILTS = Rotation.from_rotvec(np.radians([[0, 0, 0], [60, 0, 0], [0, 60, 0], [-45, -45, 0]]))

@@ -45,7 +45,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     from comgrasp_pin.cli.gains_args import gains_from_args
     from comgrasp_pin.cli.robot import write_json
     from comgrasp_pin.errors import LogError
-    from comgrasp_pin.robot_io.arm_model import arm_model_dict, identify_arm
+    from comgrasp_pin.robot_io.from_motion.arm_model import arm_model_dict, identify_arm
 
     guessed = args.ee_frame is None
     robot = _robot(args)
@@ -79,8 +79,8 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     from comgrasp_pin.cli.dynamic import one_log
     from comgrasp_pin.cli.gains_args import gains_from_args
     from comgrasp_pin.cli.robot import write_json
-    from comgrasp_pin.robot_io.gain_calibration import calibrate_gains
-    from comgrasp_pin.robot_io.gains import Gains, gains_json
+    from comgrasp_pin.robot_io.from_motion.gain_calibration import calibrate_gains
+    from comgrasp_pin.robot_io.log_files.gains import Gains, gains_json
 
     robot = _robot(args)
     gains = gains_from_args(args, robot)
@@ -112,7 +112,7 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
 def _common(p: argparse.ArgumentParser, ee_required: bool) -> None:
     from comgrasp_pin.cli.gains_args import add_gains_args
     from comgrasp_pin.cli.robot import add_robot_args
-    from comgrasp_pin.robot_io.motion_signals import CUTOFF_HZ
+    from comgrasp_pin.robot_io.from_motion.motion_signals import CUTOFF_HZ
 
     ee_help = (
         "the payload's frame (the flange or TCP)"
@@ -127,7 +127,7 @@ def _common(p: argparse.ArgumentParser, ee_required: bool) -> None:
 
 def add_arm_subcommands(sub: argparse._SubParsersAction) -> None:
     """Add `identify-arm` and `calibrate-gains` to the `comgrasp` subparsers ``sub``."""
-    from comgrasp_pin.robot_io.logs import DEFAULT_TOPIC
+    from comgrasp_pin.robot_io.log_files.joint_readers import DEFAULT_TOPIC
 
     ident = sub.add_parser(
         "identify-arm",

@@ -13,7 +13,7 @@ from comgrasp_pin.errors import InvalidInputError
 
 def add_dynamic_args(est: argparse.ArgumentParser) -> None:
     """The options of the dynamic estimate, on the `estimate` parser."""
-    from comgrasp_pin.robot_io.motion_signals import CUTOFF_HZ
+    from comgrasp_pin.robot_io.from_motion.motion_signals import CUTOFF_HZ
 
     g = est.add_argument_group(
         "from a motion (--dynamic)",
@@ -51,9 +51,9 @@ def run_dynamic(args: argparse.Namespace, robot) -> int:
     from comgrasp_pin import robot_io as rio
     from comgrasp_pin.cli.exports import finish_estimate
     from comgrasp_pin.cli.gains_args import gains_from_args
-    from comgrasp_pin.robot_io.arm_model import load_arm_model
-    from comgrasp_pin.robot_io.dynamic import check_on_log, estimate_payload_dynamic
-    from comgrasp_pin.robot_io.dynamic_plot import plot_validation
+    from comgrasp_pin.robot_io.from_motion.arm_model import load_arm_model
+    from comgrasp_pin.robot_io.from_motion.dynamic import check_on_log, estimate_payload_dynamic
+    from comgrasp_pin.robot_io.from_motion.dynamic_plot import plot_validation
 
     if args.before or args.after or args.auto:
         raise InvalidInputError("--dynamic uses the whole motion (or --window): leave out "
@@ -89,22 +89,22 @@ def run_dynamic(args: argparse.Namespace, robot) -> int:
 
 def one_log(bag, csv, bag_opt, csv_opt, robot, topic, gains=None, required: bool = True):
     """The log of ``--bag`` or ``--csv`` (one of them), read with ``gains``; None if neither."""
-    from comgrasp_pin import robot_io as rio
     from comgrasp_pin.cli.exports import log_path
+    from comgrasp_pin.robot_io.log_files import read_bag, read_csv
 
     path = log_path(bag, csv, bag_opt, csv_opt, required)
     if path is None:
         return None
     if bag is not None:
-        return rio.read_bag(bag, robot.joint_names, topic, None, gains)
-    return rio.read_csv(csv, robot.joint_names, gains)
+        return read_bag(bag, robot.joint_names, topic, None, gains)
+    return read_csv(csv, robot.joint_names, gains)
 
 
 def window(text: str | None, option: str):
     """The one window T0:T1 of ``option``, or None."""
     if text is None:
         return None
-    from comgrasp_pin.robot_io import parse_windows
+    from comgrasp_pin.robot_io.at_rest import parse_windows
 
     windows = parse_windows(text, option)
     if len(windows) != 1:
@@ -114,6 +114,6 @@ def window(text: str | None, option: str):
 
 def prior(path: str | None):
     """The static estimate in a RESULT.json as a prior ((m, c), cov), or None."""
-    from comgrasp_pin.robot_io.result_file import prior_of_result
+    from comgrasp_pin.robot_io.results.result_file import prior_of_result
 
     return None if path is None else prior_of_result(path)

@@ -36,10 +36,10 @@ EXPORTS: tuple[tuple[str, str], ...] = (
 def _render(option: str, robot, p, path: Path, urdf: Path) -> str:
     """The text of ``option``'s file (robot_io imported here: ``--help`` stays fast)."""
     from comgrasp_pin.file_checks import parse_xml, read_description
-    from comgrasp_pin.robot_io import exports as ex
-    from comgrasp_pin.robot_io import model_exports as me
-    from comgrasp_pin.robot_io import vendor_exports as ve
-    from comgrasp_pin.robot_io.payload import T_flange_ee
+    from comgrasp_pin.robot_io.payload_files import exports as ex
+    from comgrasp_pin.robot_io.payload_files import model_exports as me
+    from comgrasp_pin.robot_io.payload_files import vendor_exports as ve
+    from comgrasp_pin.robot_io.payload_files.payload import T_flange_ee
 
     if option == "--export-moveit":
         text = read_description(urdf, "URDF", robot.package_dirs)
@@ -161,9 +161,9 @@ def finish_estimate(args: argparse.Namespace, robot, est, extra=None) -> int:
         The exit status: 0, or 2 where payload files were asked for and refused.
     """
     from comgrasp_pin.errors import NotIdentifiedError
-    from comgrasp_pin.robot_io.payload import payload_in_flange
-    from comgrasp_pin.robot_io.result_file import write_result
-    from comgrasp_pin.robot_io.summary import summary
+    from comgrasp_pin.robot_io.payload_files.payload import payload_in_flange
+    from comgrasp_pin.robot_io.results.result_file import write_result
+    from comgrasp_pin.robot_io.results.text_summary import summary
 
     rendered, refused, payload = [], None, None
     if wants_exports(args):

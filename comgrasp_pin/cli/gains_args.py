@@ -1,7 +1,7 @@
 """`--current-gains` and `--gain-std`: the drive gains a command reads a current log with.
 
 The options are added to `comgrasp estimate` by ``cli.robot``; each path that reads a log
-(static, ``--dynamic``) turns them into ``robot_io.gains.Gains`` with ``gains_from_args``.
+(static, ``--dynamic``) turns them into ``robot_io.log_files.gains.Gains`` with ``gains_from_args``.
 """
 
 from __future__ import annotations
@@ -38,10 +38,11 @@ def gains_from_args(args: argparse.Namespace, robot):
     JSON's joint names).
 
     Raises:
-        InvalidInputError: see ``robot_io.gains.parse_gains``; ``--gain-std`` without gains.
+        InvalidInputError: see ``robot_io.log_files.gains.parse_gains``; ``--gain-std`` without
+            gains.
     """
     from comgrasp_pin.errors import InvalidInputError
-    from comgrasp_pin.robot_io.gains import parse_gains
+    from comgrasp_pin.robot_io.log_files.gains import parse_gains
 
     text = getattr(args, "current_gains", None)
     gain_std = getattr(args, "gain_std", None)
@@ -53,7 +54,7 @@ def gains_from_args(args: argparse.Namespace, robot):
                 "--gain-std out"
             )
         return None
-    from comgrasp_pin.robot_io.gains import GAIN_CORRELATION
+    from comgrasp_pin.robot_io.log_files.gains import GAIN_CORRELATION
 
     rho = getattr(args, "gain_correlation", None)
     return parse_gains(text, robot.nq, gain_std, robot.joint_names,

@@ -50,7 +50,8 @@ def write_json(path: str, data: dict) -> None:
 
 def _log_and_windows(args: argparse.Namespace, robot):
     """The log, its paired windows and the drive gains (or None), as the options ask."""
-    from comgrasp_pin import robot_io as rio
+    from comgrasp_pin.robot_io.at_rest import pair_by_configuration, parse_windows
+    from comgrasp_pin.robot_io.log_files import read_bag, read_csv
 
     log_path(args.bag, args.csv)
     if args.auto and args.grasp_time is None:
@@ -59,16 +60,16 @@ def _log_and_windows(args: argparse.Namespace, robot):
         raise InvalidInputError("give --before and --after windows, or --auto --grasp-time T")
     before = after = []
     if not args.auto:
-        before = rio.parse_windows(args.before, "--before")
-        after = rio.parse_windows(args.after, "--after")
+        before = parse_windows(args.before, "--before")
+        after = parse_windows(args.after, "--after")
     gains = gains_from_args(args, robot)  # None: the log's efforts are torques
     if args.bag is not None:  # with windows, only the messages near them are decoded
         wanted = None if args.auto else before + after
-        log = rio.read_bag(args.bag, robot.joint_names, args.topic, wanted, gains)
+        log = read_bag(args.bag, robot.joint_names, args.topic, wanted, gains)
     else:
-        log = rio.read_csv(args.csv, robot.joint_names, gains)
+        log = read_csv(args.csv, robot.joint_names, gains)
     if args.auto:
-        before, after = rio.pair_by_configuration(log, args.grasp_time, args.max_speed)
+        before, after = pair_by_configuration(log, args.grasp_time, args.max_speed)
     return log, before, after, gains
 
 
@@ -88,7 +89,7 @@ def _cmd_estimate(args: argparse.Namespace) -> int:
 
 
 def _cmd_plan(args: argparse.Namespace) -> int:
-    from comgrasp_pin.robot_io import planning
+    from comgrasp_pin.robot_io.plans import poses as planning
 
     robot = robot_of(args)
     if args.urscript and robot.nq != planning.UR_JOINTS:
@@ -159,9 +160,9 @@ def add_subcommands(sub: argparse._SubParsersAction) -> None:
 
 def _add_estimate(sub: argparse._SubParsersAction) -> None:
     """`estimate`: the log, its windows, the noise, the result and the payload files."""
-    from comgrasp_pin.robot_io.logs import DEFAULT_TOPIC
-    from comgrasp_pin.robot_io.payload import INERTIA_HELP
-    from comgrasp_pin.robot_io.windows import MAX_SPEED
+    from comgrasp_pin.robot_io.at_rest.windows import MAX_SPEED
+    from comgrasp_pin.robot_io.log_files.joint_readers import DEFAULT_TOPIC
+    from comgrasp_pin.robot_io.payload_files.payload import INERTIA_HELP
 
     est = sub.add_parser(
         "estimate",

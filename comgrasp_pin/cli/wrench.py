@@ -3,8 +3,8 @@
 The options are added to `comgrasp estimate` (``add_wrench_args``); ``cli.robot`` hands the
 parsed arguments here when ``--wrench`` is given. Without ``--dynamic``: mass, CoM and the
 sensor's six offsets from the arm at rest in three or more orientations
-(``robot_io.wrench_static``). With ``--dynamic``: the ten inertial parameters from a motion
-(``robot_io.wrench_dynamic``), the log's joint torques used as well where it has them.
+(``robot_io.at_rest.wrench_static``). With ``--dynamic``: the ten inertial parameters from a motion
+(``robot_io.from_motion.wrench_dynamic``), the log's joint torques used as well where it has them.
 """
 
 from __future__ import annotations
@@ -85,7 +85,7 @@ def _drift(text: str | None) -> tuple[tuple[float, float], tuple[float, float]]:
 def read_wrench(args: argparse.Namespace, robot):
     """The WrenchLog of ``--bag`` or ``--csv`` (a project CSV or a UR recording)."""
     from comgrasp_pin.cli.exports import log_path
-    from comgrasp_pin.robot_io.wrench_sources import read_wrench_log
+    from comgrasp_pin.robot_io.log_files.wrench_sources import read_wrench_log
 
     if args.grasp_time is not None:
         raise InvalidInputError(
@@ -107,12 +107,12 @@ def read_wrench(args: argparse.Namespace, robot):
 def run_wrench(args: argparse.Namespace, robot) -> int:
     """Read the log, estimate at rest, write RESULT.json and the payload files (``--dynamic``
     is ``cli.wrench_dynamic``'s; ``--before``/``--after``: the wrench's change at the same
-    poses, with the log's efforts where it has them, ``robot_io.wrench_pairs``)."""
+    poses, with the log's efforts where it has them, ``robot_io.at_rest.wrench_pairs``)."""
     from comgrasp_pin.cli.exports import finish_estimate
-    from comgrasp_pin.robot_io import parse_windows
-    from comgrasp_pin.robot_io.result_file import tool_of_result
-    from comgrasp_pin.robot_io.wrench_pairs import estimate_wrench_pairs
-    from comgrasp_pin.robot_io.wrench_static import estimate_wrench_static
+    from comgrasp_pin.robot_io.at_rest import parse_windows
+    from comgrasp_pin.robot_io.at_rest.wrench_pairs import estimate_wrench_pairs
+    from comgrasp_pin.robot_io.at_rest.wrench_static import estimate_wrench_static
+    from comgrasp_pin.robot_io.results.result_file import tool_of_result
 
     log = read_wrench(args, robot)
     if args.before or args.after:

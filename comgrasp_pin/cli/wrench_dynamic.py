@@ -16,7 +16,7 @@ from comgrasp_pin.errors import InvalidInputError
 
 def _empty_log(args: argparse.Namespace, robot):
     from comgrasp_pin.cli.exports import log_path
-    from comgrasp_pin.robot_io.wrench_sources import read_wrench_log
+    from comgrasp_pin.robot_io.log_files.wrench_sources import read_wrench_log
 
     path = log_path(args.empty_bag, args.empty_csv, "--empty-bag", "--empty-csv", False)
     if path is None:
@@ -30,8 +30,8 @@ def run_wrench_dynamic(args: argparse.Namespace, robot) -> int:
     from comgrasp_pin.cli.dynamic import prior, window
     from comgrasp_pin.cli.exports import finish_estimate
     from comgrasp_pin.cli.wrench import read_wrench
-    from comgrasp_pin.robot_io.arm_model import load_arm_model
-    from comgrasp_pin.robot_io.wrench_dynamic import estimate_wrench_dynamic
+    from comgrasp_pin.robot_io.from_motion.arm_model import load_arm_model
+    from comgrasp_pin.robot_io.from_motion.wrench_dynamic import estimate_wrench_dynamic
 
     if args.windows is not None:
         raise InvalidInputError("--windows is for the static estimate; a motion takes --window")

@@ -2,7 +2,7 @@
 
 Every log reader (the project's CSV, a UR RTDE recording, a ROS 2 bag, the wrench CSV, bag
 and RTDE readers) refuses a value past these ceilings, naming its line (or message) and
-column (``robot_io.log_values``). They are not tolerances: a damaged file or a column that
+column (``robot_io.log_files.log_values``). They are not tolerances: a damaged file or a column that
 holds another quantity (``1e300`` in a current, a time in nanoseconds) would otherwise flow
 through the fit into a confident, wrong payload. So each one is a physical ceiling at least
 ten times above the largest reading any real sensor of its kind reports, and a real log is

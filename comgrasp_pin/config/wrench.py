@@ -44,7 +44,7 @@ class WrenchSensorConfig:
     """Error model of the wrist force/torque sensor's readings (sensor frame).
 
     A sample at time t (s from the world's start) reads the true wrench (the convention of
-    ``robot_io.wrench_log``: what the tool side applies to the sensor) plus
+    ``robot_io.log_files.wrench_log``: what the tool side applies to the sensor) plus
     ``bias + offset + drift(t) + drift_rate * t + noise``, axis by axis.
 
     Attributes:

@@ -19,7 +19,7 @@ from each.
 
 What the sensor carries beyond the payload, the tool, is the URDF's links beyond the sensor
 frame (``tool_beyond``): a difference before/after the grasp cancels it, an estimate from
-orientations alone (``robot_io.wrench_static``) subtracts it.
+orientations alone (``robot_io.at_rest.wrench_static``) subtracts it.
 """
 
 from __future__ import annotations

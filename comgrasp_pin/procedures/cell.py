@@ -32,7 +32,7 @@ class TorqueMeasurement:
         time: the robot's clock when the window began (s; NaN: not known).
         wrench: (6,) the wrist force/torque sensor's mean over the same window: force (N)
             and torque (N m) the tool side applies to it, in its frame
-            (``robot_io.wrench_log``'s convention); None: no wrist sensor.
+            (``robot_io.log_files.wrench_log``'s convention); None: no wrist sensor.
         wrench_std_error: (6,) its standard error from the samples' spread; None without.
         wrench_n_samples: the wrist sensor's samples averaged (0 without one).
     """

@@ -31,18 +31,18 @@ from typing import cast
 
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.robot import RobotModel
-from comgrasp_pin.robot_io.dynamic import estimate_payload_dynamic
-from comgrasp_pin.robot_io.estimate import estimate_from_log
-from comgrasp_pin.robot_io.estimate_result import PayloadEstimate
-from comgrasp_pin.robot_io.gains import Gains
-from comgrasp_pin.robot_io.joint_log import JointLog
-from comgrasp_pin.robot_io.logs import DEFAULT_TOPIC, read_log
-from comgrasp_pin.robot_io.wrench_bag import WRENCH_STAMPED
-from comgrasp_pin.robot_io.wrench_dynamic import estimate_wrench_dynamic
-from comgrasp_pin.robot_io.wrench_log import WRENCH_COLUMNS, WrenchLog
-from comgrasp_pin.robot_io.wrench_pairs import estimate_wrench_pairs
-from comgrasp_pin.robot_io.wrench_sources import BAG_SUFFIXES, read_wrench_log
-from comgrasp_pin.robot_io.wrench_static import estimate_wrench_static
+from comgrasp_pin.robot_io.at_rest.estimate import estimate_from_log
+from comgrasp_pin.robot_io.at_rest.wrench_pairs import estimate_wrench_pairs
+from comgrasp_pin.robot_io.at_rest.wrench_static import estimate_wrench_static
+from comgrasp_pin.robot_io.from_motion.dynamic import estimate_payload_dynamic
+from comgrasp_pin.robot_io.from_motion.wrench_dynamic import estimate_wrench_dynamic
+from comgrasp_pin.robot_io.log_files.gains import Gains
+from comgrasp_pin.robot_io.log_files.joint_log import JointLog
+from comgrasp_pin.robot_io.log_files.joint_readers import DEFAULT_TOPIC, read_log
+from comgrasp_pin.robot_io.log_files.wrench_bag import WRENCH_STAMPED
+from comgrasp_pin.robot_io.log_files.wrench_log import WRENCH_COLUMNS, WrenchLog
+from comgrasp_pin.robot_io.log_files.wrench_sources import BAG_SUFFIXES, read_wrench_log
+from comgrasp_pin.robot_io.results.estimate_result import PayloadEstimate
 
 
 def _holds_wrench(path: Path) -> bool:

@@ -188,7 +188,7 @@ def add_ft_sensor(spec: mujoco.MjSpec, body: str) -> None:
     MuJoCo's convention (XML reference, sensor/force and sensor/torque): the site's body is
     the child; the sensors give the interaction between its subtree and its parent, in the
     site's frame, torque about the site: the wrench the parent (the arm) applies to the
-    subtree, i.e. minus the wrench of ``robot_io.wrench_log``'s convention
+    subtree, i.e. minus the wrench of ``robot_io.log_files.wrench_log``'s convention
     (``wrench_sensor.wrench_from_sensors`` turns one into the other).
     """
     spec.body(body).add_site(name=FT_SITE, size=[0.005, 0, 0], group=_COLLISION_GROUP)

@@ -4,7 +4,8 @@ strain-gauge sensor reports it.
 - The truth: MuJoCo's ``force`` and ``torque`` sensors on the site (``world.add_ft_sensor``)
   give the wrench the arm applies to the gripper's subtree (gripper, fingers, what they
   hold, contacts included), in the site's frame, torque about its origin. The sensor's own
-  convention (``robot_io.wrench_log``) is the other side of that interaction: what the tool
+  convention (``robot_io.log_files.wrench_log``) is the other side of that interaction: what the
+  tool
   applies to the sensor, at rest f = m g and tau = c x m g. ``wrench_from_sensors`` turns
   the first into the second (a sign).
 - The errors (``WrenchSensorConfig``): a constant bias, an offset drawn per episode, a
@@ -33,7 +34,8 @@ FORCE_TORQUE_STREAMS = (29, 31)
 
 
 def wrench_from_sensors(site_readings: np.ndarray) -> np.ndarray:
-    """(..., 6) the wrench of ``robot_io.wrench_log``'s convention (the tool's on the sensor:
+    """(..., 6) the wrench of ``robot_io.log_files.wrench_log``'s convention (the tool's on the
+    sensor:
     force N, torque N m, site frame) from MuJoCo's force and torque sensors' readings
     (..., 6) at the site (the arm's on the tool's subtree): their negative."""
     return -np.asarray(site_readings, dtype=float)
@@ -45,7 +47,7 @@ class WrenchMeasurement:
 
     Attributes:
         wrench: (6,) mean reading: force (N) and torque (N m) the tool side applies to the
-            sensor, in ``sensor_frame`` (``robot_io.wrench_log``'s convention).
+            sensor, in ``sensor_frame`` (``robot_io.log_files.wrench_log``'s convention).
         std_error: (6,) standard error of the mean, from the samples' spread (N, N m); inf
             with a single sample.
         q: (n,) the arm's configuration during the window (rad), its mean.

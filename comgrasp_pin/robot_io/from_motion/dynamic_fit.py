@@ -1,0 +1,166 @@
+"""The payload's weighted least squares from a motion: its error sources, its fit.
+
+``error_sources`` carries every error source through the weighted least squares of
+``A [pi; x] = b`` (``dynamic_uncertainty``): the noise and the model's error (white noise
+widened by a delete-a-block jackknife), the drive gains' covariance, the arm model's.
+``fit_payload`` fits the ten inertial parameters physically consistent where the mass's
+95 % interval is above zero (``estimation.inertial_fit``), and reports the unconstrained
+least squares where it is not (a consistent body of zero mass does not exist).
+``std_parts`` names the mass's std by source; ``motion_estimate`` makes the result of any
+motion's fit, its verdicts by ``trust``. Parameters in the ee frame, SI units.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from comgrasp_pin.estimation import dynamic_uncertainty as du
+from comgrasp_pin.estimation.inertial_fit import fit_inertial
+from comgrasp_pin.robot_io.from_motion.arm_model import ArmModel
+from comgrasp_pin.robot_io.from_motion.motion_system import about_com
+from comgrasp_pin.robot_io.results import trust
+from comgrasp_pin.robot_io.results.estimate_result import Inertia, Motion, PayloadEstimate
+from comgrasp_pin.robot_io.results.trust import Z95
+
+
+@dataclass(frozen=True)
+class ErrorSources:
+    """Every error source of the parameters [pi; x], linearised through the least squares.
+
+    Attributes:
+        factor: (p,) the block jackknife's widening of each parameter's white-noise std
+            (at least 1).
+        white: (p, p) the parameters' covariance from white noise alone.
+        sensitivity: (p, k n) the parameters' change per unit of each weighted row.
+        rel_gain_cov: (n, n) the drive gains' relative covariance (zeros without gains).
+        gains: (p, p) the covariance from the gains; arm: (p, p) from the arm model (zeros
+            without one).
+    """
+
+    factor: np.ndarray
+    white: np.ndarray
+    sensitivity: np.ndarray
+    rel_gain_cov: np.ndarray
+    gains: np.ndarray
+    arm: np.ndarray
+
+
+def error_sources(
+    A: np.ndarray,
+    b_rows: np.ndarray,
+    w: np.ndarray,
+    shape: tuple[int, int],
+    duration_s: float,
+    b_gain: np.ndarray | None,
+    rel_gain_cov: np.ndarray | None,
+    arm_model: ArmModel | None,
+    arm_jac: np.ndarray | None,
+) -> ErrorSources:
+    """The error sources of the fit of ``A`` (k n, p) to ``b_rows`` (k n,), row weights ``w``.
+
+    ``shape`` = (k samples, n joints) over ``duration_s`` s; ``b_gain``: the rows'
+    derivative by the gains, or None for rows no gain scales (a wrench); ``rel_gain_cov``:
+    (n, n) or None; ``arm_jac``: the rows'
+    derivative by the arm model's parameters, or None.
+    """
+    k, n = shape
+    blocks = du.contiguous_blocks(k, du.block_count(duration_s))
+    white = du.white_cov(A, b_rows, w)
+    jk = du.jackknife_cov(A, b_rows, w, k, n, blocks)
+    factor = np.sqrt(np.maximum(np.diag(jk) / np.maximum(np.diag(white), 1e-300), 1.0))
+    P = du.sensitivity(A, w)
+    rel = np.zeros((n, n)) if rel_gain_cov is None else rel_gain_cov
+    if b_gain is None:
+        cov_gains = np.zeros((P.shape[0], P.shape[0]))
+    else:
+        J_gain = du.gains_jacobian(P, b_gain)
+        cov_gains = J_gain @ rel @ J_gain.T
+    cov_arm = np.zeros((10, 10))
+    if arm_model is not None and arm_jac is not None:
+        D = P @ arm_jac @ arm_model.replicates.T  # each replicate's effect on pi
+        cov_arm = D @ D.T
+    return ErrorSources(factor, white, P, rel, cov_gains, cov_arm)
+
+
+@dataclass(frozen=True)
+class PayloadFit:
+    """The fitted parameters and their covariance from the data and the model.
+
+    ``pi`` (10,) inertial, ``x`` the rest (offsets, drift, friction, delay), IPOPT's
+    ``status`` (or why it did not run), ``data_cov`` their covariance from the data and the
+    model, ``pi_ls`` the plain weighted least squares' parameters.
+    """
+
+    pi: np.ndarray
+    x: np.ndarray
+    status: str
+    data_cov: np.ndarray
+    pi_ls: np.ndarray
+
+
+def fit_payload(
+    A_pi: np.ndarray,
+    A_x: np.ndarray,
+    b_rows: np.ndarray,
+    w: np.ndarray,
+    prior,
+    err: ErrorSources,
+) -> PayloadFit:
+    """The payload's parameters: consistent where a payload is seen, else least squares.
+
+    The consistent fit (``fit_inertial``, ``prior``: its prior or None) where the mass's
+    95 % interval from the least squares is above zero; else the unconstrained least
+    squares (nothing held).
+    """
+    pi_ls = err.sensitivity @ b_rows
+    data_cov = err.white * np.outer(err.factor, err.factor)
+    m_std = np.sqrt(data_cov[0, 0] + err.gains[0, 0] + err.arm[0, 0])
+    if pi_ls[0] - Z95 * m_std > 0:
+        fit = fit_inertial(A_pi, A_x, b_rows, w, prior)
+        pi, x, status = fit.pi, fit.x, fit.return_status
+        data_cov = fit.cov * np.outer(err.factor, err.factor)
+    else:  # nothing held: a consistent body of zero mass does not exist
+        A = np.column_stack([A_pi, A_x])
+        beta = np.linalg.lstsq(A * w[:, None], b_rows * w, rcond=None)[0]
+        pi, x, status = beta[:10], beta[10:], "not run: no payload seen"
+    return PayloadFit(pi, x, status, data_cov, pi_ls)
+
+
+def std_parts(data_cov: np.ndarray, err: ErrorSources, gains: bool, arm: bool) -> dict:
+    """The mass's std (kg) by source.
+
+    Data and model, and the ``gains`` and the ``arm`` model where they were given.
+    """
+    parts = {"data and model (block jackknife)": float(np.sqrt(data_cov[0, 0]))}
+    if gains:
+        parts["gains"] = float(np.sqrt(err.gains[0, 0]))
+    if arm:
+        parts["arm model"] = float(np.sqrt(err.arm[0, 0]))
+    return parts
+
+
+def motion_estimate(
+    robot,
+    fit: PayloadFit,
+    params_cov: np.ndarray,
+    motion: Motion,
+    findings: list[str],
+    sources: dict,
+    std_parts: dict,
+    **parts,
+) -> PayloadEstimate:
+    """A motion's ``PayloadEstimate`` from its fit.
+
+    pi about the CoM, the verdicts of the mass and CoM and of the inertia (``trust``), the
+    per-source ``parts`` (``joint_torques=``, ``wrench=``).
+    """
+    mass, com, inertia_c, cov4, inertia_cov = about_com(fit.pi, params_cov)
+    inertia_std = np.sqrt(np.clip(np.diag(inertia_cov), 0, None)).reshape(3, 3)
+    word, reasons = trust.judge(mass, com, cov4, trust.arm_mass(robot), findings)
+    i_word, i_reasons = trust.inertia_verdict(inertia_c, inertia_cov)
+    inertia = Inertia(inertia_c, inertia_cov, inertia_std, fit.pi, params_cov, fit.pi_ls,
+                      i_word, i_reasons)  # fmt: skip
+    return PayloadEstimate(mass, com, cov4, robot.ee_frame, word, reasons, sources, std_parts,
+                           motion=motion, inertia=inertia, **parts)  # fmt: skip

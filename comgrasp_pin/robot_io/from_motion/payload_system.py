@@ -1,0 +1,113 @@
+"""A loaded run's linear system: what the payload's torques are, and what else is unknown.
+
+    b = tau - tau_arm = Y pi + A_x x
+
+per kept sample and joint (rows sample-major), with the arm's own torques from an aligned
+empty run of the same motion, the arm's identified model, or the URDF's nominal model
+(``dynamic``'s three sources), the model's terms filtered like the torques
+(``parallel_filter``). x: per joint an offset and its drift (a cubic), viscous and Coulomb
+friction with the nominal model, and the efforts' delay behind the positions (not with an
+empty run: the same delay in both runs cancels). Used by the payload's fit and to check a
+fitted payload on a second log.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from comgrasp_pin.estimation.payload_regressor import regressor_rows
+from comgrasp_pin.robot import RobotModel
+from comgrasp_pin.robot_io.from_motion.alignment import align_empty
+from comgrasp_pin.robot_io.from_motion.arm_model import ArmModel, arm_columns, check_matches
+from comgrasp_pin.robot_io.from_motion.motion_signals import MotionSamples, motion_samples
+from comgrasp_pin.robot_io.from_motion.motion_system import (
+    friction_columns,
+    joint_columns,
+    offset_columns,
+)
+from comgrasp_pin.robot_io.from_motion.parallel_filter import delay_column, fast_signals, lowpassed
+from comgrasp_pin.robot_io.log_files.joint_readers import JointLog
+
+EMPTY_RUN, ARM_MODEL, NOMINAL = "empty run", "identified arm model", "URDF model + friction"
+
+
+@dataclass(frozen=True)
+class PayloadSystem:
+    """The loaded run's system.
+
+    Attributes:
+        S: the kept samples.
+        Y: (k, n, 10) the payload regressor, filtered like the torques.
+        b: (k, n) the payload's torques as measured: efforts minus the arm's own (N m).
+        b_gain: (k, n) the part of b that scales with each joint's drive gain.
+        A_x: (k n, e) the extra unknowns' columns.
+        per_joint: how many of A_x's columns come per joint (offset, drift, friction);
+            a last column, the delay, follows unless ``source`` is ``EMPTY_RUN``.
+        source: ``EMPTY_RUN``, ``ARM_MODEL`` or ``NOMINAL``.
+        arm_jac: (k n, p) the arm model's columns (tau_arm = arm_jac @ params), or None.
+        alignment: the empty run's (``Alignment.as_dict``), or None.
+    """
+
+    S: MotionSamples
+    Y: np.ndarray
+    b: np.ndarray
+    b_gain: np.ndarray
+    A_x: np.ndarray
+    per_joint: int
+    source: str
+    arm_jac: np.ndarray | None
+    alignment: dict | None
+
+
+def payload_system(
+    robot: RobotModel,
+    log: JointLog,
+    empty_log: JointLog | None,
+    window,
+    empty_window,
+    cutoff_hz: float,
+    arm_model: ArmModel | None,
+) -> PayloadSystem:
+    """The system of ``log`` with the arm's torques from the best source given."""
+    S = motion_samples(robot, log, window, cutoff_hz, crop=empty_log is not None)
+    k, n = S.q.shape
+    fast = fast_signals(robot, log, window, cutoff_hz)
+
+    def filtered(terms, source=fast, times=S.t):  # the model's terms filtered like tau
+        return lowpassed(source, cutoff_hz, terms, times)
+
+    alignment, arm_jac = None, None
+    Y = filtered(lambda F: regressor_rows(robot, F.q, F.qd, F.qdd))
+    if empty_log is not None:
+        E, found = align_empty(robot, S, empty_log, empty_window, cutoff_hz)
+        alignment = found.as_dict()
+        fast_empty = fast_signals(robot, empty_log, empty_window, cutoff_hz)
+        rnea_empty = filtered(lambda F: rnea(robot, F), fast_empty, E.t)
+        b = (S.tau - filtered(lambda F: rnea(robot, F))) - (E.tau - rnea_empty)
+        b_gain, columns, source = S.tau - E.tau, offset_columns(S), EMPTY_RUN
+    elif arm_model is not None:
+        check_matches(arm_model, robot, log)
+        arm_jac = filtered(
+            lambda F: arm_columns(robot, arm_model.base_columns, F).reshape(len(F.t), n, -1)
+        ).reshape(k * n, -1)
+        b = S.tau - (arm_jac @ arm_model.params).reshape(k, n)
+        b_gain, columns, source = b, offset_columns(S), ARM_MODEL
+    else:
+        b = S.tau - filtered(lambda F: rnea(robot, F))
+        friction = filtered(lambda F: np.stack(friction_columns(F), axis=1))
+        b_gain, source = S.tau, NOMINAL
+        columns = offset_columns(S) + [friction[:, 0], friction[:, 1]]
+    A_x = joint_columns(columns)
+    if source != EMPTY_RUN:
+        A_x = np.column_stack([A_x, delay_column(fast, S)])
+    return PayloadSystem(S, Y, b, b_gain, A_x, len(columns), source, arm_jac, alignment)
+
+
+def rnea(robot: RobotModel, S: MotionSamples) -> np.ndarray:
+    """(k, n) the URDF model's inverse dynamics (RNEA) at the samples (N m)."""
+    model, data = robot.model, robot.data
+    return np.array([pin.rnea(model, data, q, qd, qdd).copy()
+                     for q, qd, qdd in zip(S.q, S.qd, S.qdd)])  # fmt: skip

@@ -1,0 +1,170 @@
+"""A payload estimate as a few lines for a person: one writer for every estimate mode.
+
+``summary(est)``: what it came from, the mass with its std and 95 % interval, the CoM, the
+inertia where a motion gave it, what each source found (the joint torques' arm model and
+noise, the sensor's bias and tool), the checks (held out, halves), each source's share, and
+the verdict with its reasons.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from comgrasp_pin.robot_io.results.estimate_result import (
+    Inertia,
+    JointTorques,
+    Motion,
+    PayloadEstimate,
+    Wrench,
+)
+from comgrasp_pin.robot_io.results.trust import Z95, principal_moments
+
+LABELS = {"mass_kg": "mass", "com_m": "CoM", "first_moment_kgm": "m c",
+          "principal_moments_kgm2": "principal moments"}  # fmt: skip
+"""The sources' shares, by their keys in ``PayloadEstimate.sources``."""
+
+
+def _vec(values, scale: float = 1.0, precision: int = 3) -> str:
+    return np.array2string(scale * np.asarray(values, dtype=float), precision=precision)
+
+
+def _head(est: PayloadEstimate) -> str:
+    m, r, w = est.motion, est.at_rest, est.wrench
+    if r is not None:
+        text = f"payload from {r.n_poses} pose(s) at rest ({est.mode}, {r.method})"
+    elif m is not None:
+        text = (f"payload from a {m.duration_s:.1f} s motion ({est.mode}; {m.n_samples} samples "
+                f"after a {m.cutoff_hz:g} Hz zero-phase filter; velocities from "
+                f"{m.velocity_from})")  # fmt: skip
+    else:
+        text = f"payload ({est.mode})"
+    if w is not None:
+        text += f"; sensor frame {w.sensor_frame}, the tool's own wrench: {w.tool}"
+    return text
+
+
+def _mass_and_com(est: PayloadEstimate) -> list[str]:
+    std = est.std
+    if std is None:
+        lines = [f"  mass  {est.mass:.4f} kg (no uncertainty)"]
+        std = np.full(4, np.nan)
+    else:
+        lo, hi = est.mass - Z95 * std[0], est.mass + Z95 * std[0]
+        lines = [f"  mass  {est.mass:.4f} +- {std[0]:.4f} kg (std; 95 %: {lo:.3f} to {hi:.3f} kg)"]
+    if est.std_parts:
+        lines.append("        std by source: "
+                     + ", ".join(f"{k} {v:.4f}" for k, v in est.std_parts.items()))  # fmt: skip
+    if not np.all(np.isfinite(est.com_ee)):
+        return [*lines, "  CoM: not determined"]
+    c, s = 1e3 * est.com_ee, 1e3 * std[1:]
+    if est.unobservable_ee is not None:
+        lines.append(f"  CoM: a line in {est.frame}; below, its point nearest the origin")
+    lines += [f"  CoM in {est.frame}:  {axis} {c[i]:8.2f} +- {s[i]:.2f} mm"
+              for i, axis in enumerate("xyz")]  # fmt: skip
+    return lines
+
+
+def _inertia(i: Inertia, frame: str) -> list[str]:
+    moments, axes, std = principal_moments(i.inertia_com_ee, i.inertia_cov)
+    lines = [f"  principal moments of inertia about the CoM (kg m^2), axes in {frame} "
+             f"(inertia {i.verdict}):"]  # fmt: skip
+    for value, u, s in zip(moments, axes.T, std):
+        lines.append(f"    {value:.3e} +- {s:.1e}  along {_vec(u)}")
+    return lines + [f"    - {r}" for r in i.reasons]
+
+
+def _joint_torques(j: JointTorques, at_rest: bool) -> list[str]:
+    lines = []
+    if j.arm_model is not None:
+        lines.append(f"  joint torques: the arm's own from {j.arm_model}")
+    if j.note:
+        lines.append(f"    ({j.note})")
+    if at_rest:
+        drift = f"; drift {j.drift_std:g} N m/sqrt(s)" if j.drift_std else ""
+        lines.append(f"  torque std ({j.noise_from}): {np.mean(j.torque_std):.3g} N m per averaged "
+                     f"reading{drift}")  # fmt: skip
+    if j.residual_rms is not None:
+        lines.append(f"  residual RMS per joint {_vec(j.residual_rms)} N m")
+    if j.alignment is not None:
+        a = j.alignment
+        lines.append(f"  empty run aligned: its time = loaded time {a['shift_s']:+.3f} s, "
+                     f"positions {1e3 * a['rms_gap_rad']:.2f} mrad apart (rms)")  # fmt: skip
+    if j.delay_s is not None:
+        lines.append(f"  the efforts lag the positions by {1e3 * j.delay_s:.1f} ms (found)")
+    if j.gains_source is not None:
+        lines.append(f"  motor currents turned into torques with gains: {j.gains_source}")
+    return lines
+
+
+def _wrench(w: Wrench) -> list[str]:
+    lines = []
+    b, bs = w.sensor_bias, w.sensor_bias_std
+    if b is not None and bs is not None:
+        lines.append(
+            f"  sensor bias: force ({b[0]:.3f}, {b[1]:.3f}, {b[2]:.3f}) N "
+            f"(std {bs[:3].max():.3f}), torque ({b[3]:.4f}, {b[4]:.4f}, {b[5]:.4f}) N m "
+            f"(std {bs[3:].max():.4f})"
+        )
+    if w.tool_mass > 0:
+        lines.append(f"  a tool beyond the sensor ({w.tool_mass:.3f} kg) subtracted")
+    if w.fit is not None and w.residual_rms is not None:
+        lines.append(
+            f"  residuals {w.residual_rms[0]:.3g} N, {w.residual_rms[1]:.3g} N m RMS (chi2/dof "
+            f"{w.fit.chi2_dof:.2f}; covariance scaled by {w.fit.scale:.2f}; gravity spread "
+            f"{w.fit.spread_deg[0]:.0f} and {w.fit.spread_deg[1]:.0f} deg)"
+        )
+    elif w.residual_rms is not None:
+        lines.append(f"  residual RMS: force {_vec(w.residual_rms[:3])} N, torque "
+                     f"{_vec(w.residual_rms[3:], precision=4)} N m")  # fmt: skip
+    return lines
+
+
+def _motion(m: Motion) -> list[str]:
+    v = m.validation
+    lines = [
+        f"  condition number of the logged motion {m.condition_number:.1f} (scaled regressor)",
+        f"  held out ({v.folds} folds): RMS per row {_vec(v.rms_Nm)} (N m; a wrench's rows N, "
+        f"N m), {100 * v.explained_total:.1f} % of the readings explained",
+        f"  the motion's halves alone: {m.halves_mass[0]:.4f} and {m.halves_mass[1]:.4f} kg",
+    ]
+    if m.second_log is not None:
+        s = m.second_log
+        lines.append(f"  on the second log: RMS per joint {_vec(s.rms_Nm)} N m, "
+                     f"{100 * s.explained_total:.1f} % explained")  # fmt: skip
+    return lines
+
+
+def _shares(est: PayloadEstimate) -> list[str]:
+    """Each source's share of the information, where more than one gave some."""
+    if len(est.sources) < 2:
+        return []
+    lines = []
+    for name, share in est.sources.items():
+        parts = [f"{LABELS.get(key, key)} {_vec(100 * np.atleast_1d(value), precision=0)} %"
+                 for key, value in share.items()]  # fmt: skip
+        lines.append(f"  share of the information from {name.replace('_', ' ')}: "
+                     + ", ".join(parts))  # fmt: skip
+    return lines
+
+
+def summary(est: PayloadEstimate) -> str:
+    """Mass, CoM (and inertia) with their std, what each source found, the verdict."""
+    lines = [_head(est), *_mass_and_com(est)]
+    if est.inertia is not None:
+        lines += _inertia(est.inertia, est.frame)
+    if est.joint_torques is not None:
+        lines += _joint_torques(est.joint_torques, est.at_rest is not None)
+    if est.wrench is not None:
+        lines += _wrench(est.wrench)
+    if est.motion is not None:
+        lines += _motion(est.motion)
+    lines += _shares(est)
+    if est.unobservable_ee is not None:
+        lines.append(
+            f"  unobservable: the CoM along {_vec(est.unobservable_ee)} ({est.frame}) is set "
+            "to 0, and the +- above hold across that line only. That is gravity's direction "
+            "at the pose: a weight exerts no moment along its own line of action."
+        )
+    lines.append(f"VERDICT: {est.verdict}")
+    lines += [f"  - {r}" for r in est.reasons]
+    return "\n".join(lines)
