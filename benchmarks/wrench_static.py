@@ -60,7 +60,7 @@ from comgrasp_pin.motion.trajectory import Quintic, min_duration
 from comgrasp_pin.robot_io.at_rest.estimate import estimate_from_log
 from comgrasp_pin.robot_io.at_rest.windows import MAX_SPEED, MIN_STATIC_S, find_static_windows
 from comgrasp_pin.robot_io.at_rest.wrench_static import estimate_wrench_static
-from comgrasp_pin.robot_io.log_files.joint_log import JointLog
+from comgrasp_pin.robot_io.log_files.log_types import JointLog
 from comgrasp_pin.robot_io.plans.poses import plan_measurement_poses
 from comgrasp_pin.simulation.arm_worlds import SENSOR_FRAME, arm_robot, arm_urdf
 from comgrasp_pin.simulation.payload_motion import MotionSimConfig, simulate_motion

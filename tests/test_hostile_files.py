@@ -18,8 +18,8 @@ from comgrasp_pin._paths import urdf_path
 from comgrasp_pin.errors import ComGraspError, LogError, ResumeError
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io import JointLog, write_bag
+from comgrasp_pin.robot_io.front_door import load_robot
 from comgrasp_pin.robot_io.log_files import read_bag, read_csv
-from comgrasp_pin.robot_io.mount import load_robot
 from comgrasp_pin.simulation.mjcf_files import load_mjcf
 
 UR5 = urdf_path("ur5_gripper.urdf").read_text()

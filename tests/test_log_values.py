@@ -32,6 +32,7 @@ from comgrasp_pin.config import (
 from comgrasp_pin.errors import LogError
 from comgrasp_pin.robot_io import JointLog, load_robot, parse_gains, write_bag, write_csv
 from comgrasp_pin.robot_io.log_files import Gains, read_bag, read_csv, read_rtde
+from comgrasp_pin.robot_io.log_files.log_types import WrenchLog
 from comgrasp_pin.robot_io.log_files.record import (
     DEFAULT_WRENCH_TOPIC,
     T0_NS,
@@ -40,7 +41,6 @@ from comgrasp_pin.robot_io.log_files.record import (
 )
 from comgrasp_pin.robot_io.log_files.wrench_bag import read_wrench_bag
 from comgrasp_pin.robot_io.log_files.wrench_csv import read_wrench_csv
-from comgrasp_pin.robot_io.log_files.wrench_log import WrenchLog
 from comgrasp_pin.robot_io.log_files.wrench_sources import read_rtde_wrench
 
 NAMES = ("j0", "j1", "j2", "j3", "j4", "j5")

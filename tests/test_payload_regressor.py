@@ -14,7 +14,7 @@ from comgrasp_pin.estimation.payload_regressor import (
 )
 from comgrasp_pin.estimation.regressor import stacked_regressor
 from comgrasp_pin.robot import RobotModel
-from comgrasp_pin.robot_io.mount import load_robot
+from comgrasp_pin.robot_io.front_door import load_robot
 from tests._payload import panda
 
 

@@ -13,7 +13,7 @@ from _logs import mujoco_torques, session
 from comgrasp_pin._paths import urdf_path
 from comgrasp_pin.cli import main
 from comgrasp_pin.robot_io import JointLog, write_bag, write_csv
-from comgrasp_pin.robot_io.mount import load_robot
+from comgrasp_pin.robot_io.front_door import load_robot
 
 URDF = str(urdf_path("ur5_gripper.urdf"))
 MASS, COM = 0.6, np.array([0.03, -0.015, 0.04])

@@ -16,7 +16,7 @@ from _logs import rnea_torques, session
 from comgrasp_pin._paths import urdf_path
 from comgrasp_pin.cli import main
 from comgrasp_pin.robot_io import JointLog, estimate_from_log, write_csv
-from comgrasp_pin.robot_io.mount import load_robot
+from comgrasp_pin.robot_io.front_door import load_robot
 from comgrasp_pin.robot_io.results import result_dict
 
 URDF = str(urdf_path("ur5_gripper.urdf"))

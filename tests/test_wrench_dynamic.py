@@ -25,7 +25,7 @@ from comgrasp_pin.robot_io.from_motion.wrench_dynamic import (
     estimate_wrench_dynamic,
 )
 from comgrasp_pin.robot_io.from_motion.wrench_system import nominal_tool, params_map
-from comgrasp_pin.robot_io.log_files.wrench_log import WrenchLog
+from comgrasp_pin.robot_io.log_files.log_types import WrenchLog
 from comgrasp_pin.robot_io.results.result_file import result_dict
 
 RATE = 250.0

@@ -45,7 +45,7 @@ from comgrasp_pin.robot_io.from_motion import (
     estimate_wrench_dynamic,
     identify_arm,
 )
-from comgrasp_pin.robot_io.front_door import estimate_payload, read_any_log
+from comgrasp_pin.robot_io.front_door import estimate_payload, load_robot, read_any_log
 from comgrasp_pin.robot_io.log_files import (
     JointLog,
     WrenchLog,
@@ -55,7 +55,6 @@ from comgrasp_pin.robot_io.log_files import (
     write_bag,
     write_csv,
 )
-from comgrasp_pin.robot_io.mount import load_robot
 from comgrasp_pin.robot_io.payload_files import Payload, payload_in_flange
 from comgrasp_pin.robot_io.plans import plan_excitation, plan_measurement_poses
 from comgrasp_pin.robot_io.results import PayloadEstimate, read_result, summary, write_result

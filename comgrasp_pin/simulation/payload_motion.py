@@ -41,7 +41,7 @@ from scipy.interpolate import CubicHermiteSpline
 from comgrasp_pin.config import TorqueSensorConfig, WrenchSensorConfig, sensor_preset
 from comgrasp_pin.errors import InvalidInputError, UnstablePhysicsError
 from comgrasp_pin.robot_io.log_files.joint_readers import JointLog
-from comgrasp_pin.robot_io.log_files.wrench_log import WrenchLog
+from comgrasp_pin.robot_io.log_files.log_types import WrenchLog
 from comgrasp_pin.simulation.arm_worlds import SENSOR_FRAME, arm_robot, arm_world
 from comgrasp_pin.simulation.payloads import Payload
 from comgrasp_pin.simulation.torque_sensor import make_torque_sensor

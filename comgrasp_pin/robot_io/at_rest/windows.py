@@ -15,7 +15,7 @@ import numpy as np
 
 from comgrasp_pin.errors import InvalidInputError, LogError, NotStaticError
 from comgrasp_pin.robot_io.log_files.joint_readers import JointLog
-from comgrasp_pin.robot_io.log_files.wrench_log import WrenchLog
+from comgrasp_pin.robot_io.log_files.log_types import WrenchLog
 
 MAX_SPEED = 0.01
 """Default static threshold on every joint's speed (rad/s): 0.6 deg/s."""

@@ -36,7 +36,7 @@ from comgrasp_pin.robot_io.at_rest.windows import (
     find_static_windows,
     read_window,
 )
-from comgrasp_pin.robot_io.log_files.wrench_log import WrenchLog
+from comgrasp_pin.robot_io.log_files.log_types import WrenchLog
 from comgrasp_pin.robot_io.results.estimate_result import (
     TOOL_NOMINAL,
     WRENCH,

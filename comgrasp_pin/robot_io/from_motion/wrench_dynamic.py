@@ -57,7 +57,7 @@ from comgrasp_pin.robot_io.from_motion.wrench_system import (
     nominal_tool,
     wrench_system,
 )
-from comgrasp_pin.robot_io.log_files.wrench_log import WrenchLog
+from comgrasp_pin.robot_io.log_files.log_types import WrenchLog
 from comgrasp_pin.robot_io.results.estimate_result import (
     TOOL_EMPTY_RUN,
     TOOL_GIVEN,

@@ -34,8 +34,7 @@ from comgrasp_pin.robot_io.at_rest.wrench_static import tool_beyond
 from comgrasp_pin.robot_io.from_motion.motion_signals import MotionSamples, motion_samples
 from comgrasp_pin.robot_io.from_motion.motion_system import joint_columns, offset_columns
 from comgrasp_pin.robot_io.from_motion.parallel_filter import delay_column, fast_signals, lowpassed
-from comgrasp_pin.robot_io.log_files.joint_log import JointLog
-from comgrasp_pin.robot_io.log_files.wrench_log import WrenchLog
+from comgrasp_pin.robot_io.log_files.log_types import JointLog, WrenchLog
 from comgrasp_pin.robot_io.payload_files.payload import T_flange_ee
 
 AXES = ("force_x", "force_y", "force_z", "torque_x", "torque_y", "torque_z")

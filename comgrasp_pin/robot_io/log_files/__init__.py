@@ -6,8 +6,8 @@ joint torques.
 """
 
 from comgrasp_pin.robot_io.log_files.gains import Gains, gains_json, parse_gains
-from comgrasp_pin.robot_io.log_files.joint_log import JointLog
 from comgrasp_pin.robot_io.log_files.joint_readers import read_bag, read_csv, read_log
+from comgrasp_pin.robot_io.log_files.log_types import JointLog, WrenchLog
 from comgrasp_pin.robot_io.log_files.record import (
     write_bag,
     write_csv,
@@ -17,7 +17,6 @@ from comgrasp_pin.robot_io.log_files.record import (
 from comgrasp_pin.robot_io.log_files.rtde import read_rtde
 from comgrasp_pin.robot_io.log_files.wrench_bag import read_wrench_bag
 from comgrasp_pin.robot_io.log_files.wrench_csv import read_wrench_csv
-from comgrasp_pin.robot_io.log_files.wrench_log import WrenchLog
 from comgrasp_pin.robot_io.log_files.wrench_sources import read_rtde_wrench, read_wrench_log
 
 __all__ = [

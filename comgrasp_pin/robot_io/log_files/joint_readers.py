@@ -33,7 +33,7 @@ from comgrasp_pin import file_checks
 from comgrasp_pin.errors import LogError
 from comgrasp_pin.robot_io.log_files import rtde
 from comgrasp_pin.robot_io.log_files.gains import Gains
-from comgrasp_pin.robot_io.log_files.joint_log import JointLog, assemble_log
+from comgrasp_pin.robot_io.log_files.log_types import JointLog, assemble_log
 from comgrasp_pin.robot_io.log_files.log_values import check_joint_rows, check_table
 
 JOINT_STATE = "sensor_msgs/msg/JointState"

@@ -21,8 +21,8 @@ import numpy as np
 
 from comgrasp_pin.errors import InvalidInputError, OutputError
 from comgrasp_pin.robot_io.log_files.joint_readers import DEFAULT_TOPIC, JOINT_STATE, JointLog
+from comgrasp_pin.robot_io.log_files.log_types import WRENCH_COLUMNS, WrenchLog
 from comgrasp_pin.robot_io.log_files.wrench_bag import WRENCH_STAMPED
-from comgrasp_pin.robot_io.log_files.wrench_log import WRENCH_COLUMNS, WrenchLog
 
 STORAGES = ("sqlite3", "mcap")
 DEFAULT_WRENCH_TOPIC = "/wrench"

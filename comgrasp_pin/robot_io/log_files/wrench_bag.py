@@ -26,9 +26,9 @@ import numpy as np
 from comgrasp_pin import file_checks
 from comgrasp_pin.errors import LogError
 from comgrasp_pin.robot_io.log_files import joint_readers as logs
+from comgrasp_pin.robot_io.log_files.log_types import WRENCH_COLUMNS, WrenchLog
 from comgrasp_pin.robot_io.log_files.log_values import check_joint_rows, check_messages
 from comgrasp_pin.robot_io.log_files.wrench_csv import assemble_wrench_log, sensor_frame_name
-from comgrasp_pin.robot_io.log_files.wrench_log import WRENCH_COLUMNS, WrenchLog
 
 WRENCH_STAMPED = "geometry_msgs/msg/WrenchStamped"
 MAX_JOINT_GAP_S = 0.1

@@ -17,8 +17,8 @@ import numpy as np
 from comgrasp_pin import file_checks
 from comgrasp_pin.errors import InvalidInputError, LogError
 from comgrasp_pin.robot_io.log_files import rtde
+from comgrasp_pin.robot_io.log_files.log_types import WRENCH_COLUMNS, WrenchLog
 from comgrasp_pin.robot_io.log_files.log_values import check_table
-from comgrasp_pin.robot_io.log_files.wrench_log import WRENCH_COLUMNS, WrenchLog
 
 OPTIONAL_FIELDS = ("velocity", "effort")
 """Per-joint CSV fields read where every arm joint has them (rad/s, N m)."""

@@ -75,6 +75,7 @@ from comgrasp_pin.errors import LogError
 from comgrasp_pin.robot import RobotModel, check_frame
 from comgrasp_pin.robot_io.log_files import joint_readers as logs
 from comgrasp_pin.robot_io.log_files import rtde
+from comgrasp_pin.robot_io.log_files.log_types import WrenchLog
 from comgrasp_pin.robot_io.log_files.log_values import check_table
 from comgrasp_pin.robot_io.log_files.wrench_bag import read_wrench_bag
 from comgrasp_pin.robot_io.log_files.wrench_csv import (
@@ -82,7 +83,6 @@ from comgrasp_pin.robot_io.log_files.wrench_csv import (
     read_wrench_csv,
     sensor_frame_name,
 )
-from comgrasp_pin.robot_io.log_files.wrench_log import WrenchLog
 
 BAG_SUFFIXES = (".db3", ".mcap")
 

@@ -6,7 +6,7 @@ parameters, and written as programs (URScript, ROS 2 trajectories) that play the
 
 from comgrasp_pin.robot_io.plans.collision import SelfCollision
 from comgrasp_pin.robot_io.plans.excitation import ExcitationMotion, plan_excitation
-from comgrasp_pin.robot_io.plans.excitation_settings import ExcitationSettings
+from comgrasp_pin.robot_io.plans.excitation_search import ExcitationSettings
 from comgrasp_pin.robot_io.plans.poses import PosePlan, plan_measurement_poses
 
 __all__ = [

@@ -50,8 +50,12 @@ from comgrasp_pin.estimation.payload_regressor import (
 from comgrasp_pin.motion.fourier import FourierMotion
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.plans.collision import SelfCollision
-from comgrasp_pin.robot_io.plans.excitation_search import Limits, search
-from comgrasp_pin.robot_io.plans.excitation_settings import ExcitationSettings, checked_settings
+from comgrasp_pin.robot_io.plans.excitation_search import (
+    ExcitationSettings,
+    Limits,
+    checked_settings,
+    search,
+)
 from comgrasp_pin.robot_io.plans.poses import feasible, floor_heights
 
 MAX_DURATION_S = 20.0
