@@ -39,8 +39,8 @@ from comgrasp_pin.estimation.payload_regressor import (
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.from_motion.arm_model import ArmModel
 from comgrasp_pin.robot_io.from_motion.dynamic_fit import (
-    error_sources,
-    fit_payload,
+    MotionRows,
+    fit_motion,
     motion_estimate,
     std_parts,
 )
@@ -59,7 +59,7 @@ from comgrasp_pin.robot_io.results.estimate_result import (
     PayloadEstimate,
     sole_source,
 )
-from comgrasp_pin.robot_io.results.trust import MIN_EXPLAINED, UNRELIABLE, Checks, motion_reasons
+from comgrasp_pin.robot_io.results.trust import MIN_EXPLAINED, UNRELIABLE, motion_reasons
 
 
 def estimate_payload_dynamic(
@@ -104,30 +104,20 @@ def estimate_payload_dynamic(
     S, source, b_gain = system.S, system.source, system.b_gain
     k, n = S.q.shape
     A_pi, A_x, b_rows = system.Y.reshape(-1, 10), system.A_x, system.b.reshape(-1)
-    A = np.column_stack([A_pi, A_x])
-    sigma = row_noise(A, b_rows, k, n)
-    w = np.tile(1.0 / sigma, k)
+    sigma = row_noise(np.column_stack([A_pi, A_x]), b_rows, k, n)
+    rows = MotionRows(A_pi, A_x, b_rows, np.tile(1.0 / sigma, k), S.t, (k, n))
     rel = du.relative_gain_cov(gain_cov, log.current_gains, n)
-    err = error_sources(A, b_rows, w, (k, n), float(S.t[-1] - S.t[0]), b_gain, rel, arm_model,
-                        system.arm_jac)  # fmt: skip
-    fit = fit_payload(A_pi, A_x, b_rows, w, prior_of(prior), err)
-    pi = fit.pi
-    params_cov = fit.data_cov + err.gains + err.arm
-    validation = du.held_out(A_pi, A_x, b_rows, w, S.t, k, n)
-    halves, halves_std = halves_check(A, b_rows, w, k, n, err.factor, b_gain, err.rel_gain_cov)
+    m = fit_motion(rows, prior_of(prior), source, b_gain, rel, arm_model, system.arm_jac)
+    fit, err = m.fit, m.err
     parts = std_parts(fit.data_cov, err, log.current_gains is not None, arm_model is not None)
-    duration = float(S.t[-1] - S.t[0])
-    motion = Motion(k, duration, S.cutoff_hz, S.velocity_from, fit.status,
-                    condition_number(system.Y, parameter_scale()), S.t, validation,
-                    halves)  # fmt: skip
+    motion = Motion(k, float(S.t[-1] - S.t[0]), S.cutoff_hz, S.velocity_from, fit.status,
+                    condition_number(system.Y, parameter_scale()), S.t, m.validation,
+                    m.checks.halves_mass_kg)  # fmt: skip
     gains = gains_source if log.current_gains is not None else None
     joints = _joint_part(system, sigma, fit, gains)
-    checks = Checks(float(pi[0]), float(np.sqrt(params_cov[0, 0])), source,
-                    validation.explained_total, halves, halves_std)  # fmt: skip
     sources = sole_source(JOINT_TORQUES, motion=True)
-    findings = motion_reasons(checks)
-    return motion_estimate(robot, fit, params_cov, motion, findings, sources, parts,
-                           joint_torques=joints)  # fmt: skip
+    return motion_estimate(robot, fit, m.params_cov, motion, motion_reasons(m.checks), sources,
+                           parts, joint_torques=joints)  # fmt: skip
 
 
 def _joint_part(system, sigma, fit, gains_source) -> JointTorques:
@@ -145,21 +135,6 @@ def _joint_part(system, sigma, fit, gains_source) -> JointTorques:
         delay_s=float(x[-1]) if system.source != EMPTY_RUN else None,
         alignment=system.alignment, tau_payload=tau_payload, tau_payload_fit=tau_fit,
     )  # fmt: skip
-
-
-def halves_check(A, b_rows, w, k, n, factor, b_gain=None, rel=None):
-    """((m1, m2), std of m1 - m2): each half alone, its data std widened as the whole's.
-
-    The drive gains' part is added where the rows have one (``b_gain``, ``rel``).
-    """
-    (p1, c1, r1), (p2, c2, r2) = du.split_halves(A, b_rows, w, k, n)
-    var = (c1[0, 0] + c2[0, 0]) * factor[0] ** 2
-    if b_gain is not None:
-        J1 = du.gains_jacobian(du.sensitivity(A[r1], w[r1]), b_gain[: len(r1) // n])
-        J2 = du.gains_jacobian(du.sensitivity(A[r2], w[r2]), b_gain[len(r1) // n :])
-        d = J1[0] - J2[0]
-        var = var + d @ rel @ d
-    return (float(p1[0]), float(p2[0])), float(np.sqrt(var))
 
 
 def check_on_log(

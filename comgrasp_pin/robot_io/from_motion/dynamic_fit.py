@@ -6,13 +6,18 @@ widened by a delete-a-block jackknife), the drive gains' covariance, the arm mod
 ``fit_payload`` fits the ten inertial parameters physically consistent where the mass's
 95 % interval is above zero (``estimation.inertial_fit``), and reports the unconstrained
 least squares where it is not (a consistent body of zero mass does not exist).
-``std_parts`` names the mass's std by source; ``motion_estimate`` makes the result of any
-motion's fit, its verdicts by ``trust``. Parameters in the ee frame, SI units.
+``std_parts`` names the mass's std by source.
+
+``fit_motion`` is the one pipeline every source of rows goes through (the joint torques, a
+wrist sensor's wrench, both stacked): error sources, the fit, the held-out prediction, the
+halves and the checks; ``motion_estimate`` makes the result, its verdicts by ``trust``.
+Parameters in the ee frame, SI units.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -22,7 +27,7 @@ from comgrasp_pin.robot_io.from_motion.arm_model import ArmModel
 from comgrasp_pin.robot_io.from_motion.motion_system import about_com
 from comgrasp_pin.robot_io.results import trust
 from comgrasp_pin.robot_io.results.estimate_result import Inertia, Motion, PayloadEstimate
-from comgrasp_pin.robot_io.results.trust import Z95
+from comgrasp_pin.robot_io.results.trust import Z95, Checks
 
 
 @dataclass(frozen=True)
@@ -164,3 +169,97 @@ def motion_estimate(
                       i_word, i_reasons)  # fmt: skip
     return PayloadEstimate(mass, com, cov4, robot.ee_frame, word, reasons, sources, std_parts,
                            motion=motion, inertia=inertia, **parts)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class MotionRows:
+    """A motion's rows, every source stacked (rows in noise units through ``w``).
+
+    Attributes:
+        A_pi: (k r, 10) the payload's columns; A_x: (k r, e) the other unknowns' (offsets,
+            drift, friction, bias, delay); b: (k r,) the readings; w: (k r,) row weights.
+        t: (k,) the samples' times (s); shape: (k samples, r rows per sample).
+    """
+
+    A_pi: np.ndarray
+    A_x: np.ndarray
+    b: np.ndarray
+    w: np.ndarray
+    t: np.ndarray
+    shape: tuple[int, int]
+
+
+@dataclass(frozen=True)
+class MotionFit:
+    """What ``fit_motion`` found.
+
+    The fit, its error sources, the parameters' covariance, the held-out prediction and the
+    checks ``trust.motion_reasons`` weighs.
+    """
+
+    fit: PayloadFit
+    err: ErrorSources
+    params_cov: np.ndarray
+    validation: du.Validation
+    checks: Checks
+
+
+def fit_motion(
+    rows: MotionRows,
+    prior,
+    arm_label: str | None,
+    b_gain: np.ndarray | None = None,
+    rel_gain_cov: np.ndarray | None = None,
+    arm_model: ArmModel | None = None,
+    arm_jac: np.ndarray | None = None,
+    extra_cov: Callable[[ErrorSources], np.ndarray] | None = None,
+    observe: Callable = lambda solve: solve(),
+) -> MotionFit:
+    """The payload from a motion's rows: the one pipeline of every source.
+
+    Every error source, the fit, the held-out prediction and the two halves.
+
+    Args:
+        rows: the stacked rows.
+        prior: ``motion_system.prior_of``'s (mean, cov) or None.
+        arm_label: where the arm's own torques came from (joint torques), or None (a wrench).
+        b_gain: the rows' derivative by the drive gains, or None (rows no gain scales).
+        rel_gain_cov: (n, n) the gains' relative covariance, or None.
+        arm_model: the arm's identified model, or None.
+        arm_jac: the rows' derivative by the arm model's parameters, or None.
+        extra_cov: the covariance of a known part subtracted from the rows (the tool's),
+            from the error sources' sensitivity; None for none.
+        observe: runs the error sources, to say an UnobservableError in the motion's terms.
+    """
+    k, r = rows.shape
+    A = np.column_stack([rows.A_pi, rows.A_x])
+    duration = float(rows.t[-1] - rows.t[0])
+    err = observe(lambda: error_sources(A, rows.b, rows.w, (k, r), duration, b_gain,
+                                        rel_gain_cov, arm_model, arm_jac))  # fmt: skip
+    extra = None if extra_cov is None else extra_cov(err)
+    err_fit = err if extra is None else replace(err, arm=err.arm + extra)
+    fit = fit_payload(rows.A_pi, rows.A_x, rows.b, rows.w, prior, err_fit)
+    params_cov = fit.data_cov + err.gains + err.arm
+    if extra is not None:
+        params_cov = params_cov + extra
+    validation = du.held_out(rows.A_pi, rows.A_x, rows.b, rows.w, rows.t, k, r)
+    halves, halves_std = halves_check(A, rows.b, rows.w, k, r, err.factor, b_gain,
+                                      err.rel_gain_cov)  # fmt: skip
+    checks = Checks(float(fit.pi[0]), float(np.sqrt(params_cov[0, 0])), arm_label,
+                    validation.explained_total, halves, halves_std)  # fmt: skip
+    return MotionFit(fit, err, params_cov, validation, checks)
+
+
+def halves_check(A, b_rows, w, k, n, factor, b_gain=None, rel=None):
+    """((m1, m2), std of m1 - m2): each half alone, its data std widened as the whole's.
+
+    The drive gains' part is added where the rows have one (``b_gain``, ``rel``).
+    """
+    (p1, c1, r1), (p2, c2, r2) = du.split_halves(A, b_rows, w, k, n)
+    var = (c1[0, 0] + c2[0, 0]) * factor[0] ** 2
+    if b_gain is not None:
+        J1 = du.gains_jacobian(du.sensitivity(A[r1], w[r1]), b_gain[: len(r1) // n])
+        J2 = du.gains_jacobian(du.sensitivity(A[r2], w[r2]), b_gain[len(r1) // n :])
+        d = J1[0] - J2[0]
+        var = var + d @ rel @ d
+    return (float(p1[0]), float(p2[0])), float(np.sqrt(var))

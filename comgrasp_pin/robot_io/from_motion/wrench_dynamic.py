@@ -29,23 +29,22 @@ sources alone must agree.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
 from comgrasp_pin import validate
 from comgrasp_pin.errors import InvalidInputError, MotionLogError, UnobservableError
 from comgrasp_pin.estimation import ComEstimate
-from comgrasp_pin.estimation import dynamic_uncertainty as du
 from comgrasp_pin.estimation.payload_regressor import condition_number, parameter_scale
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.from_motion import wrench_combined as wc
 from comgrasp_pin.robot_io.from_motion import wrench_findings as wf
 from comgrasp_pin.robot_io.from_motion.arm_model import ArmModel
-from comgrasp_pin.robot_io.from_motion.dynamic import halves_check
 from comgrasp_pin.robot_io.from_motion.dynamic_fit import (
+    MotionRows,
     error_sources,
-    fit_payload,
+    fit_motion,
     motion_estimate,
 )
 from comgrasp_pin.robot_io.from_motion.motion_signals import CUTOFF_HZ, MIN_PEAK_SPEED
@@ -66,7 +65,7 @@ from comgrasp_pin.robot_io.results.estimate_result import (
     PayloadEstimate,
     Wrench,
 )
-from comgrasp_pin.robot_io.results.trust import Checks, motion_reasons
+from comgrasp_pin.robot_io.results.trust import motion_reasons
 
 
 @dataclass(frozen=True)
@@ -123,22 +122,20 @@ def estimate_wrench_dynamic(
     k, r = st.b.shape
     A_pi, A_x, b, w = st.A_pi.reshape(-1, 10), st.A_x.reshape(k * r, -1), st.b.reshape(-1), st.w
     A = np.column_stack([A_pi, A_x])
-    err = _observable(robot, W, lambda: error_sources(
-        A, b, w, (k, r), duration, None, None, arm, st.arm_jac))  # fmt: skip
+    m = fit_motion(MotionRows(A_pi, A_x, b, w, W.S.t, (k, r)), prior_of(prior), None,
+                   arm_model=arm, arm_jac=st.arm_jac,
+                   extra_cov=lambda err: wf.tool_cov(err.sensitivity, st, tool.cov),
+                   observe=lambda solve: _observable(robot, W, solve))  # fmt: skip
+    fit, err, validation = m.fit, m.err, m.validation
     cov_tool = wf.tool_cov(err.sensitivity, st, tool.cov)
-    fit = fit_payload(A_pi, A_x, b, w, prior_of(prior), replace(err, arm=err.arm + cov_tool))
-    params_cov = fit.data_cov + err.arm + cov_tool
-    validation = du.held_out(A_pi, A_x, b, w, W.S.t, k, r)
-    halves, halves_std = halves_check(A, b, w, k, r, err.factor)
     agree = wc.agreement(fits, tool.cov) if J is not None else None
-    m_std = float(np.sqrt(params_cov[0, 0]))
-    checks = Checks(float(fit.pi[0]), m_std, None, validation.explained_total, halves, halves_std)
-    findings = motion_reasons(checks) + wf.wrench_reasons(tool, agree, J and J.source)
+    findings = motion_reasons(m.checks) + wf.wrench_reasons(tool, agree, J and J.source)
     payload, predicted = (b - A_x @ fit.x).reshape(k, r), (A_pi @ fit.pi).reshape(k, r)
     bias, bias_std, drift, delay = wf.sensor_bias(A, b, w, st, duration, fit.x, tool.cov)
     motion = Motion(
         k, duration, W.S.cutoff_hz, W.S.velocity_from, fit.status,
-        condition_number(A_pi * w[:, None], parameter_scale()), W.S.t, validation, halves,
+        condition_number(A_pi * w[:, None], parameter_scale()), W.S.t, validation,
+        m.checks.halves_mass_kg,
     )  # fmt: skip
     wrench = Wrench(
         log.sensor_frame, bias, bias_std, drift, tool=tool.source, tool_params=tool.params,
@@ -149,7 +146,7 @@ def estimate_wrench_dynamic(
         alone_refused={name: (f if isinstance(f, str) else None) for name, f in fits.items()},
     )  # fmt: skip
     joints = wf.joint_part(J, fit.x, W.A_x.shape[1], st, predicted, payload, note)
-    return motion_estimate(robot, fit, params_cov, motion, findings,
+    return motion_estimate(robot, fit, m.params_cov, motion, findings,
                            wc.contributions(st, fit.pi, prior_of(prior)),
                            wf.std_parts(fit.data_cov, cov_tool, tool, err.arm if arm else None),
                            joint_torques=joints,
