@@ -4,7 +4,7 @@ A log's static windows, paired before and after the grasp, give the payload's ma
 and CoM from the joint torques or from a wrist sensor's wrench.
 """
 
-from comgrasp_pin.robot_io.at_rest.estimate import estimate_from_log
+from comgrasp_pin.robot_io.at_rest.joint_torques import estimate_from_log
 from comgrasp_pin.robot_io.at_rest.windows import (
     StaticReading,
     find_static_windows,

@@ -22,7 +22,7 @@ from comgrasp_pin.estimation.wrench_com import (
     wrench_regressor,
 )
 from comgrasp_pin.robot import RobotModel
-from comgrasp_pin.robot_io.at_rest.estimate import judged_at_rest
+from comgrasp_pin.robot_io.at_rest.joint_torques import judged_at_rest
 from comgrasp_pin.robot_io.at_rest.windows import MAX_SPEED, read_pairs
 from comgrasp_pin.robot_io.log_files.log_types import WrenchLog
 from comgrasp_pin.robot_io.results.estimate_result import (
