@@ -39,9 +39,10 @@ def plot_validation(est, joint_names, path: str | Path, title: str = "") -> Path
     axes[0, 0].legend(loc="upper left", fontsize=8, ncol=2)
     axes[-1, 0].set_xlabel("time in the motion (s); grey lines: the folds")
     m_std = float(np.sqrt(est.cov[0, 0]))
+    inertia = "" if est.inertia is None else f" (inertia: {est.inertia.verdict})"
     head = (f"{title + ': ' if title else ''}payload {est.mass:.3f} ± {m_std:.3f} kg, verdict "
-            f"{est.verdict.upper()}: {100 * v.explained_total:.0f} % of the held-out torque "
-            "difference explained")  # fmt: skip
+            f"{est.verdict.upper()}{inertia}: {100 * v.explained_total:.0f} % of the held-out "
+            "readings explained")  # fmt: skip
     fig.suptitle(head, fontsize=10)
     fig.tight_layout()
     path = Path(path)
