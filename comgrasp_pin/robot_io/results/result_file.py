@@ -18,14 +18,7 @@ import numpy as np
 
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.estimation.payload_regressor import PARAMETER_NAMES
-from comgrasp_pin.robot_io.results.estimate_result import (
-    AtRest,
-    Inertia,
-    JointTorques,
-    Motion,
-    PayloadEstimate,
-    Wrench,
-)
+from comgrasp_pin.robot_io.results import estimate_result as er
 from comgrasp_pin.robot_io.results.trust import Z95
 
 SCHEMA_VERSION = 2
@@ -43,7 +36,7 @@ def _list(values) -> list | None:
     return out.tolist()
 
 
-def result_dict(est: PayloadEstimate) -> dict:
+def result_dict(est: er.PayloadEstimate) -> dict:
     """The RESULT.json contents of ``est``."""
     std = est.std
     held = bool(np.all(np.isfinite(est.com_ee)))
@@ -76,7 +69,7 @@ def result_dict(est: PayloadEstimate) -> dict:
     return out
 
 
-def _at_rest(r: AtRest) -> dict:
+def _at_rest(r: er.AtRest) -> dict:
     out = {"n_poses": r.n_poses, "q_rad": _list(r.q), "windows": r.windows,
            "method": r.method, "solver_status": r.solver_status,
            "condition_number": r.condition_number}  # fmt: skip
@@ -85,7 +78,7 @@ def _at_rest(r: AtRest) -> dict:
     return out
 
 
-def _motion(m: Motion, wrench: bool) -> dict:
+def _motion(m: er.Motion, wrench: bool) -> dict:
     validation = m.validation.as_dict()
     if wrench:  # the rows: the wrench's six axes first, then the joints
         v = m.validation
@@ -103,7 +96,7 @@ def _motion(m: Motion, wrench: bool) -> dict:
     }  # fmt: skip
 
 
-def _inertia(i: Inertia) -> dict:
+def _inertia(i: er.Inertia) -> dict:
     return {
         "verdict": i.verdict, "reasons": list(i.reasons),
         "inertia_kgm2": _list(i.inertia_com_ee), "inertia_std_kgm2": _list(i.inertia_std),
@@ -115,7 +108,7 @@ def _inertia(i: Inertia) -> dict:
     }  # fmt: skip
 
 
-def _joint_torques(j: JointTorques) -> dict:
+def _joint_torques(j: er.JointTorques) -> dict:
     return {
         "torque_std_Nm": _list(j.torque_std), "torque_std_from": j.noise_from,
         "arm_model": j.arm_model, "gains": j.gains_source,
@@ -128,7 +121,7 @@ def _joint_torques(j: JointTorques) -> dict:
     }  # fmt: skip
 
 
-def _wrench(w: Wrench) -> dict:
+def _wrench(w: er.Wrench) -> dict:
     out = {
         "sensor_frame": w.sensor_frame, "sensor_bias": _list(w.sensor_bias),
         "sensor_bias_std": _list(w.sensor_bias_std), "sensor_bias_units": BIAS_UNITS,
@@ -152,7 +145,7 @@ def _wrench(w: Wrench) -> dict:
     return out
 
 
-def write_result(est: PayloadEstimate, path: str | Path) -> Path:
+def write_result(est: er.PayloadEstimate, path: str | Path) -> Path:
     """Write ``est``'s RESULT.json to ``path`` (OutputError where it cannot be written)."""
     from comgrasp_pin.errors import OutputError
 
