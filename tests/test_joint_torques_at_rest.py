@@ -1,6 +1,7 @@
-"""robot_io.at_rest.joint_torques: the Panda target (3 planned poses, 0.05 N m per sample at 200 Hz, 1 s
-windows), the reported sigma against a Monte Carlo spread, carried-over tau_before, a
-tilted mount. Truth from Pinocchio RNEA with an appended payload body (tests/_payload)."""
+"""robot_io.at_rest.joint_torques: the Panda target (3 planned poses, 0.05 N m per sample
+at 200 Hz, 1 s windows), the reported sigma against a Monte Carlo spread, carried-over
+tau_before, a tilted mount. Truth from Pinocchio RNEA with an appended payload body
+(tests/_payload)."""
 
 import numpy as np
 import pinocchio as pin

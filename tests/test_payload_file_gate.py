@@ -188,3 +188,29 @@ def test_the_front_door_reads_any_log_and_picks_the_mode(robot, tmp_path):
         estimate_payload(robot, joints)
     with pytest.raises(InvalidInputError, match="takes no"):
         estimate_payload(robot, joints, before, after, cutoff_hz=4.0)
+
+
+def test_result_json_reads_back_and_refuses_other_schemas(robot, tmp_path):
+    """One schema, written and read back by one module; a file of schema 1 (before 0.3.0) or
+    no RESULT.json at all is refused naming what is wrong."""
+    from comgrasp_pin.errors import InvalidInputError as Bad
+    from comgrasp_pin.robot_io import read_result, write_result
+    from comgrasp_pin.robot_io.results.result_file import prior_of_result
+
+    torques = rnea_torques(robot, 0.7, np.array([0.01, 0.02, 0.05]))
+    log, before, after, _ = session(Q3, torques, robot.joint_names, noise=0.05)
+    est = estimate_from_log(robot, log, before, after)
+    data = read_result(write_result(est, tmp_path / "R.json"))
+    assert data["schema_version"] == 2 and data["mass_kg"] == est.mass
+    np.testing.assert_allclose(data["cov"], est.cov, rtol=1e-15)
+    lo, hi = data["interval95_mass_kg"]
+    assert lo < est.mass < hi and hi - lo == pytest.approx(2 * 1.959964 * est.std[0], rel=1e-6)
+    mean, cov = prior_of_result(tmp_path / "R.json")
+    np.testing.assert_allclose(mean, np.r_[est.mass, est.com_ee], rtol=1e-15)
+    old = tmp_path / "old.json"
+    old.write_text(json.dumps({"mass_kg": 1.0, "com_m": [0, 0, 0], "cov": np.eye(4).tolist()}))
+    with pytest.raises(Bad, match="schema_version None"):
+        read_result(old)
+    (tmp_path / "bad.json").write_text("{not json")
+    with pytest.raises(Bad, match="not a readable RESULT.json"):
+        read_result(tmp_path / "bad.json")
