@@ -42,11 +42,20 @@ def _args(log_args, out, *more):
 
 @pytest.mark.parametrize("storage", ["sqlite3", "mcap"])
 def test_a_bag_gives_the_payload_and_the_files(wrench_log, tmp_path, storage, capsys):
+    """The tool identified first with nothing held (--keep-tool, then --tool), as the docs
+    say: with the URDF's tool alone the verdict is unreliable and no file is written."""
+    rng = np.random.default_rng(22)
+    empty = _log(RobotModel.ur5(), "ft_sensor", 0.0, np.zeros(3), rng.normal(size=6), STD, rng)
+    tool = tmp_path / "TOOL.json"
+    empty_bag = write_wrench_bag(tmp_path / "empty", empty, storage=storage)
+    assert main(_args(["--bag", str(empty_bag)], tool, "--keep-tool")) == 0
     bag = write_wrench_bag(tmp_path / "bag", wrench_log, storage=storage)
     out, rapid, urdf = tmp_path / "R.json", tmp_path / "load.mod", tmp_path / "robot.urdf"
     args = _args(["--bag", str(bag)], out, "--flange-frame", "tool0", "--export-abb",
                  str(rapid), "--export-urdf", str(urdf))  # fmt: skip
-    assert main(args) == 0
+    assert main(args) == 2 and not rapid.exists()  # the URDF's tool
+    assert "URDF's links beyond the sensor" in capsys.readouterr().err
+    assert main([*args, "--tool", str(tool)]) == 0
     r = json.loads(out.read_text())
     std = np.sqrt(np.diag(r["cov"]))
     assert r["wrench"]["sensor_frame"] == "ft_sensor" and r["at_rest"]["n_poses"] == 4
@@ -68,7 +77,7 @@ def test_a_bag_gives_the_payload_and_the_files(wrench_log, tmp_path, storage, ca
 def test_a_csv_needs_its_sensor_frame_named(wrench_log, tmp_path):
     csv = write_wrench_csv(tmp_path / "w.csv", wrench_log)
     out = tmp_path / "R.json"
-    assert main(_args(["--csv", str(csv), "--sensor-frame", "ft_sensor"], out)) == 0
+    assert main(_args(["--csv", str(csv), "--sensor-frame", "ft_sensor"], out)) == 0  # no file
     assert json.loads(out.read_text())["at_rest"]["n_poses"] == 4
     assert main(_args(["--csv", str(csv), "--sensor-frame", "ft_sensor", "--auto"], out)) == 0
     both = ["--csv", str(csv), "--sensor-frame", "ft_sensor", "--auto", "--windows", "0:1"]
@@ -97,7 +106,8 @@ def test_nothing_held_writes_no_payload_file(tmp_path):
     out, script = tmp_path / "R.json", tmp_path / "p.script"
     assert main(_args(["--csv", str(csv), "--sensor-frame", "ft_sensor"], out)) == 0
     r = json.loads(out.read_text())
-    assert r["verdict"] == "nothing held" and r["com_m"] is None
+    assert r["verdict"] == "unreliable" and r["com_m"] is None  # and the URDF's tool unknown
+    assert "no payload seen" in r["reasons"][0] and "URDF's links" in r["reasons"][1]
     assert abs(r["mass_kg"]) < 3 * r["std"]["mass_kg"]
     args = _args(
         ["--csv", str(csv), "--sensor-frame", "ft_sensor"], out, "--export-ur", str(script)

@@ -169,8 +169,14 @@ def test_a_log_at_four_planned_poses_gives_the_payload_in_the_ee_frame():
     rng = np.random.default_rng(11)
     c_sensor, bias = np.array([0.02, -0.01, 0.12]), rng.normal(size=6)
     std = np.r_[[0.1] * 3, [0.005] * 3]
-    est = estimate_wrench_static(robot, _log(robot, "tool0", 1.5, c_sensor, bias, std, rng))
+    log = _log(robot, "tool0", 1.5, c_sensor, bias, std, rng)
+    urdf_way = estimate_wrench_static(robot, log)  # the URDF's tool: its error is not known
+    assert urdf_way.verdict == "unreliable" and "URDF's links beyond" in urdf_way.reasons[0]
+    tool = tool_beyond(robot, "tool0")  # the same tool, as if identified with nothing held
+    known = (np.r_[tool.mass, tool.mass * np.asarray(tool.lever)], np.zeros((4, 4)))
+    est = estimate_wrench_static(robot, log, tool=known)
     assert est.at_rest.n_poses == 4 and est.verdict == "identified"
+    assert est.mass == pytest.approx(urdf_way.mass, rel=1e-12)
     T_world_s = robot.frame_pose(np.zeros(6), "tool0")
     T_world_ee = robot.frame_pose(np.zeros(6), robot.ee_frame)
     c_ee = np.linalg.solve(T_world_ee, T_world_s @ np.r_[c_sensor, 1])[:3]

@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 from comgrasp_pin.config import MotionConfig, sensor_preset
+from comgrasp_pin.estimation.wrench_com import tool_beyond
 from comgrasp_pin.robot_io.at_rest.wrench_static import estimate_wrench_static
 from comgrasp_pin.robot_io.plans.poses import plan_measurement_poses
 from comgrasp_pin.simulation.arm_worlds import arm_robot
@@ -58,7 +59,9 @@ def _z(est, mass, com_ee):
 def test_ideal_sensor_gives_the_simulated_payload(robot, draw):
     payload, excess, _, loaded = _sessions(robot, draw, "ideal")
     assert excess is None
-    est = estimate_wrench_static(robot, loaded)
+    tool = tool_beyond(robot, "ft_sensor")  # the ideal world's tool is the URDF's, known
+    known = (np.r_[tool.mass, tool.mass * np.asarray(tool.lever)], np.zeros((4, 4)))
+    est = estimate_wrench_static(robot, loaded, tool=known)
     assert est.verdict == "identified" and est.at_rest.n_poses == 4
     assert abs(est.mass / payload.mass - 1) < 0.01
     assert np.linalg.norm(est.com_ee - payload.p_com_ee) < 0.002
@@ -81,6 +84,7 @@ def test_realistic_sensor_with_a_calibrated_tool_holds_the_truth(robot, draw):
     assert np.linalg.norm(est.com_ee - payload.p_com_ee) < 0.002
     assert np.all(np.abs(_z(est, payload.mass, payload.p_com_ee)) < 3)
     with_urdf = estimate_wrench_static(robot, loaded, **drift)
+    assert with_urdf.verdict == "unreliable"  # its tool's error is not known: it is not
     both = held_body(payload, excess)  # what the URDF's tool leaves: payload and excess
     assert abs(with_urdf.mass - both.mass) < 3 * np.sqrt(with_urdf.cov[0, 0])
     assert abs(with_urdf.mass - payload.mass) > 0.5 * excess.mass

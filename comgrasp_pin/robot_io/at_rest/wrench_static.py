@@ -45,7 +45,7 @@ from comgrasp_pin.robot_io.results.estimate_result import (
     Wrench,
     sole_source,
 )
-from comgrasp_pin.robot_io.results.trust import Z95, arm_mass, judge
+from comgrasp_pin.robot_io.results.trust import Z95, arm_mass, judge, nominal_tool_reasons
 
 MAX_CHI2_DOF = 25.0
 """Residuals above 5 times the windows' own noise (chi-square per degree of freedom above
@@ -188,7 +188,7 @@ def _estimate(robot, fit, T_sensor_ee, log, windows, readings, tool, noise_from)
     R = T_ee_sensor[:3, :3]
     G = np.eye(4)
     G[1:, 1:] = R
-    findings = []
+    findings = nominal_tool_reasons(tool[0] == TOOL_NOMINAL, float(tool[1]))
     if fit.chi2_dof > MAX_CHI2_DOF:
         findings.append(
             f"the residuals are {np.sqrt(fit.chi2_dof):.1f} times the windows' noise: the "

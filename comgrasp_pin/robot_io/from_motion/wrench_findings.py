@@ -15,6 +15,7 @@ from comgrasp_pin.robot_io.from_motion import wrench_combined as wc
 from comgrasp_pin.robot_io.from_motion.motion_system import DRIFT_DEGREE
 from comgrasp_pin.robot_io.from_motion.payload_system import NOMINAL
 from comgrasp_pin.robot_io.results.estimate_result import TOOL_NOMINAL, JointTorques
+from comgrasp_pin.robot_io.results.trust import nominal_tool_reasons
 
 
 def tool_cov(P: np.ndarray, st: wc.Stacked, cov: np.ndarray) -> np.ndarray:
@@ -61,13 +62,7 @@ def wrench_reasons(tool, agree, joint_source) -> list[str]:
 
     ``trust.motion_reasons`` has the ones every motion shares.
     """
-    reasons = []
-    if tool.source == TOOL_NOMINAL and tool.params[0] > 0:
-        reasons.append(
-            f"the tool's own wrench is the URDF's links beyond the sensor ({tool.params[0]:.3f} "
-            "kg), whose error on this tool is not known: give an empty run of the tool "
-            "without the payload (any motion) or the tool's parameters"
-        )
+    reasons = nominal_tool_reasons(tool.source == TOOL_NOMINAL, float(tool.params[0]))
     if agree is not None and agree["chi2"] > agree["max_chi2"]:
         m = agree["mass_kg"]
         reasons.append(

@@ -105,6 +105,23 @@ def motion_reasons(c: Checks) -> list[str]:
     return reasons
 
 
+def nominal_tool_reasons(nominal: bool, tool_mass_kg: float) -> list[str]:
+    """A wrist sensor's tool taken from the URDF's links beyond it, at rest or in motion.
+
+    Its error on the real tool is not known and goes straight into the payload (a gripper 3 %
+    heavier than its URDF reads as a payload of tens of grams, tens of std away), so it is an
+    objection wherever a tool of some mass was subtracted that way.
+    """
+    if not nominal or tool_mass_kg <= 0:
+        return []
+    return [
+        f"the tool's own wrench is the URDF's links beyond the sensor ({tool_mass_kg:.3f} kg), "
+        "whose error on this tool is not known and goes into the payload: identify the tool "
+        "once with nothing held (at rest: --keep-tool, then --tool TOOL.json; from a motion: "
+        "an empty run of any motion, --empty-csv/--empty-bag) or give its parameters"
+    ]
+
+
 def judge(
     mass: float,
     com_ee: np.ndarray,
