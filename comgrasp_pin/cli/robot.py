@@ -202,7 +202,8 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     est.add_argument("--method", default="lstsq", choices=("lstsq", "ipopt"),
                      help="closed-form least squares or CasADi + IPOPT")  # fmt: skip
     est.add_argument("--out", default="RESULT.json", help="the result JSON")
-    est.add_argument("--inertia", default="point", help=f"inertia approximation: {INERTIA_HELP}")
+    est.add_argument("--inertia", default="point",
+                     help=f"the inertia written where no motion determined it: {INERTIA_HELP}")
     add_export_args(est)
     add_dynamic_args(est)
     add_wrench_args(est)
