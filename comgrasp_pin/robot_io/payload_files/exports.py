@@ -23,16 +23,8 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import numpy as np
-
 from comgrasp_pin.errors import OutputError
-from comgrasp_pin.robot_io.payload_files.payload import Payload, header_lines
-
-
-def _six(I: np.ndarray) -> list[float]:
-    """[Ixx, Iyy, Izz, Ixy, Ixz, Iyz] of a symmetric 3x3 inertia."""
-    return [float(I[0, 0]), float(I[1, 1]), float(I[2, 2]),
-            float(I[0, 1]), float(I[0, 2]), float(I[1, 2])]  # fmt: skip
+from comgrasp_pin.robot_io.payload_files.payload import Payload, header_lines, six_components
 
 
 def _list(values) -> str:
@@ -44,7 +36,7 @@ def urscript(p: Payload) -> str:
     head = "".join(f"# {line}\n" for line in header_lines(p))
     return (
         f"{head}set_target_payload({p.mass:.9g}, {_list(p.com_flange)}, "
-        f"{_list(_six(p.inertia_flange))})\n"
+        f"{_list(six_components(p.inertia_flange))})\n"
     )
 
 
@@ -62,7 +54,7 @@ def franka_load(p: Payload) -> dict:
 def ros2_yaml(p: Payload) -> str:
     """YAML with the request fields of ur_msgs/srv/SetPayload and franka_msgs/srv/SetLoad."""
     c = p.com_flange
-    ixx, iyy, izz, ixy, ixz, iyz = _six(p.inertia_flange)
+    ixx, iyy, izz, ixy, ixz, iyz = six_components(p.inertia_flange)
     head = "".join(f"# {line}\n" for line in header_lines(p))
     return (
         f"{head}"

@@ -105,10 +105,10 @@ def header_lines(p: Payload) -> list[str]:
         lines.append(f"inertia: {p.inertia_model} approximation about the CoM, flange axes "
                      f"({why})")  # fmt: skip
     else:
-        s = " ".join(f"{v:.9g}" for v in _six(p.inertia_std_flange))
+        s = ", ".join(f"{v:.9g}" for v in six_components(p.inertia_std_flange))
         word = "identified" if trusted else "fitted to the motion"
         lines.append(f"inertia: {word}, about the CoM, flange axes; 1-sigma [Ixx, Iyy, Izz, Ixy, "
-                     f"Ixz, Iyz] [{s.replace(' ', ', ')}] kg m^2")  # fmt: skip
+                     f"Ixz, Iyz] [{s}] kg m^2")  # fmt: skip
     std = p.std
     if std is not None:
         lines.append(
@@ -120,7 +120,7 @@ def header_lines(p: Payload) -> list[str]:
     return lines
 
 
-def _six(I: np.ndarray) -> list[float]:
+def six_components(I: np.ndarray) -> list[float]:
     """[Ixx, Iyy, Izz, Ixy, Ixz, Iyz] of a symmetric 3x3 inertia."""
     return [float(I[0, 0]), float(I[1, 1]), float(I[2, 2]),
             float(I[0, 1]), float(I[0, 2]), float(I[1, 2])]  # fmt: skip
