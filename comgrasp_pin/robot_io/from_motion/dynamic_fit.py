@@ -193,8 +193,8 @@ class MotionRows:
 class MotionFit:
     """What ``fit_motion`` found.
 
-    The fit, its error sources, the parameters' covariance, the held-out prediction and the
-    checks ``trust.motion_reasons`` weighs.
+    The fit, its error sources, the parameters' covariance, the held-out prediction, the
+    checks ``trust.motion_reasons`` weighs, and ``extra_cov``'s value (or None).
     """
 
     fit: PayloadFit
@@ -202,6 +202,7 @@ class MotionFit:
     params_cov: np.ndarray
     validation: du.Validation
     checks: Checks
+    extra_cov: np.ndarray | None = None
 
 
 def fit_motion(
@@ -247,7 +248,7 @@ def fit_motion(
                                       err.rel_gain_cov)  # fmt: skip
     checks = Checks(float(fit.pi[0]), float(np.sqrt(params_cov[0, 0])), arm_label,
                     validation.explained_total, halves, halves_std)  # fmt: skip
-    return MotionFit(fit, err, params_cov, validation, checks)
+    return MotionFit(fit, err, params_cov, validation, checks, extra)
 
 
 def halves_check(A, b_rows, w, k, n, factor, b_gain=None, rel=None):

@@ -127,7 +127,7 @@ def estimate_wrench_dynamic(
                    extra_cov=lambda err: wf.tool_cov(err.sensitivity, st, tool.cov),
                    observe=lambda solve: _observable(robot, W, solve))  # fmt: skip
     fit, err, validation = m.fit, m.err, m.validation
-    cov_tool = wf.tool_cov(err.sensitivity, st, tool.cov)
+    cov_tool = m.extra_cov
     agree = wc.agreement(fits, tool.cov) if J is not None else None
     findings = motion_reasons(m.checks) + wf.wrench_reasons(tool, agree, J and J.source)
     payload, predicted = (b - A_x @ fit.x).reshape(k, r), (A_pi @ fit.pi).reshape(k, r)
