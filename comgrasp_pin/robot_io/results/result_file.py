@@ -40,6 +40,7 @@ def result_dict(est: er.PayloadEstimate) -> dict:
     """The RESULT.json contents of ``est``."""
     std = est.std
     held = bool(np.all(np.isfinite(est.com_ee)))
+    interval = est.interval95_mass
     out = {
         "schema_version": SCHEMA_VERSION,
         "mode": est.mode,
@@ -51,8 +52,7 @@ def result_dict(est: er.PayloadEstimate) -> dict:
             "mass_kg": float(std[0]), "com_m": _list(std[1:]) if held else None,
             "mass_kg_by_source": est.std_parts or None,
         },
-        "interval95_mass_kg": None if std is None else [est.mass - Z95 * float(std[0]),
-                                                        est.mass + Z95 * float(std[0])],
+        "interval95_mass_kg": None if interval is None else list(interval),
         "interval95_com_m": None if std is None or not held else [
             [float(c - Z95 * s), float(c + Z95 * s)] for c, s in zip(est.com_ee, std[1:])],
         "verdict": est.verdict,

@@ -17,7 +17,7 @@ from comgrasp_pin.robot_io.results.estimate_result import (
     PayloadEstimate,
     Wrench,
 )
-from comgrasp_pin.robot_io.results.trust import Z95, principal_moments
+from comgrasp_pin.robot_io.results.trust import principal_moments
 
 LABELS = {"mass_kg": "mass", "com_m": "CoM", "first_moment_kgm": "m c",
           "principal_moments_kgm2": "principal moments"}  # fmt: skip
@@ -44,12 +44,12 @@ def _head(est: PayloadEstimate) -> str:
 
 
 def _mass_and_com(est: PayloadEstimate) -> list[str]:
-    std = est.std
-    if std is None:
+    std, interval = est.std, est.interval95_mass
+    if std is None or interval is None:
         lines = [f"  mass  {est.mass:.4f} kg (no uncertainty)"]
         std = np.full(4, np.nan)
     else:
-        lo, hi = est.mass - Z95 * std[0], est.mass + Z95 * std[0]
+        lo, hi = interval
         lines = [f"  mass  {est.mass:.4f} +- {std[0]:.4f} kg (std; 95 %: {lo:.3f} to {hi:.3f} kg)"]
     if est.std_parts:
         lines.append("        std by source: "
