@@ -54,9 +54,9 @@ import numpy as np
 import pinocchio as pin
 
 from comgrasp_pin.errors import ComGraspError
+from comgrasp_pin.planning.excitation import ExcitationSettings, plan_excitation
 from comgrasp_pin.robot_io.from_motion.arm_model import identify_arm
 from comgrasp_pin.robot_io.from_motion.dynamic import estimate_payload_dynamic
-from comgrasp_pin.robot_io.plans.excitation import ExcitationSettings, plan_excitation
 from comgrasp_pin.simulation import arm_worlds
 from comgrasp_pin.simulation.arm_worlds import arm_robot
 from comgrasp_pin.simulation.payload_motion import simulate_motion

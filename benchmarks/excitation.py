@@ -23,11 +23,11 @@ import numpy as np
 from excitation_baseline import random_condition_numbers  # benchmarks/, beside this script
 
 from comgrasp_pin._paths import example_robot_urdf, urdf_path
-from comgrasp_pin.robot import RobotModel
-from comgrasp_pin.robot_io.plans.excitation import (
+from comgrasp_pin.planning.excitation import (
     ExcitationSettings,
     plan_excitation,
 )
+from comgrasp_pin.robot import RobotModel
 
 ARMS = {
     "ur5": (urdf_path("ur5_gripper.urdf"), "eelink"),

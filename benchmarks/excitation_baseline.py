@@ -16,17 +16,17 @@ from comgrasp_pin.estimation.payload_regressor import (
     payload_regressor,
 )
 from comgrasp_pin.motion.fourier import FourierMotion
-from comgrasp_pin.robot import RobotModel
-from comgrasp_pin.robot_io.plans.collision import SelfCollision
-from comgrasp_pin.robot_io.plans.excitation import (
+from comgrasp_pin.planning.collision import SelfCollision
+from comgrasp_pin.planning.excitation import (
     MAX_DURATION_S,
     ExcitationSettings,
     default_start,
     excitation_limits,
     within_limits,
 )
-from comgrasp_pin.robot_io.plans.excitation_search import Grid, random_motions
-from comgrasp_pin.robot_io.plans.poses import feasible
+from comgrasp_pin.planning.excitation_search import Grid, random_motions
+from comgrasp_pin.planning.measurement_poses import feasible
+from comgrasp_pin.robot import RobotModel
 
 
 def random_condition_numbers(

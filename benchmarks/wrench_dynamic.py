@@ -30,9 +30,9 @@ from pathlib import Path
 import numpy as np
 
 from comgrasp_pin.config import sensor_preset, wrench_preset
+from comgrasp_pin.planning.excitation import ExcitationSettings, plan_excitation
 from comgrasp_pin.robot_io.from_motion.dynamic import estimate_payload_dynamic
 from comgrasp_pin.robot_io.from_motion.wrench_dynamic import estimate_wrench_dynamic
-from comgrasp_pin.robot_io.plans.excitation import ExcitationSettings, plan_excitation
 from comgrasp_pin.simulation.arm_worlds import arm_robot
 from comgrasp_pin.simulation.payload_motion import simulate_motion
 from comgrasp_pin.simulation.payloads import Payload, Solid, box, off_axis_weight, rod

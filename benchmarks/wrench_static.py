@@ -57,11 +57,11 @@ from comgrasp_pin.errors import UnobservableError
 from comgrasp_pin.estimation.wrench import check_orientations
 from comgrasp_pin.estimation.wrench_com import T_sensor_ee, tool_beyond
 from comgrasp_pin.motion.trajectory import Quintic, min_duration
+from comgrasp_pin.planning.measurement_poses import plan_measurement_poses
 from comgrasp_pin.robot_io.at_rest.joint_torques import estimate_from_log
 from comgrasp_pin.robot_io.at_rest.windows import MAX_SPEED, MIN_STATIC_S, find_static_windows
 from comgrasp_pin.robot_io.at_rest.wrench_static import estimate_wrench_static
 from comgrasp_pin.robot_io.log_files.log_types import JointLog
-from comgrasp_pin.robot_io.plans.poses import plan_measurement_poses
 from comgrasp_pin.simulation.arm_worlds import SENSOR_FRAME, arm_robot, arm_urdf
 from comgrasp_pin.simulation.payload_motion import MotionSimConfig, simulate_motion
 from comgrasp_pin.simulation.payloads import Payload, Solid

@@ -18,8 +18,8 @@ from comgrasp_pin.estimation import (
     ComEstimate,
     com_along_axis,
     estimate_com,
-    plan_wrist_poses,
 )
+from comgrasp_pin.planning import PosePlan, plan_wrist_poses
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io import (
     JointLog,
@@ -31,7 +31,6 @@ from comgrasp_pin.robot_io import (
     plan_measurement_poses,
     read_log,
 )
-from comgrasp_pin.robot_io.plans import PosePlan
 
 __all__ = [
     "AxisPrior",

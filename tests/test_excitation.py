@@ -19,14 +19,14 @@ from comgrasp_pin.estimation.payload_regressor import (
     parameter_scale,
     payload_regressor,
 )
-from comgrasp_pin.robot import RobotModel
-from comgrasp_pin.robot_io.plans import motion_files
-from comgrasp_pin.robot_io.plans.collision import SelfCollision
-from comgrasp_pin.robot_io.plans.excitation import (
+from comgrasp_pin.planning.collision import SelfCollision
+from comgrasp_pin.planning.excitation import (
     UR_HOME,
     ExcitationSettings,
     plan_excitation,
 )
+from comgrasp_pin.robot import RobotModel
+from comgrasp_pin.robot_io.payload_files import motion_files
 
 sys.path.append(str(Path(__file__).resolve().parents[1] / "benchmarks"))
 from excitation_baseline import random_condition_numbers  # noqa: E402  (benchmarks/)

@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 
 from comgrasp_pin.cli import main
+from comgrasp_pin.planning.excitation import ExcitationSettings, plan_excitation
 from comgrasp_pin.robot_io import write_bag, write_csv
 from comgrasp_pin.robot_io.from_motion.dynamic import estimate_payload_dynamic
 from comgrasp_pin.robot_io.payload_files.payload import T_flange_ee
-from comgrasp_pin.robot_io.plans.excitation import ExcitationSettings, plan_excitation
 from comgrasp_pin.simulation.arm_worlds import arm_robot, arm_urdf
 from comgrasp_pin.simulation.payload_motion import simulate_motion
 from comgrasp_pin.simulation.payloads import box, off_axis_weight, rod

@@ -98,8 +98,8 @@ def test_a_depth_image_that_is_not_real_is_refused(dtype):
 @pytest.mark.parametrize("dtype", REFUSED)
 def test_camera_transforms_and_planning_refuse_what_is_not_real(ur5, dtype):
     from comgrasp_pin.camera import transform_points
-    from comgrasp_pin.estimation.pose_planning import best_next_pose
     from comgrasp_pin.geometry import check_transform
+    from comgrasp_pin.planning.wrist_poses import best_next_pose
 
     points = np.array([[0.1, 0.2, 0.5], [0.0, 0.0, 1.0]])
     with pytest.raises(InvalidInputError, match="p_b"):

@@ -10,8 +10,8 @@ from _logs import rnea_torques, session
 from _payload import panda, payload_torques
 
 from comgrasp_pin.errors import InvalidInputError, LogError
+from comgrasp_pin.planning.measurement_poses import plan_measurement_poses
 from comgrasp_pin.robot_io import estimate_from_log, load_robot
-from comgrasp_pin.robot_io.plans.poses import plan_measurement_poses
 
 MASS, COM = 0.85, np.array([0.025, -0.012, 0.06])
 START = np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8])

@@ -1,5 +1,6 @@
-"""robot_io.plans.poses: planned poses within the limits and free of self-collision (checked here
-with a collision model built independently: pin.buildGeomFromUrdf + pin.computeCollisions),
+"""planning.measurement_poses: planned poses within the limits and free of self-collision
+(checked here with a collision model built independently: pin.buildGeomFromUrdf +
+pin.computeCollisions),
 and a predicted CoM std at least 2x better than four random wrist poses near the start."""
 
 import numpy as np
@@ -10,8 +11,8 @@ from _payload import panda
 from comgrasp_pin import RobotModel
 from comgrasp_pin._paths import example_robot_data_dir, example_robot_urdf
 from comgrasp_pin.errors import CollisionError, InvalidInputError
-from comgrasp_pin.estimation.pose_planning import predicted_std
-from comgrasp_pin.robot_io.plans.poses import plan_measurement_poses, urscript_program
+from comgrasp_pin.planning.measurement_poses import plan_measurement_poses, urscript_program
+from comgrasp_pin.planning.wrist_poses import predicted_std
 
 STARTS = {
     "panda": np.array([0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8]),

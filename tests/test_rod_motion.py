@@ -10,11 +10,11 @@ from _payload import payload_torques
 
 import comgrasp_pin as cg
 from comgrasp_pin.config import RegraspConfig
-from comgrasp_pin.estimation.pose_planning import best_next_pose
 from comgrasp_pin.estimation.regressor import pose_regressor
 from comgrasp_pin.perception.side_view import SideView
 from comgrasp_pin.planning.holding import holding_lever
 from comgrasp_pin.planning.regrasp import needs_another_pose
+from comgrasp_pin.planning.wrist_poses import best_next_pose
 from comgrasp_pin.procedures.rod_motion import rod_motion
 
 

@@ -2,7 +2,7 @@
 
 - ``ruff check`` over the whole repository, including the docstring rules (D, Google
   convention) on the package's public API (configured in pyproject.toml);
-- ``mypy`` on comgrasp_pin/estimation, comgrasp_pin/perception and comgrasp_pin/robot_io
+- ``mypy`` on comgrasp_pin/estimation, perception, planning and robot_io
   ([tool.mypy]).
 
 Both tools come with the ``test`` extra; a test is skipped only if its tool is missing.
@@ -17,7 +17,12 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-TYPED = ["comgrasp_pin/estimation", "comgrasp_pin/perception", "comgrasp_pin/robot_io"]
+TYPED = [
+    "comgrasp_pin/estimation",
+    "comgrasp_pin/perception",
+    "comgrasp_pin/planning",
+    "comgrasp_pin/robot_io",
+]
 TIMEOUT_S = 600
 
 

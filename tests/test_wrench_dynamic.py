@@ -319,8 +319,8 @@ def test_mujoco_wrench_against_the_truth_and_the_joint_torques_on_one_motion():
     force/torque sensor at ft_sensor (the realistic FT 300-S class: noise, an episode offset,
     drift) and its link-side joint torques, an empty run of the same motion for each path."""
     from comgrasp_pin.config import sensor_preset, wrench_preset
+    from comgrasp_pin.planning.excitation import ExcitationSettings, plan_excitation
     from comgrasp_pin.robot_io.from_motion.dynamic import estimate_payload_dynamic
-    from comgrasp_pin.robot_io.plans.excitation import ExcitationSettings, plan_excitation
     from comgrasp_pin.simulation.arm_worlds import arm_robot
     from comgrasp_pin.simulation.payload_motion import MotionSimConfig, simulate_motion
     from comgrasp_pin.simulation.payloads import box

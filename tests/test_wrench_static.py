@@ -19,10 +19,10 @@ from scipy.spatial.transform import Rotation
 from comgrasp_pin.errors import InvalidInputError, LogError, UnobservableError
 from comgrasp_pin.estimation.wrench import fit_static_wrench
 from comgrasp_pin.estimation.wrench_com import tool_beyond
+from comgrasp_pin.planning.measurement_poses import plan_measurement_poses
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.at_rest.wrench_static import estimate_wrench_static
 from comgrasp_pin.robot_io.log_files.log_types import WrenchLog
-from comgrasp_pin.robot_io.plans.poses import plan_measurement_poses
 
 G = np.array([0.0, 0.0, -9.81])
 TILTS = Rotation.from_rotvec(np.radians([[0, 0, 0], [60, 0, 0], [0, 60, 0], [-45, -45, 0]]))

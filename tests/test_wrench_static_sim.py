@@ -19,8 +19,8 @@ import pytest
 
 from comgrasp_pin.config import MotionConfig, sensor_preset
 from comgrasp_pin.estimation.wrench_com import tool_beyond
+from comgrasp_pin.planning.measurement_poses import plan_measurement_poses
 from comgrasp_pin.robot_io.at_rest.wrench_static import estimate_wrench_static
-from comgrasp_pin.robot_io.plans.poses import plan_measurement_poses
 from comgrasp_pin.simulation.arm_worlds import arm_robot
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))

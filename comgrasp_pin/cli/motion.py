@@ -1,4 +1,4 @@
-"""`comgrasp plan-motion`: an excitation motion for a real arm (``robot_io.plans.excitation``).
+"""`comgrasp plan-motion`: an excitation motion for a real arm (``planning.excitation``).
 
 Registered by ``cli.robot.add_subcommands``, which loads the robot (``--urdf``,
 ``--ee-frame``, ``--package-dir``, ``--gravity``) and parses ``--start``.
@@ -31,7 +31,7 @@ _DESCRIPTION = (
 
 def add_plan_motion(sub: argparse._SubParsersAction, add_robot_args, func) -> None:
     """Add `plan-motion` to the subparsers ``sub``; ``func`` runs it."""
-    from comgrasp_pin.robot_io.plans.excitation import ExcitationSettings
+    from comgrasp_pin.planning.excitation import ExcitationSettings
 
     d = ExcitationSettings()
     p = sub.add_parser(
@@ -50,7 +50,7 @@ def add_plan_motion(sub: argparse._SubParsersAction, add_robot_args, func) -> No
 
 def _add_motion_args(p: argparse.ArgumentParser, d) -> None:
     """The motion's length, start and limits (``d``: the default ``ExcitationSettings``)."""
-    from comgrasp_pin.robot_io.plans.excitation import MAX_DURATION_S, MIN_DURATION_S
+    from comgrasp_pin.planning.excitation import MAX_DURATION_S, MIN_DURATION_S
 
     p.add_argument(
         "--duration",
@@ -142,9 +142,9 @@ def _add_output_args(p: argparse.ArgumentParser) -> None:
 
 def run_plan_motion(args: argparse.Namespace, robot, start: np.ndarray | None) -> int:
     """Plan, write the files asked for, print a summary; 0 on success."""
-    from comgrasp_pin.robot_io.plans import motion_files
-    from comgrasp_pin.robot_io.plans.excitation import ExcitationSettings, plan_excitation
-    from comgrasp_pin.robot_io.plans.poses import UR_JOINTS
+    from comgrasp_pin.planning.excitation import ExcitationSettings, plan_excitation
+    from comgrasp_pin.planning.measurement_poses import UR_JOINTS
+    from comgrasp_pin.robot_io.payload_files import motion_files
 
     if args.urscript and robot.nq != UR_JOINTS:
         raise InvalidInputError(

@@ -89,7 +89,7 @@ def _cmd_estimate(args: argparse.Namespace) -> int:
 
 
 def _cmd_plan(args: argparse.Namespace) -> int:
-    from comgrasp_pin.robot_io.plans import poses as planning
+    from comgrasp_pin.planning import measurement_poses as planning
 
     robot = robot_of(args)
     if args.urscript and robot.nq != planning.UR_JOINTS:
@@ -202,8 +202,11 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     est.add_argument("--method", default="lstsq", choices=("lstsq", "ipopt"),
                      help="closed-form least squares or CasADi + IPOPT")  # fmt: skip
     est.add_argument("--out", default="RESULT.json", help="the result JSON")
-    est.add_argument("--inertia", default="point",
-                     help=f"the inertia written where no motion determined it: {INERTIA_HELP}")
+    est.add_argument(
+        "--inertia",
+        default="point",
+        help=f"the inertia written where no motion determined it: {INERTIA_HELP}",
+    )
     add_export_args(est)
     add_dynamic_args(est)
     add_wrench_args(est)

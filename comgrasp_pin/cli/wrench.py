@@ -107,11 +107,13 @@ def read_wrench(args: argparse.Namespace, robot):
 def run_wrench(args: argparse.Namespace, robot) -> int:
     """Read the log, estimate at rest, write RESULT.json and the payload files (``--dynamic``
     is ``cli.wrench_dynamic``'s; ``--before``/``--after``: the wrench's change at the same
-    poses, with the log's efforts where it has them, ``robot_io.at_rest.wrench_pairs``)."""
+    poses, with the log's efforts where it has them, ``robot_io.at_rest.wrench_static``)."""
     from comgrasp_pin.cli.exports import finish_estimate
     from comgrasp_pin.robot_io.at_rest import parse_windows
-    from comgrasp_pin.robot_io.at_rest.wrench_pairs import estimate_wrench_pairs
-    from comgrasp_pin.robot_io.at_rest.wrench_static import estimate_wrench_static
+    from comgrasp_pin.robot_io.at_rest.wrench_static import (
+        estimate_wrench_pairs,
+        estimate_wrench_static,
+    )
     from comgrasp_pin.robot_io.results.result_file import tool_of_result
 
     log = read_wrench(args, robot)

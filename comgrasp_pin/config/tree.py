@@ -146,7 +146,7 @@ class RegraspConfig:
         pad_friction: (sliding, torsional) friction of the pads as the robot knows them
             (its gripper's data; the simulated world has its own, ``WorldConfig``).
         extra_rolls_deg: the candidate rolls about ee-x of that one more pose (deg); the
-            D-optimal one (``estimation.pose_planning.best_next_pose``) is measured.
+            D-optimal one (``planning.wrist_poses.best_next_pose``) is measured.
         attempts: careful trial grasps before the last, uncareful one.
         retry_shift: a turning rod is grasped again this fraction of its length further
             towards the end that went down (then bisected).

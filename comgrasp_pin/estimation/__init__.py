@@ -1,7 +1,7 @@
 """Payload mass and CoM from static joint torques (Pinocchio, NumPy, CasADi; no simulator).
 
 The regressor, the ``ComEstimate`` type, ``estimate_com`` (one least-squares path and
-IPOPT), the wrist pose planning, the CoM on the rod's axis, the whole payload's inertial
+IPOPT), the CoM on the rod's axis, the whole payload's inertial
 fit.
 
 Layer: imports only ``robot`` and the shared modules (``geometry``, ``validate``,
@@ -10,7 +10,6 @@ Layer: imports only ``robot`` and the shared modules (``geometry``, ``validate``
 
 from comgrasp_pin.estimation.estimate import ComEstimate
 from comgrasp_pin.estimation.estimator import estimate_com
-from comgrasp_pin.estimation.pose_planning import plan_wrist_poses
 from comgrasp_pin.estimation.prior import AxisPrior
 from comgrasp_pin.estimation.rod_axis import com_along_axis
 
@@ -19,5 +18,4 @@ __all__ = [
     "ComEstimate",
     "com_along_axis",
     "estimate_com",
-    "plan_wrist_poses",
 ]

@@ -63,7 +63,7 @@ def plan_put_down(
     # Flat, the rod's centre lies -grasp_offset along ee-x from the TCP: put it on the spot.
     e_x = np.array([np.cos(yaw), np.sin(yaw)])
     xy_touch = np.asarray(put_down_xy) + (grasp_offset_obj - shift) * e_x
-    T_above = top_down_frame(*xy_touch, T_world_ee[2, 3], yaw)
+    T_above = top_down_frame(float(xy_touch[0]), float(xy_touch[1]), T_world_ee[2, 3], yaw)
     # Flat, the rod's axis lies where it is now below the TCP (its point nearest the TCP):
     # the TCP ends that far above the axis' height on the table (never lower than a grasp
     # of the rod lying there: the pads must not jam on the table).

@@ -53,7 +53,7 @@ decides by the exact class)."""
 
 def on_failed_grasp(exc: BaseException) -> OnFailedGrasp | None:
     """``ON_FAILED_GRASP``'s entry for ``exc``'s exact class, or None: not grasped again."""
-    return ON_FAILED_GRASP.get(type(exc))
+    return ON_FAILED_GRASP.get(type(exc)) if isinstance(exc, Exception) else None
 
 
 @dataclass(frozen=True)

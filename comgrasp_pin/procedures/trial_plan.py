@@ -14,10 +14,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from comgrasp_pin.errors import IKError
-from comgrasp_pin.estimation.pose_planning import best_next_pose
 from comgrasp_pin.geometry import GraspPose
 from comgrasp_pin.motion.ik import grasp_frame, solve_ik, solve_top_down
 from comgrasp_pin.perception import RodDetection
+from comgrasp_pin.planning.wrist_poses import best_next_pose
 from comgrasp_pin.robot import RobotModel
 
 

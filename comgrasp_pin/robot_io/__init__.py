@@ -19,7 +19,10 @@
     est = estimate_wrench_dynamic(robot, ft_motion, empty_log=ft_tool_only)  # the inertia too
     text = payload_files.krl_load(payload)  # KUKA $LOAD; rapid_loaddata, moveit_yaml...
 
-Layer: beside ``procedures``; imports ``estimation``, ``motion.fourier``, ``robot`` and the
+Where the arm goes to measure (poses, excitation motions) is planned in
+``comgrasp_pin.planning``; the two planners are re-exported here.
+
+Layer: beside ``procedures``; imports ``planning``, ``estimation``, ``robot`` and the
 shared modules, never ``simulation`` (no MuJoCo here): it runs on a real robot's logs.
 
 This front door lists the 25 names most users need; each folder's ``__init__`` lists its own
@@ -30,10 +33,11 @@ This front door lists the 25 names most users need; each folder's ``__init__`` l
 - ``from_motion/``: the payload from a motion, and the empty arm's own model.
 - ``results/``: what an estimate gives back and whether to trust it.
 - ``payload_files/``: the payload in the flange frame and the files controllers take.
-- ``plans/``: measurement poses and excitation motions for the arm to play.
+- ``payload_files/motion_files.py``: a planned motion out as JSON, CSV, URScript, ROS 2.
 - ``mount.py``: ``load_robot``; the maths without I/O is in ``comgrasp_pin.estimation``.
 """
 
+from comgrasp_pin.planning import plan_excitation, plan_measurement_poses
 from comgrasp_pin.robot_io.at_rest import (
     estimate_from_log,
     estimate_wrench_pairs,
@@ -56,7 +60,6 @@ from comgrasp_pin.robot_io.log_files import (
     write_csv,
 )
 from comgrasp_pin.robot_io.payload_files import Payload, payload_in_flange
-from comgrasp_pin.robot_io.plans import plan_excitation, plan_measurement_poses
 from comgrasp_pin.robot_io.results import PayloadEstimate, read_result, summary, write_result
 
 __all__ = [

@@ -46,8 +46,10 @@ from comgrasp_pin import validate
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.robot import RobotModel, urdf_model
 from comgrasp_pin.robot_io.at_rest.joint_torques import estimate_from_log
-from comgrasp_pin.robot_io.at_rest.wrench_pairs import estimate_wrench_pairs
-from comgrasp_pin.robot_io.at_rest.wrench_static import estimate_wrench_static
+from comgrasp_pin.robot_io.at_rest.wrench_static import (
+    estimate_wrench_pairs,
+    estimate_wrench_static,
+)
 from comgrasp_pin.robot_io.from_motion.dynamic import estimate_payload_dynamic
 from comgrasp_pin.robot_io.from_motion.wrench_dynamic import estimate_wrench_dynamic
 from comgrasp_pin.robot_io.log_files.gains import Gains

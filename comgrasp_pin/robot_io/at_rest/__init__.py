@@ -12,8 +12,10 @@ from comgrasp_pin.robot_io.at_rest.windows import (
     parse_windows,
     read_window,
 )
-from comgrasp_pin.robot_io.at_rest.wrench_pairs import estimate_wrench_pairs
-from comgrasp_pin.robot_io.at_rest.wrench_static import estimate_wrench_static
+from comgrasp_pin.robot_io.at_rest.wrench_static import (
+    estimate_wrench_pairs,
+    estimate_wrench_static,
+)
 
 __all__ = [
     "StaticReading",

@@ -24,9 +24,9 @@ import numpy as np
 
 from comgrasp_pin.errors import InvalidInputError, OutputError
 from comgrasp_pin.estimation.payload_regressor import PARAMETER_NAMES
+from comgrasp_pin.planning.excitation import ExcitationMotion
+from comgrasp_pin.planning.measurement_poses import UR_JOINTS
 from comgrasp_pin.robot_io.payload_files.exports import write_text
-from comgrasp_pin.robot_io.plans.excitation import ExcitationMotion
-from comgrasp_pin.robot_io.plans.poses import UR_JOINTS
 
 SERIES = "q(t) = q0 + sum_l a_l/(w l) sin(w l t) - b_l/(w l) (cos(w l t) - 1), w = 2 pi/period"
 

@@ -5,7 +5,7 @@ a start configuration, within ``max_offset`` of it on every joint (near the work
 arm already uses). Those that collide with the arm itself (``collision.SelfCollision``) or
 put the ee or a wrist joint below ``min_height`` above the base are dropped. Then the poses
 are chosen by greedy D-optimal design plus a Fedorov exchange on the stacked regressor of
-``estimation.regressor`` (``estimation.pose_planning``), the start first if given. The
+``estimation.regressor`` (``planning.wrist_poses``), the start first if given. The
 prediction is the Cramer-Rao bound for a payload of a given mass at the ee origin.
 """
 
@@ -16,7 +16,9 @@ import numpy as np
 from comgrasp_pin import validate
 from comgrasp_pin.errors import CollisionError, InvalidInputError
 from comgrasp_pin.estimation import wrench
-from comgrasp_pin.estimation.pose_planning import (
+from comgrasp_pin.estimation.wrench_com import T_sensor_ee
+from comgrasp_pin.planning.collision import SelfCollision
+from comgrasp_pin.planning.wrist_poses import (
     PosePlan,
     check_prediction,
     exchange_d_optimal,
@@ -24,9 +26,7 @@ from comgrasp_pin.estimation.pose_planning import (
     information,
     predicted_std,
 )
-from comgrasp_pin.estimation.wrench_com import T_sensor_ee
 from comgrasp_pin.robot import RobotModel
-from comgrasp_pin.robot_io.plans.collision import SelfCollision
 
 UR_JOINTS = 6
 

@@ -48,15 +48,15 @@ from comgrasp_pin.estimation.payload_regressor import (
     payload_regressor,
 )
 from comgrasp_pin.motion.fourier import FourierMotion
-from comgrasp_pin.robot import RobotModel
-from comgrasp_pin.robot_io.plans.collision import SelfCollision
-from comgrasp_pin.robot_io.plans.excitation_search import (
+from comgrasp_pin.planning.collision import SelfCollision
+from comgrasp_pin.planning.excitation_search import (
     ExcitationSettings,
     Limits,
     checked_settings,
     search,
 )
-from comgrasp_pin.robot_io.plans.poses import feasible, floor_heights
+from comgrasp_pin.planning.measurement_poses import feasible, floor_heights
+from comgrasp_pin.robot import RobotModel
 
 MAX_DURATION_S = 20.0
 MIN_DURATION_S = 4.0
