@@ -141,12 +141,13 @@ def with_gains(log: JointLog, gains_Nm_per_A: np.ndarray) -> JointLog:
 def mass_figures(est, truth_kg: float | None = None) -> dict:
     """Mass, std, interval, z (against ``truth_kg``), verdict and the rest, JSON-ready."""
     std = float(np.sqrt(est.cov[0, 0]))
-    low, high = est.mass - Z95 * std, est.mass + Z95 * std
+    low, high = est.interval95_mass
     out = {
         "mass_kg": est.mass,
         "mass_std_kg": std,
+        "mass_dof": float(est.dof[0]),
         "interval_95_kg": [low, high],
-        "half_width_pct_of_mass": 100 * Z95 * std / abs(est.mass),
+        "half_width_pct_of_mass": 100 * (high - est.mass) / abs(est.mass),
         "holds_zero": bool(low <= 0 <= high),
         "std_parts_kg": est.std_parts,
         "com_ee_m": est.com_ee.tolist(),
@@ -383,7 +384,8 @@ def panda_draw(robot, log: JointLog, Y: np.ndarray, rng: np.random.Generator, in
         "mass_rel_err": (est.mass - payload["mass_kg"]) / payload["mass_kg"],
         "com_err_mm": 1e3 * float(np.linalg.norm(est.com_ee - payload["com_m"])),
         "z_mass_com": z.tolist(),
-        "inside_95": (np.abs(z) <= Z95).tolist(),
+        "dof_mass_com": est.dof.tolist(),
+        "inside_95": (np.abs(z) <= est.t95).tolist(),
         "std_parts_kg": est.std_parts,
         "verdict": est.verdict,
         "reasons": list(est.reasons),
@@ -397,7 +399,7 @@ def panda_summary(rows: list[dict]) -> dict:
     rel = np.array([r["mass_rel_err"] for r in rows])
     com = np.array([r["com_err_mm"] for r in rows])
     z = np.array([r["z_mass_com"] for r in rows])
-    inside = np.abs(z) <= Z95
+    inside = np.array([r["inside_95"] for r in rows])
     abs_err = np.array([abs(r["mass_kg"] - r["mass_true_kg"]) for r in rows])
     arm_std = np.array([r["std_parts_kg"]["arm model"] for r in rows])
     return {
@@ -445,9 +447,10 @@ def panda_section(data: Path, draws: int, seed: int = PANDA_SEED) -> dict:
         arm = identify_arm(robot, log, window=ident)
         est = estimate_payload_dynamic(robot, log, window=est_on, arm_model=arm)
         std = float(np.sqrt(est.cov[0, 0]))
+        low, high = est.interval95_mass
         empty.append({"identified_on_s": list(ident), "estimated_on_s": list(est_on),
                       "mass_kg": est.mass, "mass_std_kg": std,
-                      "holds_0": bool(est.mass - Z95 * std <= 0 <= est.mass + Z95 * std),
+                      "holds_0": bool(low <= 0 <= high),
                       "verdict": est.verdict, "reasons": list(est.reasons)})  # fmt: skip
     return {
         "empty_arm": empty,

@@ -62,7 +62,7 @@ def test_ur_published_gains_interval_holds_the_weighed_mass(ur_subtraction):
     std = float(np.sqrt(est.cov[0, 0]))
     assert est.mass - Z95 * std < UR_LOAD_KG < est.mass + Z95 * std
     assert Z95 * std / est.mass < 0.25
-    assert est.std_parts["gains"] > est.std_parts["data and model (block jackknife)"]
+    assert est.std_parts["gains"] > est.std_parts["data and model (block sandwich)"]
 
 
 def test_ur_calibrated_gains_halves_agree(bench, ur):

@@ -14,6 +14,7 @@ import json
 import numpy as np
 import pinocchio as pin
 import pytest
+from test_dynamic_estimate import normal_score
 
 from comgrasp_pin.errors import InvalidInputError, LogError, MotionLogError, UnobservableError
 from comgrasp_pin.estimation.inertial_fit import pseudo_inertia
@@ -217,7 +218,7 @@ def test_both_sources_used_their_shares_follow_their_noise(robot):
         np.testing.assert_allclose(total, 1.0, atol=1e-9)
     # a 0.1 N sensor against 0.05 N m joint torques: the wrench carries most of the mass
     assert both.sources["wrench"]["mass_kg"] > 0.8
-    assert both.wrench.agreement["chi2"] < both.wrench.agreement["max_chi2"]
+    assert both.wrench.agreement["disagree"] is False
     assert both.cov[0, 0] <= wrench_only.cov[0, 0] * 1.05
     # a sensor 100 times noisier: the joint torques carry most of it
     noisy = wrench_log(robot, PAYLOAD, motion, noise=(10.0, 0.5), seed=4)
@@ -247,7 +248,7 @@ def test_sources_that_disagree_make_the_verdict_unreliable(robot):
     heavier = pin.Inertia(1.1, PAYLOAD.lever, PAYLOAD.inertia)
     log = wrench_log(robot, PAYLOAD, fourier_motion(robot), seed=6, tau_payload_ee=heavier)
     est = estimate_wrench_dynamic(robot, log, tool_params=nominal_tool(robot, SENSOR))
-    assert est.wrench.agreement["chi2"] > est.wrench.agreement["max_chi2"]
+    assert est.wrench.agreement["disagree"]
     assert est.verdict == "unreliable"
     assert any("disagree" in r and "URDF's model of the arm" in r for r in est.reasons)
 
@@ -341,15 +342,19 @@ def test_mujoco_wrench_against_the_truth_and_the_joint_torques_on_one_motion():
     for est in (joint, wrench, both):
         assert abs(est.mass / payload.mass - 1) < 0.01
         assert np.linalg.norm(est.com_ee - payload.p_com_ee) < 2e-3
+        # each z follows Student's t of its variance's dof: through it to the normal's
+        # quantile (the joint torques' mass: z 4.1 at 10 dof, score 3.1; the 1 ms step's
+        # bias of about 1.5 g, docs/uncertainty.md)
         z = (np.r_[est.mass, est.com_ee] - truth) / np.sqrt(np.diag(est.cov))
-        assert np.all(np.abs(z) < 4), z
+        assert np.all(np.abs(normal_score(z, est.dof)) < 4), (z, est.dof)
         for moment, u in zip(true_moments, axes.T):
             std = np.sqrt(np.kron(u, u) @ est.inertia.inertia_cov @ np.kron(u, u))
-            assert abs(u @ est.inertia.inertia_com_ee @ u - moment) < 4 * std
+            z = (u @ est.inertia.inertia_com_ee @ u - moment) / std
+            assert abs(normal_score(z, est.inertia.dof)) < 4
             assert abs(u @ est.inertia.inertia_com_ee @ u / moment - 1) < 0.1
         assert est.verdict == "identified", est.reasons
     # the two paths see one payload: they agree within their stated uncertainties
     d = np.r_[wrench.mass, wrench.com_ee] - np.r_[joint.mass, joint.com_ee]
     assert np.all(np.abs(d) < 4 * np.sqrt(np.diag(wrench.cov) + np.diag(joint.cov))), d
     assert both.joint_torques.arm_model == "empty run"
-    assert both.wrench.agreement["chi2"] < both.wrench.agreement["max_chi2"]
+    assert both.wrench.agreement["disagree"] is False

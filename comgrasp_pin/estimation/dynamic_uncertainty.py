@@ -5,13 +5,16 @@ The payload's parameters pi come from a weighted linear system over the motion's
 Three sources of error enter pi's covariance, each measured or given, never a factor:
 
 1. **The data and what the model leaves out** (noise, friction not modelled, the filter,
-   the arm model's structural error): a delete-a-block jackknife (Kuensch 1989). The motion
-   is cut into contiguous blocks of ``BLOCK_S`` seconds; the fit without each block gives
-   pi_b, and (B - 1)/B sum (pi_b - mean)^2 is pi's variance. Blocks a few seconds long hold
-   errors that are correlated over seconds (friction over a stroke, a mismodelled link
-   over a swing), which a white-noise Laplace or a few-lag Newey-West estimate miss. Its
-   ratio to the white-noise variance widens each parameter's Laplace std (floored at 1:
-   the sensor's noise is always there).
+   the arm model's structural error): the block sandwich (``block_sandwich.py``, CR2 of Bell
+   and McCaffrey 2002). The motion is cut into contiguous blocks of ``BLOCK_S`` seconds; each
+   block's residuals, freed of the fit's pull on them (its leverage), enter the sandwich
+   M (sum_b A_b^T r_b r_b^T A_b) M. Blocks a few seconds long hold errors that are
+   correlated over seconds (friction over a stroke, a mismodelled link over a swing), which
+   a white-noise Laplace or a few-lag Newey-West estimate miss; for white rows it is
+   unbiased, where the delete-a-block jackknife (Kuensch 1989, used here before) overstated
+   the variance 1.4 to 2 times. Its ratio to the white-noise variance scales each
+   parameter's Laplace std. Its variance is estimated from B blocks: Satterthwaite's degrees
+   of freedom (``BlockSandwich.dof``) set the t quantile of the 95 % interval.
 2. **The drive gains** (a log of motor currents): the efforts are K_j I_j. A relative error
    delta_j of gain j scales joint j's efforts, and moves b's rows of joint j by delta_j
    times the part of b that scales with it (``b_gain``). d pi / d delta from the linear
@@ -34,10 +37,10 @@ import numpy as np
 from comgrasp_pin.errors import InvalidInputError, UnobservableError
 
 BLOCK_S = 2.5
-"""Length (s) of the jackknife's blocks: ten times the filter's correlation time at its
+"""Length (s) of the sandwich's blocks: ten times the filter's correlation time at its
 4 Hz cutoff, long enough to hold a slow model error within one block."""
 MIN_BLOCKS, MAX_BLOCKS = 12, 20
-"""The jackknife's block count. Its variance has B - 1 degrees of freedom, and a z-score
+"""The sandwich's block count. Its variance has at most B - 1 degrees of freedom, and a z-score
 over a variance with nu of them has E[z^2] = nu / (nu - 2): 1.4 with 8 blocks (rms z 1.18),
 1.22 with 12. On 24 paired MuJoCo runs of a 20 s motion (benchmarks/inertia_from_motion.py,
 UR5 and Panda, three payloads) 12 blocks of 1.7 s held the mass in 92-96 % of the runs
@@ -93,7 +96,7 @@ def contiguous_blocks(k: int, count: int) -> list[np.ndarray]:
 
 
 def block_count(duration_s: float) -> int:
-    """The jackknife's number of blocks for a motion of ``duration_s`` seconds."""
+    """The sandwich's number of blocks for a motion of ``duration_s`` seconds."""
     return int(np.clip(round(duration_s / BLOCK_S), MIN_BLOCKS, MAX_BLOCKS))
 
 
@@ -102,40 +105,6 @@ def _normal(A: np.ndarray, b: np.ndarray, w: np.ndarray, k: int, n: int):
     Aw = (A * w[:, None]).reshape(k, n, -1)
     bw = (b * w).reshape(k, n)
     return np.einsum("kna,knb->kab", Aw, Aw), np.einsum("kna,kn->ka", Aw, bw)
-
-
-def jackknife_replicates(
-    A,
-    b,
-    w,
-    k: int,
-    n: int,
-    blocks: list[np.ndarray],
-    p: int = 10,
-    prior: tuple[np.ndarray, np.ndarray] | None = None,
-) -> np.ndarray:
-    """(B, p) delete-a-block replicates R of the first p unknowns, scaled: cov = R^T R.
-
-    Row b is sqrt((B - 1)/B) (theta_without_block_b - mean). A linear function c theta then
-    has the jackknife variance |R c|^2: how an error source reaches a derived quantity is
-    carried replicate by replicate, not through a covariance matrix that B replicates only
-    fill in B - 1 directions. ``prior``: (precision (m,), mean (m,)) of a diagonal Gaussian
-    prior on all m unknowns.
-    """
-    Gs, gs = _normal(A, b, w, k, n)
-    G, g = Gs.sum(axis=0), gs.sum(axis=0)
-    if prior is not None:
-        G, g = G + np.diag(prior[0]), g + prior[0] * prior[1]
-    est = np.array([np.linalg.lstsq(G - Gs[i].sum(0), g - gs[i].sum(0), rcond=None)[0][:p]
-                    for i in blocks])  # fmt: skip
-    B = len(blocks)
-    return np.sqrt((B - 1) / B) * (est - est.mean(axis=0))
-
-
-def jackknife_cov(A, b, w, k: int, n: int, blocks: list[np.ndarray], p: int = 10, prior=None):
-    """(p, p) delete-a-block jackknife covariance of the first p unknowns of the LS fit."""
-    R = jackknife_replicates(A, b, w, k, n, blocks, p, prior)
-    return R.T @ R
 
 
 def _refuse_flat(flat_vectors: np.ndarray, ratio: float, p: int) -> None:

@@ -20,7 +20,7 @@ arm's torques are identified from an excitation run, as robot identification doe
   the covariance stays finite.
 
 What ``--arm-model`` carries into a payload's interval: the identification's delete-a-block
-jackknife replicates (``dynamic_uncertainty``), each pushed through the payload's fit, so
+block sandwich replicates (``dynamic_uncertainty``), each pushed through the payload's fit, so
 that the arm model's noise and model error reach the payload's parameters replicate by
 replicate (a per-parameter widening of the 40-odd correlated base parameters' covariance
 overstated the payload's std five times on the Panda). The model's terms are filtered like
@@ -38,6 +38,7 @@ import numpy as np
 import pinocchio as pin
 
 from comgrasp_pin.errors import InvalidInputError, LogError
+from comgrasp_pin.estimation import block_sandwich as bs
 from comgrasp_pin.estimation import dynamic_uncertainty as du
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.from_motion.motion_signals import (
@@ -73,9 +74,9 @@ class ArmModel:
         params: (p + 2 n,) the base parameters, then viscous (N m s/rad) and Coulomb (N m)
             friction per joint.
         cov: their covariance, the white noise's (Laplace, prior included): for a reader.
-        replicates: (B, p + 2 n) delete-a-block jackknife replicates (``dynamic_uncertainty.
-            jackknife_replicates``): how the identification's noise and model error reach
-            a payload estimated with this model, replicate by replicate.
+        replicates: (B, p + 2 n) block sandwich replicates (``estimation.block_sandwich``):
+            how the identification's noise and model error reach a payload estimated with
+            this model, replicate by replicate.
         nominal: (p + 2 n,) the URDF's base parameters (zero friction), for comparison.
         residual_rms_Nm: (n,) on the identification run.
         validation: held-out check on the identification run (``Validation.as_dict``).
@@ -182,7 +183,7 @@ def identify_arm(
     residual = (A @ beta - b).reshape(k, n)
     scale = float(np.mean((residual / sigma) ** 2))  # the rows' noise as the residuals say
     blocks = du.contiguous_blocks(k, du.block_count(float(S.t[-1] - S.t[0])))
-    replicates = du.jackknife_replicates(A, b, w, k, n, blocks, p, (P_inv, prior_mean))
+    replicates = bs.block_sandwich(A, b, w, k, n, blocks, p, (P_inv, prior_mean)).replicates
     cov = scale * laplace
     return ArmModel(
         tuple(robot.joint_names), cols, beta[:p], cov, replicates, nominal,

@@ -19,7 +19,7 @@ The ten parameters are fitted physically consistent (``estimation.inertial_fit``
 estimate as prior where one is given. Where the mass's interval holds zero nothing is held:
 the unconstrained least squares is reported (a consistent body of zero mass does not exist)
 and the verdict says no payload was seen. Uncertainty (``dynamic_uncertainty``): the noise
-and the model's error by a delete-a-block jackknife, the drive gains' and the arm model's
+and the model's error by the block sandwich, the drive gains' and the arm model's
 covariance propagated. Validation: each fifth of the motion predicted from the rest.
 """
 
@@ -117,7 +117,7 @@ def estimate_payload_dynamic(
     joints = _joint_part(system, sigma, fit, gains)
     sources = sole_source(JOINT_TORQUES, motion=True)
     return motion_estimate(robot, fit, m.params_cov, motion, motion_reasons(m.checks), sources,
-                           parts, joint_torques=joints)  # fmt: skip
+                           parts, dof=m.dof, joint_torques=joints)  # fmt: skip
 
 
 def _joint_part(system, sigma, fit, gains_source) -> JointTorques:

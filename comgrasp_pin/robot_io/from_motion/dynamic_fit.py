@@ -1,8 +1,9 @@
 """The payload's weighted least squares from a motion: its error sources, its fit.
 
 ``error_sources`` carries every error source through the weighted least squares of
-``A [pi; x] = b`` (``dynamic_uncertainty``): the noise and the model's error (white noise
-widened by a delete-a-block jackknife), the drive gains' covariance, the arm model's.
+``A [pi; x] = b`` (``dynamic_uncertainty``): the noise and the model's error (the block
+sandwich, CR2), the drive gains' covariance, the arm model's; ``satterthwaite`` pools their
+degrees of freedom for the t quantile of each 95 % interval.
 ``fit_payload`` fits the ten inertial parameters physically consistent where the mass's
 95 % interval is above zero (``estimation.inertial_fit``), and reports the unconstrained
 least squares where it is not (a consistent body of zero mass does not exist).
@@ -21,13 +22,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from comgrasp_pin.estimation import block_sandwich as bs
 from comgrasp_pin.estimation import dynamic_uncertainty as du
 from comgrasp_pin.estimation.inertial_fit import fit_inertial
 from comgrasp_pin.robot_io.from_motion.arm_model import ArmModel
-from comgrasp_pin.robot_io.from_motion.motion_system import about_com
+from comgrasp_pin.robot_io.from_motion.motion_system import about_com, derived_jacobian
 from comgrasp_pin.robot_io.results import trust
 from comgrasp_pin.robot_io.results.estimate_result import Inertia, Motion, PayloadEstimate
-from comgrasp_pin.robot_io.results.trust import Z95, Checks
+from comgrasp_pin.robot_io.results.trust import Checks
 
 
 @dataclass(frozen=True)
@@ -35,13 +37,17 @@ class ErrorSources:
     """Every error source of the parameters [pi; x], linearised through the least squares.
 
     Attributes:
-        factor: (p,) the block jackknife's widening of each parameter's white-noise std
-            (at least 1).
+        factor: (p,) the block sandwich's ratio to each parameter's white-noise std: what
+            the rows' correlation and the model's error add (or take: a white-noise
+            estimate from the residuals is itself an estimate).
         white: (p, p) the parameters' covariance from white noise alone.
         sensitivity: (p, k n) the parameters' change per unit of each weighted row.
         rel_gain_cov: (n, n) the drive gains' relative covariance (zeros without gains).
         gains: (p, p) the covariance from the gains; arm: (p, p) from the arm model (zeros
             without one).
+        sandwich: the block sandwich (its degrees of freedom per contrast).
+        arm_dof: the arm model's blocks less one (its variance's degrees of freedom at most),
+            or inf without an arm model.
     """
 
     factor: np.ndarray
@@ -50,6 +56,8 @@ class ErrorSources:
     rel_gain_cov: np.ndarray
     gains: np.ndarray
     arm: np.ndarray
+    sandwich: bs.BlockSandwich
+    arm_dof: float = np.inf
 
 
 def error_sources(
@@ -73,8 +81,8 @@ def error_sources(
     k, n = shape
     blocks = du.contiguous_blocks(k, du.block_count(duration_s))
     white = du.white_cov(A, b_rows, w)
-    jk = du.jackknife_cov(A, b_rows, w, k, n, blocks)
-    factor = np.sqrt(np.maximum(np.diag(jk) / np.maximum(np.diag(white), 1e-300), 1.0))
+    sandwich = bs.block_sandwich(A, b_rows, w, k, n, blocks)
+    factor = np.sqrt(np.diag(sandwich.cov) / np.maximum(np.diag(white), 1e-300))
     P = du.sensitivity(A, w)
     rel = np.zeros((n, n)) if rel_gain_cov is None else rel_gain_cov
     if b_gain is None:
@@ -82,11 +90,11 @@ def error_sources(
     else:
         J_gain = du.gains_jacobian(P, b_gain)
         cov_gains = J_gain @ rel @ J_gain.T
-    cov_arm = np.zeros((10, 10))
+    cov_arm, arm_dof = np.zeros((10, 10)), np.inf
     if arm_model is not None and arm_jac is not None:
         D = P @ arm_jac @ arm_model.replicates.T  # each replicate's effect on pi
-        cov_arm = D @ D.T
-    return ErrorSources(factor, white, P, rel, cov_gains, cov_arm)
+        cov_arm, arm_dof = D @ D.T, float(len(arm_model.replicates) - 1)
+    return ErrorSources(factor, white, P, rel, cov_gains, cov_arm, sandwich, arm_dof)
 
 
 @dataclass(frozen=True)
@@ -105,24 +113,18 @@ class PayloadFit:
     pi_ls: np.ndarray
 
 
-def fit_payload(
-    A_pi: np.ndarray,
-    A_x: np.ndarray,
-    b_rows: np.ndarray,
-    w: np.ndarray,
-    prior,
-    err: ErrorSources,
-) -> PayloadFit:
+def fit_payload(A_pi: np.ndarray, A_x: np.ndarray, b_rows: np.ndarray, w: np.ndarray, prior,
+                err: ErrorSources, q: float = trust.Z95) -> PayloadFit:  # fmt: skip
     """The payload's parameters: consistent where a payload is seen, else least squares.
 
     The consistent fit (``fit_inertial``, ``prior``: its prior or None) where the mass's
-    95 % interval from the least squares is above zero; else the unconstrained least
-    squares (nothing held).
+    95 % interval from the least squares (half-width ``q`` std) is above zero; else the
+    unconstrained least squares (nothing held).
     """
     pi_ls = err.sensitivity @ b_rows
     data_cov = err.white * np.outer(err.factor, err.factor)
     m_std = np.sqrt(data_cov[0, 0] + err.gains[0, 0] + err.arm[0, 0])
-    if pi_ls[0] - Z95 * m_std > 0:
+    if trust.payload_seen(pi_ls[0], m_std, q):
         fit = fit_inertial(A_pi, A_x, b_rows, w, prior)
         pi, x, status = fit.pi, fit.x, fit.return_status
         data_cov = fit.cov * np.outer(err.factor, err.factor)
@@ -133,12 +135,16 @@ def fit_payload(
     return PayloadFit(pi, x, status, data_cov, pi_ls)
 
 
+DATA_PART = "data and model (block sandwich)"
+"""``std_parts``' name of the data's and the model's part of the mass's std."""
+
+
 def std_parts(data_cov: np.ndarray, err: ErrorSources, gains: bool, arm: bool) -> dict:
     """The mass's std (kg) by source.
 
     Data and model, and the ``gains`` and the ``arm`` model where they were given.
     """
-    parts = {"data and model (block jackknife)": float(np.sqrt(data_cov[0, 0]))}
+    parts = {DATA_PART: float(np.sqrt(data_cov[0, 0]))}
     if gains:
         parts["gains"] = float(np.sqrt(err.gains[0, 0]))
     if arm:
@@ -154,21 +160,28 @@ def motion_estimate(
     findings: list[str],
     sources: dict,
     std_parts: dict,
+    dof: Callable[[np.ndarray], float] | None = None,
     **parts,
 ) -> PayloadEstimate:
     """A motion's ``PayloadEstimate`` from its fit.
 
     pi about the CoM, the verdicts of the mass and CoM and of the inertia (``trust``), the
-    per-source ``parts`` (``joint_torques=``, ``wrench=``).
+    per-source ``parts`` (``joint_torques=``, ``wrench=``). ``dof``: the degrees of freedom
+    of a contrast c (10,) of pi's variance (``MotionFit.dof``), or None (a known variance).
     """
     mass, com, inertia_c, cov4, inertia_cov = about_com(fit.pi, params_cov)
     inertia_std = np.sqrt(np.clip(np.diag(inertia_cov), 0, None)).reshape(3, 3)
-    word, reasons = trust.judge(mass, com, cov4, trust.arm_mass(robot), findings)
-    i_word, i_reasons = trust.inertia_verdict(inertia_c, inertia_cov)
+    D = derived_jacobian(fit.pi)
+    dofs = np.array([np.inf if dof is None else dof(c) for c in D])
+    inertia_dof = float(dofs[4:][[0, 1, 2, 4, 5, 8]].min())  # its six distinct entries
+    q = trust.t95(dofs[:4])
+    word, reasons = trust.judge(mass, com, cov4, trust.arm_mass(robot), findings, q[0])
+    i_word, i_reasons = trust.inertia_verdict(inertia_c, inertia_cov, trust.t95(inertia_dof))
+    params_dof = np.array([np.inf if dof is None else dof(c) for c in np.eye(10)])
     inertia = Inertia(inertia_c, inertia_cov, inertia_std, fit.pi, params_cov, fit.pi_ls,
-                      i_word, i_reasons)  # fmt: skip
+                      i_word, i_reasons, inertia_dof, params_dof)  # fmt: skip
     return PayloadEstimate(mass, com, cov4, robot.ee_frame, word, reasons, sources, std_parts,
-                           motion=motion, inertia=inertia, **parts)  # fmt: skip
+                           motion=motion, inertia=inertia, dof=dofs[:4], **parts)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -203,6 +216,22 @@ class MotionFit:
     validation: du.Validation
     checks: Checks
     extra_cov: np.ndarray | None = None
+
+    def dof(self, c: np.ndarray) -> float:
+        """The degrees of freedom of the variance of c pi (c: (10,)); ``satterthwaite``."""
+        extra = 0.0 if self.extra_cov is None else self.extra_cov
+        return satterthwaite(c, self.fit.data_cov, self.err, extra)
+
+
+def satterthwaite(c: np.ndarray, data_cov: np.ndarray, err: ErrorSources, extra=0.0) -> float:
+    """The degrees of freedom of c pi's variance, its parts pooled (``bs.pooled_dof``).
+
+    The data's part has the block sandwich's (``BlockSandwich.dof``), the arm model's its own
+    blocks less one; the gains' and a known tool's (``extra``) are stated (infinite).
+    """
+    return bs.pooled_dof([(float(c @ data_cov @ c), err.sandwich.dof(c)),
+                          (float(c @ err.arm @ c), err.arm_dof),
+                          (float(c @ (err.gains + extra) @ c), np.inf)])  # fmt: skip
 
 
 def fit_motion(
@@ -239,7 +268,10 @@ def fit_motion(
                                         rel_gain_cov, arm_model, arm_jac))  # fmt: skip
     extra = None if extra_cov is None else extra_cov(err)
     err_fit = err if extra is None else replace(err, arm=err.arm + extra)
-    fit = fit_payload(rows.A_pi, rows.A_x, rows.b, rows.w, prior, err_fit)
+    e_mass = np.eye(10)[0]
+    q_mass = trust.t95(satterthwaite(e_mass, err.white * np.outer(err.factor, err.factor), err,
+                                     0.0 if extra is None else extra))  # fmt: skip
+    fit = fit_payload(rows.A_pi, rows.A_x, rows.b, rows.w, prior, err_fit, q_mass)
     params_cov = fit.data_cov + err.gains + err.arm
     if extra is not None:
         params_cov = params_cov + extra

@@ -14,7 +14,7 @@ the noise stays on the left (the currents on the regressor side would pull a gai
 joint sees little payload towards zero: 7 % on a UR5's wrist 3 in MuJoCo), and
 Gauss-Newton (``GN_ITERATIONS``, from the linear estimate) gives every gain, the payload's
 other nine parameters and the offsets. The gains' covariance: the white Laplace widened by
-the same delete-a-block jackknife as a payload's (``dynamic_uncertainty``), plus the
+the same block sandwich as a payload's (``dynamic_uncertainty``), plus the
 known mass's own uncertainty.
 The payload's CoM and inertia need not be known; the motion must excite each joint.
 """
@@ -27,6 +27,7 @@ from statistics import NormalDist
 import numpy as np
 
 from comgrasp_pin.errors import EmptyGripperError, InvalidInputError
+from comgrasp_pin.estimation import block_sandwich as bs
 from comgrasp_pin.estimation import dynamic_uncertainty as du
 from comgrasp_pin.estimation.payload_regressor import regressor_rows
 from comgrasp_pin.robot import RobotModel
@@ -130,7 +131,7 @@ def calibrate_gains(
     M, model = _current_model(theta, Y, d_rnea.reshape(-1), O, known_mass_kg, n)
     b_lin = y - model + M @ theta  # the linearised problem whose solution is theta
     white = du.white_cov(M, b_lin, w, n)
-    jk = du.jackknife_cov(M, b_lin, w, k, n, blocks, n)
+    jk = bs.block_cov(M, b_lin, w, k, n, blocks, n)
     factor = np.sqrt(np.maximum(np.diag(jk) / np.maximum(np.diag(white), 1e-300), 1.0))
     c = theta[:n]
     dc_dm = -du.sensitivity(M, w, n) @ (np.tile(c, k) * Y[:, 0])  # d model / d m0
@@ -171,7 +172,7 @@ def _payload_shows(d_tau, d_rnea, Y, O, blocks, known_mass_kg: float, loaded, em
     excludes 0), asked here of the plain subtraction with the gains the logs were read with
     (``d_tau``, (k, n) N m, loaded minus empty): the mass fitted with the payload's nine
     other parameters and the offsets. Its std is the larger of the fit's own (white,
-    widened by the same delete-a-block jackknife as the gains') and the one the two runs'
+    widened by the same block sandwich as the gains') and the one the two runs'
     own sensor noise gives (``_sensor_noise``): a difference of two recordings carries the
     noise of both, except where the two are the same samples, whose difference has none
     and whose residuals would call a resampling error of 1e-5 N m a payload. Gains within a
@@ -188,7 +189,7 @@ def _payload_shows(d_tau, d_rnea, Y, O, blocks, known_mass_kg: float, loaded, em
     noise = np.hypot(_sensor_noise(loaded, cutoff_hz), _sensor_noise(empty, cutoff_hz))
     w = np.tile(1.0 / noise, k)
     mass = float(np.linalg.lstsq(A * w[:, None], b * w, rcond=None)[0][0])
-    var = max(du.white_cov(A, b, w, 1)[0, 0], du.jackknife_cov(A, b, w, k, n, blocks, 1)[0, 0],
+    var = max(du.white_cov(A, b, w, 1)[0, 0], bs.block_cov(A, b, w, k, n, blocks, 1)[0, 0],
               float(np.sum((du.sensitivity(A, w, 1)[0] * np.tile(noise, k)) ** 2)))  # fmt: skip
     std = float(np.sqrt(var))
     low, high = mass - Z95 * std, mass + Z95 * std

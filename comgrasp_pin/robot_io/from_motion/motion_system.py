@@ -70,20 +70,26 @@ def prior_of(est):
     return np.concatenate([[est.mass], est.com_ee]), np.asarray(est.cov, float)
 
 
+def _derived(p: np.ndarray) -> np.ndarray:
+    """(13,) mass, CoM and the inertia about the CoM (flattened) of the ten parameters p."""
+    m = p[0] if abs(p[0]) > 1e-9 else 1e-9
+    c = p[1:4] / m
+    Ixx, Ixy, Iyy, Ixz, Iyz, Izz = p[4:]
+    I_o = np.array([[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]])
+    I_c = I_o - m * (c @ c * np.eye(3) - np.outer(c, c))  # parallel axis theorem
+    return np.concatenate([[p[0]], c, I_c.ravel()])
+
+
+def derived_jacobian(pi: np.ndarray) -> np.ndarray:
+    """(13, 10) d (mass, CoM, inertia about the CoM) / d pi, by central differences."""
+    steps = np.diag(1e-6 * np.maximum(np.abs(pi), 1e-6))
+    return np.column_stack([(_derived(pi + h) - _derived(pi - h)) / (2 * h[i])
+                            for i, h in enumerate(steps)])  # fmt: skip
+
+
 def about_com(pi: np.ndarray, cov: np.ndarray):
     """Mass, CoM, inertia about the CoM and their covariances (the delta method)."""
-
-    def derived(p):
-        m = p[0] if abs(p[0]) > 1e-9 else 1e-9
-        c = p[1:4] / m
-        Ixx, Ixy, Iyy, Ixz, Iyz, Izz = p[4:]
-        I_o = np.array([[Ixx, Ixy, Ixz], [Ixy, Iyy, Iyz], [Ixz, Iyz, Izz]])
-        I_c = I_o - m * (c @ c * np.eye(3) - np.outer(c, c))  # parallel axis theorem
-        return np.concatenate([[p[0]], c, I_c.ravel()])
-
-    value = derived(pi)
-    steps = np.diag(1e-6 * np.maximum(np.abs(pi), 1e-6))
-    D = np.column_stack([(derived(pi + h) - derived(pi - h)) / (2 * h[i])
-                         for i, h in enumerate(steps)])  # fmt: skip
+    value = _derived(pi)
+    D = derived_jacobian(pi)
     C = D @ cov @ D.T
     return float(value[0]), value[1:4], value[4:].reshape(3, 3), C[:4, :4], C[4:, 4:]

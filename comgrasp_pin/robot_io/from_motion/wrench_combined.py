@@ -2,11 +2,11 @@
 
 Per kept sample the six wrench rows (``wrench_system``) come first, then the n joint-torque
 rows of the same sample (``payload_system``), so that the stacked system keeps the sample-major
-layout the fit, the jackknife and the validation expect (k samples of r = 6 + n rows). The
+layout the fit, the block sandwich and the validation expect (k samples of r = 6 + n rows). The
 payload's ten parameters (ee frame) are shared; each source keeps its own extra unknowns (the
 sensor's bias, drift and delay; the joints' offsets, drift, friction and delay) and its own
 row weights: 1 / its noise per row (from a first plain fit of that source alone) times its
-own block jackknife's widening (``reweighted``).
+own block sandwich's widening (``reweighted``).
 
 What each source contributed (``contributions``): with F_s the information about the ten
 parameters that source s's rows carry once its own extras are fitted (the Schur complement of
@@ -16,7 +16,7 @@ g has variance g^T C g = sum_s g^T C F_s C g: source s's share is g^T C F_s C g 
 each principal moment (about the estimate's principal axes).
 
 Whether the sources agree (``agreement``): each source alone fitted (unconstrained least
-squares, its covariance widened by its own block jackknife), and the mass and first moments
+squares, its covariance widened by its own block sandwich), and the mass and first moments
 (m, m c) compared, chi-square with 4 degrees of freedom.
 """
 
@@ -27,16 +27,19 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from comgrasp_pin.errors import UnobservableError
+from comgrasp_pin.estimation.block_sandwich import pooled_dof
 from comgrasp_pin.robot_io.from_motion.arm_model import ArmModel
-from comgrasp_pin.robot_io.from_motion.dynamic_fit import error_sources
+from comgrasp_pin.robot_io.from_motion.dynamic_fit import error_sources, satterthwaite
 from comgrasp_pin.robot_io.from_motion.motion_system import about_com, row_noise
 from comgrasp_pin.robot_io.from_motion.payload_system import PayloadSystem
 from comgrasp_pin.robot_io.from_motion.wrench_system import WrenchSystem
 from comgrasp_pin.robot_io.results.estimate_result import JOINT_TORQUES, PRIOR, WRENCH
 
-MAX_SOURCES_CHI2 = 16.25
-"""Largest chi-square (4 degrees of freedom) of the two sources' (m, m c) difference before they
-are said to disagree: its 99.73 % quantile, the false-alarm rate of the halves' 3 std rule."""
+DISAGREE_P = 0.0027
+"""The false-alarm rate of the sources' agreement test, the halves' 3 std rule's: the two
+sources' mass or a first moment (m c) is said to differ where its difference exceeds Student's
+t quantile of its variance's degrees of freedom at DISAGREE_P / 4 two-sided (Bonferroni over the
+four; 3.2 std where the degrees of freedom are many, 6.1 at 6, 12 at 3)."""
 
 
 @dataclass(frozen=True)
@@ -162,9 +165,10 @@ def contributions(st: Stacked, pi: np.ndarray, prior=None) -> dict:
 
 
 def alone(st: Stacked, name: str, duration_s: float, arm_model: ArmModel | None = None):
-    """Source ``name``'s rows alone: ((10,) pi, (10, 10) its covariance, its widening).
+    """Source ``name``'s rows alone: (pi, its covariance, its widening, m and m c's dof).
 
-    The widening is the rms over the ten parameters of its block jackknife's widening of
+    pi (10,), its covariance (10, 10), the degrees of freedom (4,) of m and m c's variances.
+    The widening is the rms over the ten parameters of its block sandwich's widening of
     their white-noise std (``dynamic_fit.ErrorSources.factor``). Where the rows do not
     determine pi, the reason (a string) instead.
     """
@@ -180,18 +184,19 @@ def alone(st: Stacked, name: str, duration_s: float, arm_model: ArmModel | None 
                             None, arm_model, arm_jac)  # fmt: skip
     except UnobservableError as exc:
         return f"{name} alone: {exc}"
-    cov = err.white * np.outer(err.factor, err.factor) + err.arm
-    return err.sensitivity @ b, cov, float(np.sqrt(np.mean(err.factor**2)))
+    data_cov = err.white * np.outer(err.factor, err.factor)
+    dof = np.array([satterthwaite(c, data_cov, err) for c in np.eye(10)[:4]])
+    return err.sensitivity @ b, data_cov + err.arm, float(np.sqrt(np.mean(err.factor**2))), dof
 
 
 def reweighted(st: Stacked, fits: dict) -> Stacked:
-    """``st`` with each source's rows weighted by 1 / (noise x its own jackknife widening).
+    """``st`` with each source's rows weighted by 1 / (noise x its own sandwich widening).
 
     A source whose errors are correlated over seconds (a friction the model lacks, an arm
     model's error) carries less information than its white noise says; weighted by its white
     noise alone it would pull the joint fit by more than it knows. The weights are then
     scaled together so that the weighted residuals of a plain fit have unit variance, as the
-    fit's covariance (``fit_payload``: the inverse Hessian, widened by the jackknife over the
+    fit's covariance (``fit_payload``: the inverse Hessian, widened by the sandwich over the
     white-noise covariance) expects. One source alone: unchanged.
     """
     usable = {n: f for n, f in fits.items() if not isinstance(f, str)}
@@ -209,8 +214,18 @@ def reweighted(st: Stacked, fits: dict) -> Stacked:
     return replace(st, w=w / np.sqrt(s2))
 
 
+def agreement_limit(nu: np.ndarray) -> np.ndarray:
+    """(4,) the largest |difference| / std of each of m, m c before the sources disagree."""
+    from scipy.stats import t
+
+    return t.ppf(1 - DISAGREE_P / 8, np.where(np.isfinite(nu), nu, 1e12))
+
+
 def agreement(fits: dict, tool_cov: np.ndarray) -> dict | None:
-    """chi-square of the two sources' (m, m c) difference, or None with fewer than two fits.
+    """The two sources' (m, m c) difference against its std, or None with fewer than two fits.
+
+    ``z``: each difference over its std; ``max_z``: ``agreement_limit`` of their degrees of
+    freedom (pooled, ``pooled_dof``); ``chi2``: the four together, for a reader.
 
     ``fits``: source -> ``alone``'s result; ``tool_cov`` (10, 10) is added to the wrench's
     (the tool subtracted from its rows only).
@@ -218,10 +233,15 @@ def agreement(fits: dict, tool_cov: np.ndarray) -> dict | None:
     usable = {k: v for k, v in fits.items() if not isinstance(v, str)}
     if len(usable) < 2:
         return None
-    (pw, cw, _), (pj, cj, _) = usable[WRENCH], usable[JOINT_TORQUES]
+    (pw, cw, _, nw), (pj, cj, _, nj) = usable[WRENCH], usable[JOINT_TORQUES]
     d = pw[:4] - pj[:4]
     chi2 = float(d @ np.linalg.solve((cw + tool_cov + cj)[:4, :4], d))
-    return {"chi2": chi2, "dof": 4, "max_chi2": MAX_SOURCES_CHI2,
+    var = np.diag(cw + tool_cov + cj)[:4]
+    nu = np.array([pooled_dof([(cw[i, i], nw[i]), (tool_cov[i, i], np.inf), (cj[i, i], nj[i])])
+                   for i in range(4)])  # fmt: skip
+    z = d / np.sqrt(var)
+    return {"chi2": chi2, "z": z.tolist(), "max_z": agreement_limit(nu).tolist(),
+            "cov_dof": nu.tolist(), "disagree": bool(np.any(np.abs(z) > agreement_limit(nu))),
             "mass_kg": {WRENCH: float(pw[0]), JOINT_TORQUES: float(pj[0])},
             "mass_std_kg": {WRENCH: float(np.sqrt(cw[0, 0] + tool_cov[0, 0])),
                             JOINT_TORQUES: float(np.sqrt(cj[0, 0]))}}  # fmt: skip

@@ -6,7 +6,7 @@ rows, with the sensor's bias, its drift over the motion (a cubic per axis, as th
 torques' offsets) and the wrench's delay behind the positions unknown alongside. The fit, its
 error bars, the validation and the verdict are the joint-torque path's (``dynamic``): weights
 per axis from the residual noise, a physically consistent fit (``fit_payload``), a
-delete-a-block jackknife for the noise and the model's error, each fifth of the motion
+block sandwich for the noise and the model's error, each fifth of the motion
 predicted from the rest, the two halves compared, and nothing held where the mass's 95 %
 interval holds zero.
 
@@ -149,7 +149,7 @@ def estimate_wrench_dynamic(
     return motion_estimate(robot, fit, m.params_cov, motion, findings,
                            wc.contributions(st, fit.pi, prior_of(prior)),
                            wf.std_parts(fit.data_cov, cov_tool, tool, err.arm if arm else None),
-                           joint_torques=joints,
+                           dof=m.dof, joint_torques=joints,
                            wrench=wrench)  # fmt: skip
 
 

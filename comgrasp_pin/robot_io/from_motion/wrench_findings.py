@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from comgrasp_pin.estimation import block_sandwich as bs
 from comgrasp_pin.estimation import dynamic_uncertainty as du
 from comgrasp_pin.robot_io.from_motion import wrench_combined as wc
+from comgrasp_pin.robot_io.from_motion.dynamic_fit import DATA_PART
 from comgrasp_pin.robot_io.from_motion.motion_system import DRIFT_DEGREE
 from comgrasp_pin.robot_io.from_motion.payload_system import NOMINAL
 from comgrasp_pin.robot_io.results.estimate_result import TOOL_NOMINAL, JointTorques
@@ -31,7 +33,7 @@ def tool_cov(P: np.ndarray, st: wc.Stacked, cov: np.ndarray) -> np.ndarray:
 
 def std_parts(data_cov, cov_tool, tool, cov_arm) -> dict:
     """The mass's std (kg) by source: the data and the model, the tool, the arm model."""
-    parts = {"data and model (block jackknife)": float(np.sqrt(data_cov[0, 0]))}
+    parts = {DATA_PART: float(np.sqrt(data_cov[0, 0]))}
     if tool.cov.any():
         parts[f"tool ({tool.source})"] = float(np.sqrt(cov_tool[0, 0]))
     if cov_arm is not None:
@@ -43,13 +45,13 @@ def sensor_bias(A, b, w, st, duration, x, tool_params_cov):
     """The sensor's bias (mean over the motion), its std, its drift and the wrench's delay.
 
     ``x``: the fit's extra unknowns, the wrench's first (bias, drift, delay); the bias's std
-    from white noise widened by the block jackknife, plus the tool's (``tool_params_cov``).
+    from white noise widened by the block sandwich, plus the tool's (``tool_params_cov``).
     """
     k, r = st.b.shape
     p = 16  # pi and the six biases
     blocks = du.contiguous_blocks(k, du.block_count(duration))
     white = du.white_cov(A, b, w, p)[10:, 10:]
-    jk = du.jackknife_cov(A, b, w, k, r, blocks, p)[10:, 10:]
+    jk = bs.block_cov(A, b, w, k, r, blocks, p)[10:, 10:]
     var = np.maximum(np.diag(white), np.diag(jk))
     var += np.diag(tool_cov(du.sensitivity(A, w, p)[10:], st, tool_params_cov))
     extras = x[: 6 * (1 + DRIFT_DEGREE)].reshape(1 + DRIFT_DEGREE, 6)
@@ -63,11 +65,14 @@ def wrench_reasons(tool, agree, joint_source) -> list[str]:
     ``trust.motion_reasons`` has the ones every motion shares.
     """
     reasons = nominal_tool_reasons(tool.source == TOOL_NOMINAL, float(tool.params[0]))
-    if agree is not None and agree["chi2"] > agree["max_chi2"]:
+    if agree is not None and agree["disagree"]:
         m = agree["mass_kg"]
+        ratio = np.abs(agree["z"]) / np.array(agree["max_z"])
+        i = int(np.argmax(ratio))
         reasons.append(
-            f"the wrench and the joint torques disagree (chi-square {agree['chi2']:.1f} on "
-            f"mass and first moments, at most {agree['max_chi2']:g}; masses {m['wrench']:.3f} "
+            f"the wrench and the joint torques disagree ({['mass', 'm c_x', 'm c_y', 'm c_z'][i]}"
+            f" {abs(agree['z'][i]):.1f} std apart, at most {agree['max_z'][i]:.1f} for its "
+            f"{agree['cov_dof'][i]:.0f} degrees of freedom; masses {m['wrench']:.3f} "
             f"and {m['joint_torques']:.3f} kg): "
             + ("the URDF's model of the arm is the likely cause; give an empty run of the same "
                "motion or an identified arm model, or leave the joint torques out"

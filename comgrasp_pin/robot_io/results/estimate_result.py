@@ -24,7 +24,7 @@ import numpy as np
 from comgrasp_pin.estimation import ComEstimate
 from comgrasp_pin.estimation.dynamic_uncertainty import Validation
 from comgrasp_pin.estimation.wrench import StaticWrenchFit
-from comgrasp_pin.robot_io.results.trust import Z95
+from comgrasp_pin.robot_io.results.trust import t95
 
 JOINT_TORQUES, WRENCH, PRIOR = "joint_torques", "wrench", "prior"
 """The sources' names, as ``PayloadEstimate.sources`` keys them."""
@@ -108,6 +108,9 @@ class Inertia:
         unconstrained_params: (10,) the plain least squares' (maybe not a body).
         verdict: ``identified`` where every principal moment is determined (``trust``),
             else ``not determined``; reasons: why not.
+        dof: the degrees of freedom of the inertia's variance (the fewest of its six
+            entries'), inf where it is known rather than estimated; params_dof: (10,) each
+            parameter's.
     """
 
     inertia_com_ee: np.ndarray
@@ -118,6 +121,13 @@ class Inertia:
     unconstrained_params: np.ndarray
     verdict: str
     reasons: tuple[str, ...] = ()
+    dof: float = np.inf
+    params_dof: np.ndarray = field(default_factory=lambda: np.full(10, np.inf))
+
+    @property
+    def t95(self) -> float:
+        """The 95 % quantile a principal moment's std is multiplied by (``trust.t95``)."""
+        return t95(self.dof)
 
 
 @dataclass(frozen=True)
@@ -226,9 +236,12 @@ class PayloadEstimate:
             sources. Quantities: "mass_kg" always; "com_m" (3) and, from a motion,
             "principal_moments_kgm2" (3); before/after pairs "first_moment_kgm" (3, m c).
         std_parts: the mass's std (kg) from each error source, where more than one was
-            modelled ({"data and model (block jackknife)": ..., "gains": ...}), else {}.
+            modelled ({"data and model (block sandwich)": ..., "gains": ...}), else {}.
         unobservable_ee: (3,) the direction the CoM was not seen along (one pose), or None.
         at_rest, motion, inertia, joint_torques, wrench: the parts (module docstring).
+        dof: (4,) the degrees of freedom of the variances of (mass, com_ee): few where they
+            were estimated from a motion's blocks, inf where the variance is known or came
+            from many readings; the 95 % intervals take Student's t of them (``t95``).
     """
 
     mass: float
@@ -245,6 +258,7 @@ class PayloadEstimate:
     inertia: Inertia | None = None
     joint_torques: JointTorques | None = None
     wrench: Wrench | None = None
+    dof: np.ndarray = field(default_factory=lambda: np.full(4, np.inf))
 
     @property
     def std(self) -> np.ndarray | None:
@@ -254,12 +268,23 @@ class PayloadEstimate:
         return np.sqrt(np.clip(np.diag(self.cov), 0, None))
 
     @property
+    def t95(self) -> np.ndarray:
+        """(4,) the 95 % quantiles of (mass, com_ee): Student's t of ``dof``."""
+        return np.atleast_1d(t95(self.dof))
+
+    @property
+    def interval95_halfwidth(self) -> np.ndarray | None:
+        """(4,) the 95 % intervals' half-widths of (mass, com_ee) (kg, m), or None."""
+        std = self.std
+        return None if std is None else self.t95 * std
+
+    @property
     def interval95_mass(self) -> tuple[float, float] | None:
         """The mass's 95 % interval (kg), or None without a covariance."""
-        std = self.std
-        if std is None:
+        half = self.interval95_halfwidth
+        if half is None:
             return None
-        return self.mass - Z95 * float(std[0]), self.mass + Z95 * float(std[0])
+        return self.mass - float(half[0]), self.mass + float(half[0])
 
     @property
     def mode(self) -> str:

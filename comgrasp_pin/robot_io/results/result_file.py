@@ -19,7 +19,6 @@ import numpy as np
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.estimation.payload_regressor import PARAMETER_NAMES
 from comgrasp_pin.robot_io.results import estimate_result as er
-from comgrasp_pin.robot_io.results.trust import Z95
 
 SCHEMA_VERSION = 2
 """Raised at every change of a key's name or meaning (CHANGELOG). 1: the files before it."""
@@ -36,9 +35,14 @@ def _list(values) -> list | None:
     return out.tolist()
 
 
+def _number(value: float) -> float | None:
+    """A float, or None where it is not finite (JSON has no inf)."""
+    return float(value) if np.isfinite(value) else None
+
+
 def result_dict(est: er.PayloadEstimate) -> dict:
     """The RESULT.json contents of ``est``."""
-    std = est.std
+    std, half = est.std, est.interval95_halfwidth
     held = bool(np.all(np.isfinite(est.com_ee)))
     interval = est.interval95_mass
     out = {
@@ -53,8 +57,11 @@ def result_dict(est: er.PayloadEstimate) -> dict:
             "mass_kg_by_source": est.std_parts or None,
         },
         "interval95_mass_kg": None if interval is None else list(interval),
-        "interval95_com_m": None if std is None or not held else [
-            [float(c - Z95 * s), float(c + Z95 * s)] for c, s in zip(est.com_ee, std[1:])],
+        "interval95_com_m": None if half is None or not held else [
+            [float(c - h), float(c + h)] for c, h in zip(est.com_ee, half[1:])],
+        "dof": {"mass": _number(est.dof[0]), "com": _list(est.dof[1:]) if held else None,
+                "about": "degrees of freedom of each variance; the 95 % intervals are "
+                         "Student's t of them (null: known, the normal's 1.96)"},
         "verdict": est.verdict,
         "reasons": list(est.reasons),
         "sources": est.sources,
@@ -100,6 +107,7 @@ def _inertia(i: er.Inertia) -> dict:
     return {
         "verdict": i.verdict, "reasons": list(i.reasons),
         "inertia_kgm2": _list(i.inertia_com_ee), "inertia_std_kgm2": _list(i.inertia_std),
+        "inertia_dof": _number(i.dof), "inertia_t95": i.t95,
         "inertia_about": "the CoM, axes of frame",
         "params": dict(zip(PARAMETER_NAMES, i.params.tolist(), strict=True)),
         "params_cov": _list(i.params_cov),
@@ -131,7 +139,9 @@ def _wrench(w: er.Wrench) -> dict:
                  "com_sensor_m": _list(w.tool_com_sensor)},
         "noise_from": w.noise_from, "wrench_std": _list(w.wrench_std),
         "residual_rms": _list(w.residual_rms), "wrench_delay_s": w.delay_s,
-        "agreement": w.agreement, "alone_refused": w.alone_refused or None,
+        "agreement": None if w.agreement is None else {
+            **w.agreement, "cov_dof": _list(w.agreement["cov_dof"])},
+        "alone_refused": w.alone_refused or None,
     }  # fmt: skip
     if w.fit is not None:  # at rest: the fit in the sensor frame, what --tool reads back
         fit = w.fit

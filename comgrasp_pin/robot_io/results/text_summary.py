@@ -43,6 +43,11 @@ def _head(est: PayloadEstimate) -> str:
     return text
 
 
+def _student(dof: float) -> str:
+    """The interval's words where the variance was estimated from few blocks, else ''."""
+    return f", Student's t, {dof:.0f} dof" if np.isfinite(dof) else ""
+
+
 def _mass_and_com(est: PayloadEstimate) -> list[str]:
     std, interval = est.std, est.interval95_mass
     if std is None or interval is None:
@@ -50,7 +55,8 @@ def _mass_and_com(est: PayloadEstimate) -> list[str]:
         std = np.full(4, np.nan)
     else:
         lo, hi = interval
-        lines = [f"  mass  {est.mass:.4f} +- {std[0]:.4f} kg (std; 95 %: {lo:.3f} to {hi:.3f} kg)"]
+        lines = [f"  mass  {est.mass:.4f} +- {std[0]:.4f} kg (std; 95 %: {lo:.3f} to {hi:.3f} kg"
+                 f"{_student(est.dof[0])})"]  # fmt: skip
     if est.std_parts:
         lines.append("        std by source: "
                      + ", ".join(f"{k} {v:.4f}" for k, v in est.std_parts.items()))  # fmt: skip
@@ -67,9 +73,9 @@ def _mass_and_com(est: PayloadEstimate) -> list[str]:
 def _inertia(i: Inertia, frame: str) -> list[str]:
     moments, axes, std = principal_moments(i.inertia_com_ee, i.inertia_cov)
     lines = [f"  principal moments of inertia about the CoM (kg m^2), axes in {frame} "
-             f"(inertia {i.verdict}):"]  # fmt: skip
+             f"(inertia {i.verdict}); std, 95 % half-width{_student(i.dof)}:"]  # fmt: skip
     for value, u, s in zip(moments, axes.T, std):
-        lines.append(f"    {value:.3e} +- {s:.1e}  along {_vec(u)}")
+        lines.append(f"    {value:.3e} +- {s:.1e} (95 %: +- {i.t95 * s:.1e})  along {_vec(u)}")
     return lines + [f"    - {r}" for r in i.reasons]
 
 

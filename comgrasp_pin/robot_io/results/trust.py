@@ -29,7 +29,8 @@ import numpy as np
 from comgrasp_pin.errors import NotIdentifiedError
 
 Z95 = 1.959963984540054
-"""The two-sided 95 % quantile of the standard normal."""
+"""The two-sided 95 % quantile of the standard normal: a variance known, or estimated from
+so many readings that Student's t is the normal (``t95`` of infinite degrees of freedom)."""
 MIN_EXPLAINED = 0.8
 """Smallest share of the held-out readings the payload must explain. Below it they carry
 more than a rigid payload: an arm model or friction that does not hold, a payload that moves
@@ -67,9 +68,23 @@ class Checks:
     halves_diff_std_kg: float
 
 
-def payload_seen(mass: float, mass_std: float) -> bool:
-    """True where the mass's 95 % interval lies above 0."""
-    return mass - Z95 * mass_std > 0
+def t95(dof):
+    """The two-sided 95 % quantile of Student's t with ``dof`` degrees of freedom.
+
+    A variance estimated from few blocks or windows is itself uncertain: with nu degrees of
+    freedom, (estimate - truth) / std follows Student's t, whose 97.5 % point is 2.23 at
+    nu = 10 and 2.09 at 20 (1.96 at infinity, ``Z95``). ``dof`` a number or an array.
+    """
+    from scipy.stats import t
+
+    dof = np.asarray(dof, dtype=float)
+    q = np.where(np.isfinite(dof), t.ppf(0.975, np.where(np.isfinite(dof), dof, 1.0)), Z95)
+    return float(q) if q.ndim == 0 else q
+
+
+def payload_seen(mass: float, mass_std: float, q: float = Z95) -> bool:
+    """True where the mass's 95 % interval (half-width ``q`` std) lies above 0."""
+    return mass - q * mass_std > 0
 
 
 def motion_reasons(c: Checks) -> list[str]:
@@ -128,6 +143,7 @@ def judge(
     cov: np.ndarray | None,
     arm_mass_kg: float,
     findings: list[str] | tuple[str, ...] = (),
+    q: float = Z95,
 ) -> tuple[str, tuple[str, ...]]:
     """(verdict, reasons) of a mass and CoM: the shared rules, then the mode's ``findings``.
 
@@ -137,6 +153,7 @@ def judge(
         cov: (4, 4) the covariance of (mass, com_ee), or None.
         arm_mass_kg: the mass of the arm that holds it (its URDF's links).
         findings: the mode's own objections (``motion_reasons``, a fit's residuals).
+        q: the mass's 95 % quantile (``t95`` of its variance's degrees of freedom).
     """
     if not np.isfinite(mass) or (cov is not None and not np.isfinite(cov[0, 0])):
         return UNRELIABLE, (NOT_FINITE, *findings)
@@ -154,18 +171,18 @@ def judge(
             "logged in mN or a torque in N mm reads 1000 times too heavy"
         )
     std = float(np.sqrt(max(cov[0, 0], 0.0)))
-    if mass + Z95 * std < 0:
+    if mass + q * std < 0:
         reasons.append(
-            f"the mass comes out negative ({mass:.3f} +- {Z95 * std:.3f} kg): the model of "
+            f"the mass comes out negative ({mass:.3f} +- {q * std:.3f} kg): the model of "
             "what the sensor carries besides the payload predicts more than it measures: "
             "identify the arm (comgrasp identify-arm) or record an empty run (with a wrist "
             "sensor: identify the tool, --keep-tool then --tool)"
         )
     reasons += list(findings)
-    if not payload_seen(mass, std):
-        if mass + Z95 * std < 0:
+    if not payload_seen(mass, std, q):
+        if mass + q * std < 0:
             return UNRELIABLE, tuple(reasons)
-        nothing = (f"no payload seen: the mass's 95 % interval ({mass:.3f} +- {Z95 * std:.3f} "
+        nothing = (f"no payload seen: the mass's 95 % interval ({mass:.3f} +- {q * std:.3f} "
                    "kg) holds 0")  # fmt: skip
         return (UNRELIABLE if reasons else NOTHING_HELD), (nothing, *reasons)
     if not (np.all(np.isfinite(com_ee)) and np.all(np.isfinite(cov))):
@@ -184,21 +201,24 @@ def principal_moments(inertia: np.ndarray, inertia_cov: np.ndarray):
     return moments, axes, std
 
 
-def inertia_verdict(inertia: np.ndarray, inertia_cov: np.ndarray) -> tuple[str, tuple[str, ...]]:
+def inertia_verdict(
+    inertia: np.ndarray, inertia_cov: np.ndarray, q: float = Z95
+) -> tuple[str, tuple[str, ...]]:
     """(``identified`` or ``not determined``, reasons) of a motion's inertia about the CoM.
 
-    Determined where every principal moment's 95 % half-width is below the largest moment:
-    the tensor is then known to better than its own size. (A thin rod's smallest moment is
-    near 0 and need not be resolved; one of 1e-3 kg m^2 known to +-0.1 is not known.)
+    ``q``: the moments' 95 % quantile (``t95``). Determined where every principal moment's 95 %
+    half-width is below the largest moment: the tensor is then known to better than its own
+    size. (A thin rod's smallest moment is near 0 and need not be resolved; one of 1e-3 kg m^2
+    known to +-0.1 is not known.)
     """
     moments, _, std = principal_moments(inertia, inertia_cov)
     largest = float(np.max(moments))
-    if np.all(np.isfinite(std)) and np.all(Z95 * std < largest):
+    if np.all(np.isfinite(std)) and np.all(q * std < largest):
         return IDENTIFIED, ()
     return NOT_DETERMINED, (
         f"the motion did not determine the inertia: principal moments "
         f"{np.array2string(moments, precision=3)} kg m^2 with 95 % half-widths "
-        f"{np.array2string(Z95 * std, precision=2)}; excite the wrist more (comgrasp "
+        f"{np.array2string(q * std, precision=2)}; excite the wrist more (comgrasp "
         "plan-motion) or give the inertia (--inertia)",
     )
 
