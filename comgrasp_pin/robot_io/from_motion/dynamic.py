@@ -39,6 +39,8 @@ from comgrasp_pin.estimation.payload_regressor import (
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.from_motion.arm_model import ArmModel
 from comgrasp_pin.robot_io.from_motion.dynamic_fit import (
+    PIPELINE_PART,
+    MotionFit,
     MotionRows,
     fit_motion,
     motion_estimate,
@@ -50,6 +52,7 @@ from comgrasp_pin.robot_io.from_motion.payload_system import (
     EMPTY_RUN,
     NOMINAL,
     payload_system,
+    pipeline_bias,
 )
 from comgrasp_pin.robot_io.log_files.joint_readers import JointLog
 from comgrasp_pin.robot_io.results.estimate_result import (
@@ -108,16 +111,29 @@ def estimate_payload_dynamic(
     rows = MotionRows(A_pi, A_x, b_rows, np.tile(1.0 / sigma, k), S.t, (k, n))
     rel = du.relative_gain_cov(gain_cov, log.current_gains, n)
     m = fit_motion(rows, prior_of(prior), source, b_gain, rel, arm_model, system.arm_jac)
+    bias = pipeline_bias(robot, log, window, cutoff_hz, m.fit.pi)
+    m = carry(m, np.outer(bias, bias))
     fit, err = m.fit, m.err
     parts = std_parts(fit.data_cov, err, log.current_gains is not None, arm_model is not None)
+    parts[PIPELINE_PART] = abs(float(bias[0]))
     motion = Motion(k, float(S.t[-1] - S.t[0]), S.cutoff_hz, S.velocity_from, fit.status,
                     condition_number(system.Y, parameter_scale()), S.t, m.validation,
-                    m.checks.halves_mass_kg)  # fmt: skip
+                    m.checks.halves_mass_kg, pipeline_bias=bias)  # fmt: skip
     gains = gains_source if log.current_gains is not None else None
     joints = _joint_part(system, sigma, fit, gains)
     sources = sole_source(JOINT_TORQUES, motion=True)
     return motion_estimate(robot, fit, m.params_cov, motion, motion_reasons(m.checks), sources,
                            parts, dof=m.dof, joint_torques=joints)  # fmt: skip
+
+
+def carry(m: MotionFit, cov: np.ndarray) -> MotionFit:
+    """``m`` with a known error's covariance (10, 10) added: stated, infinite dof.
+
+    The pipeline's bias is carried as b b^T, not subtracted: its size is measured on a
+    smoothed stand-in for the true motion (``pipeline_bias``), a size and not a correction.
+    """
+    extra = cov if m.extra_cov is None else m.extra_cov + cov
+    return replace(m, params_cov=m.params_cov + cov, extra_cov=extra)
 
 
 def _joint_part(system, sigma, fit, gains_source) -> JointTorques:

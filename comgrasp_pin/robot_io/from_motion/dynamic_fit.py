@@ -137,6 +137,7 @@ def fit_payload(A_pi: np.ndarray, A_x: np.ndarray, b_rows: np.ndarray, w: np.nda
 
 DATA_PART = "data and model (block sandwich)"
 """``std_parts``' name of the data's and the model's part of the mass's std."""
+PIPELINE_PART = "pipeline bias (measured on the motion)"
 
 
 def std_parts(data_cov: np.ndarray, err: ErrorSources, gains: bool, arm: bool) -> dict:

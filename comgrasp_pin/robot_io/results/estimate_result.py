@@ -83,6 +83,9 @@ class Motion:
         validation: each fifth of the motion predicted from the rest (every row).
         halves_mass: (m1, m2) kg, each half of the motion alone.
         second_log: the payload predicting a second log of the same payload, or None.
+        pipeline_bias: (10,) what the filters and derivatives add to the payload's
+            parameters on this motion (``payload_system.pipeline_bias``; carried in the
+            covariance, not subtracted), or None where not measured (a wrench's rows).
     """
 
     n_samples: int
@@ -95,6 +98,7 @@ class Motion:
     validation: Validation
     halves_mass: tuple[float, float]
     second_log: Validation | None = None
+    pipeline_bias: np.ndarray | None = None
 
 
 @dataclass(frozen=True)

@@ -97,6 +97,7 @@ def _motion(m: er.Motion, wrench: bool) -> dict:
         "velocity_from": m.velocity_from, "solver_status": m.solver_status,
         "condition_number": m.condition_number, "halves_mass_kg": list(m.halves_mass),
         "validation": validation,
+        "pipeline_bias_params": _list(m.pipeline_bias),
         "validation_log": None if m.second_log is None else {
             "rms_Nm": _list(m.second_log.rms_Nm), "explained": _list(m.second_log.explained),
             "explained_total": m.second_log.explained_total},
