@@ -245,6 +245,7 @@ def scores(est, truth) -> dict:
         "dof": dof.tolist(),
         "inside": np.r_[np.abs(err) <= half, np.abs(m_err) <= m_half].tolist(),
         "verdict": est.verdict,
+        "inertia_verdict": None if est.inertia is None else est.inertia.verdict,
     }
 
 
@@ -264,11 +265,20 @@ def summarise(draws: list[dict]) -> dict:
     inside = np.array([d["inside"] for d in draws])
     n = len(draws)
     groups = {"mass": [0], "com": [1, 2, 3], "moments": [4, 5, 6]}
+    determined = np.array([d["inertia_verdict"] == "identified" for d in draws])
     out = {"draws": n, "verdicts": {v: sum(d["verdict"] == v for d in draws)
                                     for v in {d["verdict"] for d in draws}}}  # fmt: skip
+    out["inertia_identified"] = int(determined.sum())
     for name, cols in groups.items():
         if np.all(np.isnan(z[:, cols])):
             continue  # no inertia at rest
+        if name == "moments" and determined.any():  # where the inertia was determined
+            sel = z[determined][:, cols]
+            out["moments_where_identified"] = {
+                "draws": int(determined.sum()),
+                "coverage": float(inside[determined][:, cols].mean()),
+                "rms_score": float(np.sqrt(np.mean(score[determined][:, cols] ** 2))),
+                "rms_z": float(np.sqrt(np.mean(sel**2)))}  # fmt: skip
         k = int(inside[:, cols].sum())
         total = inside[:, cols].size
         out[name] = {"coverage": k / total, "coverage_ci95": wilson(k, total),
@@ -296,7 +306,18 @@ def markdown(results: dict) -> str:
                          f"{c['rms_z']:.2f}, {c['rms_score']:.2f}, {c['bias_z']:+.2f}, "
                          f"{c['median_dof']:.0f}".replace("inf", "∞"))  # fmt: skip
         verdicts = ", ".join(f"{n} {v}" for v, n in sorted(r["verdicts"].items()))
-        lines.append(f"| `{row}` | {verdicts} | " + " | ".join(cells) + " |")
+        if "moments" in r:
+            verdicts += f"; inertia identified {r['inertia_identified']}"
+            w = r.get("moments_where_identified")
+            if w:
+                cells_w = (
+                    f" (inertia identified: {100 * w['coverage']:.0f} %, {w['rms_score']:.2f})"
+                )
+            else:
+                cells_w = ""
+        else:
+            cells_w = ""
+        lines.append(f"| `{row}` | {verdicts} | " + " | ".join(cells) + cells_w + " |")
     return "\n".join(lines)
 
 
