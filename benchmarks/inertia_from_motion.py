@@ -23,6 +23,7 @@ import numpy as np
 
 from comgrasp_pin.planning.excitation import ExcitationSettings, plan_excitation
 from comgrasp_pin.robot_io.from_motion.dynamic import estimate_payload_dynamic
+from comgrasp_pin.robot_io.results import trust
 from comgrasp_pin.simulation.arm_worlds import arm_robot
 from comgrasp_pin.simulation.payload_motion import simulate_motion
 from comgrasp_pin.simulation.payloads import reference_payloads
@@ -69,6 +70,9 @@ def run_arm(arm: str, runs: int, settings: ExcitationSettings) -> dict:
                 "z_com": ((est.com_ee - p.p_com_ee) / m_std[1:]).tolist(),
                 "z_moments": ((moments - true) / moment_std).tolist(),
                 "z_params": z_params.tolist(),
+                "q_mass": float(est.t95[0]), "q_com": est.t95[1:].tolist(),
+                "q_moments": [est.inertia.t95] * 3,
+                "q_params": trust.t95(est.inertia.params_dof).tolist(),
                 "fit_s": fit_s,
             })  # fmt: skip
     return {"plan_s": plan_s, "condition_number": motion.condition_number,
@@ -87,6 +91,7 @@ def _summary(rows: dict) -> dict:
         mom_abs = np.array([r["moment_err_kgm2"] for r in runs])
         z = {k: np.array([r[k] for r in runs]) for k in ("z_mass", "z_com", "z_moments",
                                                         "z_params")}  # fmt: skip
+        q = {k: np.array([r["q" + k[1:]] for r in runs]) for k in z}  # each interval's t95
         out[name] = {
             "runs": len(runs),
             "true_moments_kgm2": true.tolist(),
@@ -100,8 +105,10 @@ def _summary(rows: dict) -> dict:
             "runs_dominant_within_10pc": float(
                 np.mean(np.all(np.abs(mom_rel[:, dominant]) < 0.1, axis=1))
             ),  # fmt: skip
-            "coverage95": {k: float(np.mean(np.abs(v) < 1.96)) for k, v in z.items()},
-            "coverage95_per_moment": np.mean(np.abs(z["z_moments"]) < 1.96, axis=0).tolist(),
+            "coverage95": {k: float(np.mean(np.abs(v) < q[k])) for k, v in z.items()},
+            "coverage95_per_moment": np.mean(
+                np.abs(z["z_moments"]) < q["z_moments"], axis=0
+            ).tolist(),  # fmt: skip
             "rms_z": {k: float(np.sqrt(np.mean(v**2))) for k, v in z.items()},
             "fit_s_median": float(np.median([r["fit_s"] for r in runs])),
         }

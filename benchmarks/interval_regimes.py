@@ -35,7 +35,8 @@ Rows (``--rows``, comma-separated names; default all the synthetic ones):
   URDF tool's gravity wrench, a bias, 200 samples per window of 0.1 N and 0.005 N m white
   noise, the tool known (``estimate_wrench_static``): no inertia;
 - ``mujoco_ur5``, ``mujoco_panda``: the three reference payloads in turn, played in MuJoCo
-  (1 ms step) with the realistic torque sensor, and an empty run;
+  (1 ms step) with the realistic torque sensor, and an empty run; ``mujoco_ur5_0.25ms``,
+  ``mujoco_panda_0.25ms``: the same at a 0.25 ms step;
 - ``mujoco_ur5_wrench``, ``mujoco_ur5_both``: the same on the UR5 with the realistic wrist
   sensor (FT 300-S class): the wrench alone (the tool from the empty run), and the wrench
   stacked with the joint torques.
@@ -69,7 +70,8 @@ SYNTHETIC = ("white_0.005", "white_0.05", "white_0.5", "correlated_0.2s", "gains
              "gains_per_joint", "urdf_model", "urdf_wrong_2_links", "arm_model",
              "urdf_model_friction_shape", "arm_model_friction_shape", "static_joint_torques",
              "static_wrench")  # fmt: skip
-MUJOCO = ("mujoco_ur5", "mujoco_panda", "mujoco_ur5_wrench", "mujoco_ur5_both")
+MUJOCO = ("mujoco_ur5", "mujoco_panda", "mujoco_ur5_0.25ms", "mujoco_panda_0.25ms",
+          "mujoco_ur5_wrench", "mujoco_ur5_both")  # fmt: skip
 GAIN_STD = 0.1
 NOMINAL_GAINS = np.array([10.0, 10.7, 8.5, 9.0, 9.5, 10.1])  # N m / A, a UR10e's order
 
@@ -201,10 +203,11 @@ def mujoco_draw(row: str, motion, draw: int):
     from comgrasp_pin.config import wrench_preset
     from comgrasp_pin.robot_io import estimate_wrench_dynamic
     from comgrasp_pin.simulation.arm_worlds import arm_robot
-    from comgrasp_pin.simulation.payload_motion import simulate_motion
+    from comgrasp_pin.simulation.payload_motion import MotionSimConfig, simulate_motion
     from comgrasp_pin.simulation.payloads import reference_payloads
 
     arm = row.split("_")[1]
+    config = MotionSimConfig(timestep_s=2.5e-4 if row.endswith("0.25ms") else 1e-3)
     payload = reference_payloads()[draw % 3]
     robot = arm_robot(arm)
     args = (motion.t, motion.q, motion.qd, motion.qdd)
@@ -217,8 +220,8 @@ def mujoco_draw(row: str, motion, draw: int):
         both = row.endswith("both")
         return estimate_wrench_dynamic(robot, log, empty_log=empty,
                                        combine_joint_torques=both), truth  # fmt: skip
-    empty = simulate_motion(arm, None, *args, seed=1000 + draw, offsets_seed=draw)
-    log = simulate_motion(arm, payload, *args, seed=draw, offsets_seed=draw)
+    empty = simulate_motion(arm, None, *args, seed=1000 + draw, offsets_seed=draw, config=config)
+    log = simulate_motion(arm, payload, *args, seed=draw, offsets_seed=draw, config=config)
     return estimate_payload_dynamic(robot, log, empty), truth
 
 
@@ -302,9 +305,11 @@ def markdown(results: dict) -> str:
                 continue
             c = r[g]
             lo, hi = c["coverage_ci95"]
+            nu = c["median_dof"]
+            nu_text = "∞" if nu == np.inf else f"{nu:.0f}" if nu < 1000 else "> 1000"
             cells.append(f"{100 * c['coverage']:.0f} % [{100 * lo:.0f}–{100 * hi:.0f}], "
                          f"{c['rms_z']:.2f}, {c['rms_score']:.2f}, {c['bias_z']:+.2f}, "
-                         f"{c['median_dof']:.0f}".replace("inf", "∞"))  # fmt: skip
+                         f"{nu_text}")  # fmt: skip
         verdicts = ", ".join(f"{n} {v}" for v, n in sorted(r["verdicts"].items()))
         if "moments" in r:
             verdicts += f"; inertia identified {r['inertia_identified']}"

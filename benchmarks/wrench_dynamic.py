@@ -68,6 +68,9 @@ def errors(est, p: Payload) -> dict:
         "z_mass": float((est.mass - p.mass) / std[0]),
         "z_com": ((est.com_ee - p.p_com_ee) / std[1:]).tolist(),
         "z_moments": ((moments - true) / m_std).tolist(),
+        "q_mass": float(est.t95[0]),
+        "q_com": est.t95[1:].tolist(),
+        "q_moments": [est.inertia.t95] * 3,
         "verdict": est.verdict,
     }
 
@@ -121,9 +124,9 @@ def summary(rows: list[dict]) -> dict:
                 "com_err_mm_rms": float(1e3 * np.sqrt(np.mean([x["com_err_m"] ** 2 for x in e]))),
                 "moment_err_rel_rms": float(np.sqrt(np.mean(mom**2))) if mom.size else None,
                 "moment_err_kgm2_rms": float(np.sqrt(np.mean(mom_abs**2))),
-                "coverage95_mass": float(np.mean([abs(x["z_mass"]) < 1.96 for x in e])),
-                "coverage95_com": float(np.mean(np.abs(z_com) < 1.96)),
-                "coverage95_moments": float(np.mean(np.abs(z_mom) < 1.96)),
+                "coverage95_mass": float(np.mean([abs(x["z_mass"]) < x["q_mass"] for x in e])),
+                "coverage95_com": float(np.mean(np.abs(z_com) < [x["q_com"] for x in e])),
+                "coverage95_moments": float(np.mean(np.abs(z_mom) < [x["q_moments"] for x in e])),
                 "rms_z_mass": float(np.sqrt(np.mean([x["z_mass"] ** 2 for x in e]))),
                 "rms_z_com": float(np.sqrt(np.mean(z_com**2))),
                 "identified": float(np.mean([x["verdict"] == "identified" for x in e])),

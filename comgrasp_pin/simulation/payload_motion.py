@@ -42,7 +42,7 @@ from comgrasp_pin.config import TorqueSensorConfig, WrenchSensorConfig, sensor_p
 from comgrasp_pin.errors import InvalidInputError, UnstablePhysicsError
 from comgrasp_pin.robot_io.log_files.joint_readers import JointLog
 from comgrasp_pin.robot_io.log_files.log_types import WrenchLog
-from comgrasp_pin.simulation.arm_worlds import SENSOR_FRAME, arm_robot, arm_world
+from comgrasp_pin.simulation.arm_worlds import SENSOR_FRAME, SIM_DT, arm_robot, arm_world
 from comgrasp_pin.simulation.payloads import Payload
 from comgrasp_pin.simulation.torque_sensor import make_torque_sensor
 from comgrasp_pin.simulation.world import FT_SENSORS
@@ -62,6 +62,7 @@ class MotionSimConfig:
         velocity_std: white noise on each logged velocity (rad/s): a drive's filtered
             estimate (assumed).
         max_tracking_error: a run whose servo error exceeds this (rad) is refused.
+        timestep_s: MuJoCo's step (s); the log's rate must divide 1 / timestep_s.
     """
 
     servo_hz: float = 30.0
@@ -70,6 +71,7 @@ class MotionSimConfig:
     position_std: float = 2e-5
     velocity_std: float = 2e-3
     max_tracking_error: float = 0.05
+    timestep_s: float = SIM_DT
 
 
 def simulate_motion(
@@ -121,6 +123,7 @@ def simulate_motion(
     config = config or MotionSimConfig()
     sensor = sensor or sensor_preset("realistic").torque
     model, names, _ = arm_world(arm, payload)
+    model.opt.timestep = config.timestep_s
     robot = arm_robot(arm)
     t, q, qd, qdd = _check_trajectory(t, q, qd, qdd, robot)
     dt = model.opt.timestep
