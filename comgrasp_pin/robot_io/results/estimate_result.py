@@ -85,7 +85,8 @@ class Motion:
         second_log: the payload predicting a second log of the same payload, or None.
         pipeline_bias: (10,) what the filters and derivatives add to the payload's
             parameters on this motion (``payload_system.pipeline_bias``; carried in the
-            covariance, not subtracted), or None where not measured (a wrench's rows).
+            covariance, not subtracted; a wrench's from its own rows, ``wrench_system.
+            wrench_pipeline_bias``), or None where not measured.
     """
 
     n_samples: int
