@@ -121,36 +121,28 @@ what the pipeline's own filters and derivatives do to that band shows (10 and 20
 same bias to 1e-7 kg on a MuJoCo UR5 motion)."""
 
 
-def smoothed_motion(log) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(q, qd, qdd) at the log's times: a stand-in for the true motion (``TRUTH_HZ``).
+def pipeline_bias(robot: RobotModel, log: JointLog, window, cutoff_hz: float,
+                  pi: np.ndarray) -> np.ndarray:  # fmt: skip
+    """(10,) what the pipeline adds to the payload ``pi`` on this log's motion.
 
-    The positions on a uniform grid (the filter needs one), smoothed at ``TRUTH_HZ`` (zero
-    phase), a cubic spline's value and derivatives at the log's own times.
+    A parametric bootstrap: the payload's exact torques along the logged motion (positions
+    on a uniform grid, smoothed at ``TRUTH_HZ``, a cubic spline's derivatives at the log's
+    own times, ``regressor_rows``) go through
+    the same filtering, differentiation, grid and least squares as the log (an empty run of
+    zeros), and come back as pi + bias. The bias is what the filters' passbands and the
+    numerical derivatives do to the payload's torques on this motion; the noise and the
+    arm's model are not in it (they are in the block sandwich).
     """
     from scipy.interpolate import CubicSpline
     from scipy.signal import butter, sosfiltfilt
 
     t = np.asarray(log.time, float)
     step = float(np.median(np.diff(t)))
-    grid = np.arange(t[0], t[-1] + 0.5 * step, step)
+    grid = np.arange(t[0], t[-1] + 0.5 * step, step)  # the filter needs a uniform grid
     q_grid = np.column_stack([np.interp(grid, t, col) for col in np.asarray(log.position).T])
     sos = butter(4, min(TRUTH_HZ, 0.4 / (2 * step)), fs=1.0 / step, output="sos")
     spline = CubicSpline(grid, sosfiltfilt(sos, q_grid, axis=0))
-    return spline(t), spline(t, 1), spline(t, 2)
-
-
-def pipeline_bias(robot: RobotModel, log: JointLog, window, cutoff_hz: float,
-                  pi: np.ndarray) -> np.ndarray:  # fmt: skip
-    """(10,) what the pipeline adds to the payload ``pi`` on this log's motion.
-
-    A parametric bootstrap: the payload's exact torques along the logged motion
-    (``smoothed_motion``, ``regressor_rows``) go through the same filtering,
-    differentiation, grid and least squares as the log (an empty run of zeros), and come
-    back as pi + bias. The bias is what the filters' passbands and the numerical derivatives
-    do to the payload's torques on this motion; the noise and the arm's model are not in it
-    (they are in the block sandwich).
-    """
-    q, qd, qdd = smoothed_motion(log)
+    q, qd, qdd = spline(t), spline(t, 1), spline(t, 2)
     tau = regressor_rows(robot, q, qd, qdd) @ pi
     loaded = replace(log, position=q, effort=tau, current_gains=None,
                      velocity=None if log.velocity is None else qd)  # fmt: skip

@@ -41,9 +41,7 @@ from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.from_motion import wrench_combined as wc
 from comgrasp_pin.robot_io.from_motion import wrench_findings as wf
 from comgrasp_pin.robot_io.from_motion.arm_model import ArmModel
-from comgrasp_pin.robot_io.from_motion.dynamic import carry
 from comgrasp_pin.robot_io.from_motion.dynamic_fit import (
-    PIPELINE_PART,
     MotionRows,
     error_sources,
     fit_motion,
@@ -56,7 +54,6 @@ from comgrasp_pin.robot_io.from_motion.wrench_system import (
     as_joint_log,
     gravity_in_sensor,
     nominal_tool,
-    wrench_pipeline_bias,
     wrench_system,
 )
 from comgrasp_pin.robot_io.log_files.log_types import WrenchLog
@@ -129,10 +126,8 @@ def estimate_wrench_dynamic(
                    arm_model=arm, arm_jac=st.arm_jac,
                    extra_cov=lambda err: wf.tool_cov(err.sensitivity, st, tool.cov),
                    observe=lambda solve: _observable(robot, W, solve))  # fmt: skip
-    cov_tool = m.extra_cov
-    pipe = wrench_pipeline_bias(robot, log, window, cutoff_hz, m.fit.pi)
-    m = carry(m, np.outer(pipe, pipe))
     fit, err, validation = m.fit, m.err, m.validation
+    cov_tool = m.extra_cov
     agree = wc.agreement(fits, tool.cov) if J is not None else None
     findings = motion_reasons(m.checks) + wf.wrench_reasons(tool, agree, J and J.source)
     payload, predicted = (b - A_x @ fit.x).reshape(k, r), (A_pi @ fit.pi).reshape(k, r)
@@ -140,7 +135,7 @@ def estimate_wrench_dynamic(
     motion = Motion(
         k, duration, W.S.cutoff_hz, W.S.velocity_from, fit.status,
         condition_number(A_pi * w[:, None], parameter_scale()), W.S.t, validation,
-        m.checks.halves_mass_kg, pipeline_bias=pipe,
+        m.checks.halves_mass_kg,
     )  # fmt: skip
     wrench = Wrench(
         log.sensor_frame, bias, bias_std, drift, tool=tool.source, tool_params=tool.params,
@@ -153,8 +148,7 @@ def estimate_wrench_dynamic(
     joints = wf.joint_part(J, fit.x, W.A_x.shape[1], st, predicted, payload, note)
     return motion_estimate(robot, fit, m.params_cov, motion, findings,
                            wc.contributions(st, fit.pi, prior_of(prior)),
-                           wf.std_parts(fit.data_cov, cov_tool, tool, err.arm if arm else None)
-                           | {PIPELINE_PART: abs(float(pipe[0]))},
+                           wf.std_parts(fit.data_cov, cov_tool, tool, err.arm if arm else None),
                            dof=m.dof, joint_torques=joints,
                            wrench=wrench)  # fmt: skip
 

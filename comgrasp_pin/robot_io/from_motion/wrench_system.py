@@ -18,13 +18,12 @@ and Phi is computed on the differentiated signals and low-passed by the same fil
 (``parallel_filter``: parallel filtering, so filter(wrench) = filter(Phi) X pi holds exactly).
 
 ``nominal_tool``: the URDF's links beyond the sensor frame, the last resort for the tool's
-own wrench. ``wrench_pipeline_bias``: what these rows' filters and derivatives do to a
-payload on the logged motion.
+own wrench.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
@@ -35,7 +34,6 @@ from comgrasp_pin.robot_io.at_rest.wrench_static import tool_beyond
 from comgrasp_pin.robot_io.from_motion.motion_signals import MotionSamples, motion_samples
 from comgrasp_pin.robot_io.from_motion.motion_system import joint_columns, offset_columns
 from comgrasp_pin.robot_io.from_motion.parallel_filter import delay_column, fast_signals, lowpassed
-from comgrasp_pin.robot_io.from_motion.payload_system import smoothed_motion
 from comgrasp_pin.robot_io.log_files.log_types import JointLog, WrenchLog
 from comgrasp_pin.robot_io.payload_files.payload import T_flange_ee
 
@@ -154,26 +152,6 @@ def wrench_system(
     per_axis = [np.repeat(c[:, :1], 6, axis=1) for c in offset_columns(S)]  # bias, drift
     A_x = np.column_stack([joint_columns(per_axis), delay_column(fast, S)])
     return WrenchSystem(S, A_pi, S.tau.reshape(k, 6), A_x, log.sensor_frame, T_sensor_ee)
-
-
-def wrench_pipeline_bias(robot: RobotModel, log: WrenchLog, window, cutoff_hz: float,
-                         pi: np.ndarray) -> np.ndarray:  # fmt: skip
-    """(10,) what the wrench's pipeline adds to the payload ``pi`` on this log's motion.
-
-    ``payload_system.pipeline_bias`` for the wrench's rows: the payload's exact wrench along
-    the smoothed logged motion (``smoothed_motion``, ``sensor_regressor``), no tool, bias or
-    noise, through ``wrench_system`` and the least squares.
-    """
-    sid, T_sensor_ee = sensor_placement(robot, log.sensor_frame)
-    q, qd, qdd = smoothed_motion(log)
-    truth = MotionSamples(np.asarray(log.time, float), q, qd, qdd, np.zeros_like(q), 0.0, 0.0,
-                          "positions")  # fmt: skip
-    wrench = -sensor_regressor(robot, sid, truth) @ (params_map(T_sensor_ee) @ pi)
-    exact = replace(log, position=q, wrench=wrench, effort=None,
-                    velocity=None if log.velocity is None else qd)  # fmt: skip
-    W = wrench_system(robot, exact, window, cutoff_hz)
-    A = np.column_stack([W.A_pi.reshape(-1, 10), W.A_x])
-    return np.linalg.lstsq(A, W.b.reshape(-1), rcond=None)[0][:10] - pi
 
 
 def nominal_tool(robot: RobotModel, sensor_frame: str) -> np.ndarray:

@@ -85,8 +85,7 @@ class Motion:
         second_log: the payload predicting a second log of the same payload, or None.
         pipeline_bias: (10,) what the filters and derivatives add to the payload's
             parameters on this motion (``payload_system.pipeline_bias``; carried in the
-            covariance, not subtracted; a wrench's from its own rows, ``wrench_system.
-            wrench_pipeline_bias``), or None where not measured.
+            covariance, not subtracted), or None where not measured (a wrench's rows).
     """
 
     n_samples: int
