@@ -201,7 +201,7 @@ def test_result_json_reads_back_and_refuses_other_schemas(robot, tmp_path):
     log, before, after, _ = session(Q3, torques, robot.joint_names, noise=0.05)
     est = estimate_from_log(robot, log, before, after)
     data = read_result(write_result(est, tmp_path / "R.json"))
-    assert data["schema_version"] == 2 and data["mass_kg"] == est.mass
+    assert data["schema_version"] == 3 and data["mass_kg"] == est.mass
     np.testing.assert_allclose(data["cov"], est.cov, rtol=1e-15)
     lo, hi = data["interval95_mass_kg"]
     assert lo < est.mass < hi and hi - lo == pytest.approx(2 * 1.959964 * est.std[0], rel=1e-6)

@@ -47,7 +47,7 @@ def test_python_blocks_run(tmp_path, monkeypatch, capsys):
     assert np.all(np.abs(np.r_[est.mass, est.com_ee] - truth) < 4 * est.std)
     assert est.verdict == "identified" and est.at_rest.fit is not None
     assert (tmp_path / "payload.yaml").is_file() and (tmp_path / "log.csv").is_file()
-    assert json.loads((tmp_path / "RESULT.json").read_text())["schema_version"] == 2
+    assert json.loads((tmp_path / "RESULT.json").read_text())["schema_version"] == 3
     assert "mass" in capsys.readouterr().out
 
 

@@ -50,7 +50,7 @@ def _check_result(path):
     assert set(r) >= {"schema_version", "mass_kg", "com_m", "frame", "cov", "std",
                       "interval95_mass_kg", "verdict", "reasons", "sources", "unobservable",
                       "at_rest", "joint_torques"}  # fmt: skip
-    assert r["schema_version"] == 2 and r["verdict"] == "identified"
+    assert r["schema_version"] == 3 and r["verdict"] == "identified"
     assert set(r["at_rest"]) >= {"n_poses", "q_rad", "windows", "residual_rms"}
     std = np.sqrt(np.diag(r["cov"]))
     assert r["frame"] == "eelink" and r["at_rest"]["n_poses"] == 3 and r["unobservable"] is None

@@ -20,8 +20,10 @@ from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.estimation.payload_regressor import PARAMETER_NAMES
 from comgrasp_pin.robot_io.results import estimate_result as er
 
-SCHEMA_VERSION = 2
-"""Raised at every change of a key's name or meaning (CHANGELOG). 1: the files before it."""
+SCHEMA_VERSION = 3
+"""Raised at every change of a key's name or meaning (CHANGELOG). 1: the files before issue
+41; 2: one schema for every mode; 3: intervals of Student's t and their ``dof``, the block
+sandwich's ``std`` part, the sources' agreement per quantity (issue 42)."""
 BIAS_UNITS = "force_x, force_y, force_z (N), torque_x, torque_y, torque_z (N m)"
 
 
