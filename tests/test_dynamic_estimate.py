@@ -45,17 +45,26 @@ def fourier_motion(robot, duration=16.0, seed=0, amplitude=0.5):
     return t, q, qd, np.gradient(qd, t, axis=0)
 
 
-def rnea_log(robot, inertia, motion, noise=0.05, seed=0, offset=0.2):
-    """The arm's efforts along ``motion`` with ``inertia`` appended at the ee frame."""
+def arm_efforts(robot, inertia, motion, rng, noise=0.05, offset=0.2, coulomb_speed=0.01):
+    """RNEA of the arm with ``inertia`` appended at the ee frame, viscous friction and
+    Coulomb friction 0.3 tanh(qd / coulomb_speed) (the model's shape is 0.02), an offset and
+    white noise."""
     t, q, qd, qdd = motion
-    rng = np.random.default_rng(seed)
     model = pin.Model(robot.model)
     if inertia is not None:
         frame = model.frames[robot.ee_frame_id]
         model.appendBodyToJoint(frame.parentJoint, inertia, frame.placement)
     data = model.createData()
     tau = np.array([pin.rnea(model, data, a, b, c) for a, b, c in zip(q, qd, qdd)])
-    tau += 0.3 * np.tanh(qd / 0.01) + 0.5 * qd + offset + noise * rng.standard_normal(tau.shape)
+    tau += 0.3 * np.tanh(qd / coulomb_speed) + 0.5 * qd + offset
+    return tau + noise * rng.standard_normal(tau.shape)
+
+
+def rnea_log(robot, inertia, motion, noise=0.05, seed=0, offset=0.2):
+    """The arm's efforts along ``motion`` with ``inertia`` appended at the ee frame."""
+    t, q = motion[0], motion[1]
+    rng = np.random.default_rng(seed)
+    tau = arm_efforts(robot, inertia, motion, rng, noise, offset)
     q_read = q + 1e-5 * rng.standard_normal(q.shape)
     return JointLog(t, tuple(robot.joint_names), q_read, tau, "synthetic")
 

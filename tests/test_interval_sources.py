@@ -11,9 +11,8 @@ identified model, a wrist sensor's wrench along a motion.
 """
 
 import numpy as np
-import pinocchio as pin
 import pytest
-from test_dynamic_estimate import MC_PAYLOAD, fourier_motion, normal_score
+from test_dynamic_estimate import MC_PAYLOAD, arm_efforts, fourier_motion, normal_score
 from test_wrench_dynamic import wrench_log
 
 from comgrasp_pin.robot import RobotModel
@@ -37,16 +36,8 @@ def robot():
 
 
 def efforts(robot, inertia, motion, rng, noise=0.05, offset=0.2):
-    """RNEA of the arm (with ``inertia`` at the ee), friction of the model's shape, noise."""
-    t, q, qd, qdd = motion
-    model = pin.Model(robot.model)
-    if inertia is not None:
-        frame = model.frames[robot.ee_frame_id]
-        model.appendBodyToJoint(frame.parentJoint, inertia, frame.placement)
-    data = model.createData()
-    tau = np.array([pin.rnea(model, data, a, b, c) for a, b, c in zip(q, qd, qdd)])
-    tau += 0.3 * np.tanh(qd / COULOMB_SPEED) + 0.5 * qd + offset
-    return tau + noise * rng.standard_normal(tau.shape)
+    """The arm's efforts with friction of the model's own shape (no model error)."""
+    return arm_efforts(robot, inertia, motion, rng, noise, offset, COULOMB_SPEED)
 
 
 def log_of(robot, motion, tau, rng, gains=None):
