@@ -23,6 +23,7 @@ from comgrasp_pin.estimation.payload_regressor import regressor_rows
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.from_motion.alignment import align_empty
 from comgrasp_pin.robot_io.from_motion.arm_model import ArmModel, arm_columns, check_matches
+from comgrasp_pin.robot_io.from_motion.log_grid import on_grid
 from comgrasp_pin.robot_io.from_motion.motion_signals import MotionSamples, motion_samples
 from comgrasp_pin.robot_io.from_motion.motion_system import (
     friction_columns,
@@ -73,15 +74,13 @@ def payload_system(
     arm_model: ArmModel | None,
 ) -> PayloadSystem:
     """The system of ``log`` with the arm's torques from the best source given."""
-    S = motion_samples(robot, log, window, cutoff_hz, crop=empty_log is not None)
+    S, fast, Y = payload_columns(robot, log, window, cutoff_hz, crop=empty_log is not None)
     k, n = S.q.shape
-    fast = fast_signals(robot, log, window, cutoff_hz)
 
     def filtered(terms, source=fast, times=S.t):  # the model's terms filtered like tau
         return lowpassed(source, cutoff_hz, terms, times)
 
     alignment, arm_jac = None, None
-    Y = filtered(lambda F: regressor_rows(robot, F.q, F.qd, F.qdd))
     if empty_log is not None:
         E, found = align_empty(robot, S, empty_log, empty_window, cutoff_hz)
         alignment = found.as_dict()
@@ -107,6 +106,17 @@ def payload_system(
     return PayloadSystem(S, Y, b, b_gain, A_x, len(columns), source, arm_jac, alignment)
 
 
+def payload_columns(robot: RobotModel, log: JointLog, window, cutoff_hz: float, crop: bool):
+    """(S, fast, Y): the kept samples, the signals to differentiate, the payload regressor.
+
+    Y (k, n, 10) is computed on ``fast`` and low-passed like the torques (``lowpassed``).
+    """
+    S = motion_samples(robot, log, window, cutoff_hz, crop=crop)
+    fast = fast_signals(robot, log, window, cutoff_hz)
+    Y = lowpassed(fast, cutoff_hz, lambda F: regressor_rows(robot, F.q, F.qd, F.qdd), S.t)
+    return S, fast, Y
+
+
 def rnea(robot: RobotModel, S: MotionSamples) -> np.ndarray:
     """(k, n) the URDF model's inverse dynamics (RNEA) at the samples (N m)."""
     model, data = robot.model, robot.data
@@ -126,10 +136,10 @@ def pipeline_bias(robot: RobotModel, log: JointLog, window, cutoff_hz: float,
     """(10,) what the pipeline adds to the payload ``pi`` on this log's motion.
 
     A parametric bootstrap: the payload's exact torques along the logged motion (positions
-    on a uniform grid, smoothed at ``TRUTH_HZ``, a cubic spline's derivatives at the log's
-    own times, ``regressor_rows``) go through
-    the same filtering, differentiation, grid and least squares as the log (an empty run of
-    zeros), and come back as pi + bias. The bias is what the filters' passbands and the
+    on a uniform grid, ``log_grid.on_grid``, smoothed at ``TRUTH_HZ``, a cubic spline's
+    derivatives at the log's own times, ``regressor_rows``) go through the same filtering,
+    differentiation, grid and least squares as the log (its offsets fitted, as with an empty
+    run), and come back as pi + bias. The bias is what the filters' passbands and the
     numerical derivatives do to the payload's torques on this motion; the noise and the
     arm's model are not in it (they are in the block sandwich).
     """
@@ -137,16 +147,13 @@ def pipeline_bias(robot: RobotModel, log: JointLog, window, cutoff_hz: float,
     from scipy.signal import butter, sosfiltfilt
 
     t = np.asarray(log.time, float)
-    step = float(np.median(np.diff(t)))
-    grid = np.arange(t[0], t[-1] + 0.5 * step, step)  # the filter needs a uniform grid
-    q_grid = np.column_stack([np.interp(grid, t, col) for col in np.asarray(log.position).T])
-    sos = butter(4, min(TRUTH_HZ, 0.4 / (2 * step)), fs=1.0 / step, output="sos")
+    rate = 1.0 / float(np.median(np.diff(t)))
+    grid, q_grid = on_grid(t, rate, log.position)  # the filter needs a uniform grid
+    sos = butter(4, min(TRUTH_HZ, 0.4 * rate / 2), fs=rate, output="sos")
     spline = CubicSpline(grid, sosfiltfilt(sos, q_grid, axis=0))
     q, qd, qdd = spline(t), spline(t, 1), spline(t, 2)
-    tau = regressor_rows(robot, q, qd, qdd) @ pi
-    loaded = replace(log, position=q, effort=tau, current_gains=None,
-                     velocity=None if log.velocity is None else qd)  # fmt: skip
-    system = payload_system(robot, loaded, replace(loaded, effort=0 * tau), window, window,
-                            cutoff_hz, None)  # fmt: skip
-    A = np.column_stack([system.Y.reshape(-1, 10), system.A_x])
-    return np.linalg.lstsq(A, system.b.reshape(-1), rcond=None)[0][:10] - pi
+    exact = replace(log, position=q, effort=regressor_rows(robot, q, qd, qdd) @ pi,
+                    current_gains=None, velocity=None if log.velocity is None else qd)  # fmt: skip
+    S, _, Y = payload_columns(robot, exact, window, cutoff_hz, crop=True)
+    A = np.column_stack([Y.reshape(-1, 10), joint_columns(offset_columns(S))])
+    return np.linalg.lstsq(A, S.tau.reshape(-1), rcond=None)[0][:10] - pi
