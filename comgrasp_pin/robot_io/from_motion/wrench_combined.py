@@ -33,6 +33,7 @@ from comgrasp_pin.robot_io.from_motion.dynamic_fit import error_sources, sattert
 from comgrasp_pin.robot_io.from_motion.motion_system import about_com, row_noise
 from comgrasp_pin.robot_io.from_motion.payload_system import PayloadSystem
 from comgrasp_pin.robot_io.from_motion.wrench_system import WrenchSystem
+from comgrasp_pin.robot_io.results import trust
 from comgrasp_pin.robot_io.results.estimate_result import JOINT_TORQUES, PRIOR, WRENCH
 
 DISAGREE_P = 0.0027
@@ -216,9 +217,7 @@ def reweighted(st: Stacked, fits: dict) -> Stacked:
 
 def agreement_limit(nu: np.ndarray) -> np.ndarray:
     """(4,) the largest |difference| / std of each of m, m c before the sources disagree."""
-    from scipy.stats import t
-
-    return t.ppf(1 - DISAGREE_P / 8, np.where(np.isfinite(nu), nu, 1e12))
+    return np.atleast_1d(trust.t_quantile(nu, 1 - DISAGREE_P / 4))
 
 
 def agreement(fits: dict, tool_cov: np.ndarray) -> dict | None:
@@ -239,9 +238,9 @@ def agreement(fits: dict, tool_cov: np.ndarray) -> dict | None:
     var = np.diag(cw + tool_cov + cj)[:4]
     nu = np.array([pooled_dof([(cw[i, i], nw[i]), (tool_cov[i, i], np.inf), (cj[i, i], nj[i])])
                    for i in range(4)])  # fmt: skip
-    z = d / np.sqrt(var)
-    return {"chi2": chi2, "z": z.tolist(), "max_z": agreement_limit(nu).tolist(),
-            "cov_dof": nu.tolist(), "disagree": bool(np.any(np.abs(z) > agreement_limit(nu))),
+    z, limit = d / np.sqrt(var), agreement_limit(nu)
+    return {"chi2": chi2, "z": z.tolist(), "max_z": limit.tolist(),
+            "cov_dof": nu.tolist(), "disagree": bool(np.any(np.abs(z) > limit)),
             "mass_kg": {WRENCH: float(pw[0]), JOINT_TORQUES: float(pj[0])},
             "mass_std_kg": {WRENCH: float(np.sqrt(cw[0, 0] + tool_cov[0, 0])),
                             JOINT_TORQUES: float(np.sqrt(cj[0, 0]))}}  # fmt: skip

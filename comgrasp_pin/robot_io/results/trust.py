@@ -68,18 +68,24 @@ class Checks:
     halves_diff_std_kg: float
 
 
-def t95(dof):
-    """The two-sided 95 % quantile of Student's t with ``dof`` degrees of freedom.
+def t_quantile(dof, coverage: float):
+    """The two-sided ``coverage`` quantile of Student's t with ``dof`` degrees of freedom.
 
     A variance estimated from few blocks or windows is itself uncertain: with nu degrees of
-    freedom, (estimate - truth) / std follows Student's t, whose 97.5 % point is 2.23 at
-    nu = 10 and 2.09 at 20 (1.96 at infinity, ``Z95``). ``dof`` a number or an array.
+    freedom, (estimate - truth) / std follows Student's t. Infinite ``dof``: the normal's.
+    ``dof`` a number or an array.
     """
-    from scipy.stats import t
+    from scipy.stats import norm, t
 
     dof = np.asarray(dof, dtype=float)
-    q = np.where(np.isfinite(dof), t.ppf(0.975, np.where(np.isfinite(dof), dof, 1.0)), Z95)
+    p = 0.5 + coverage / 2
+    q = np.where(np.isfinite(dof), t.ppf(p, np.where(np.isfinite(dof), dof, 1.0)), norm.ppf(p))
     return float(q) if q.ndim == 0 else q
+
+
+def t95(dof):
+    """The 95 % quantile (``t_quantile``): 2.23 at nu = 10, 2.09 at 20, ``Z95`` at infinity."""
+    return t_quantile(dof, 0.95)
 
 
 def payload_seen(mass: float, mass_std: float, q: float = Z95) -> bool:
