@@ -80,6 +80,11 @@ class StaticWrenchFit:
     spread_deg: np.ndarray
     held: bool
 
+    @property
+    def cov_dof(self) -> float:
+        """The degrees of freedom of ``cov``: 6 k - 10 where the residuals scaled it, else inf."""
+        return float(6 * self.n_orientations - N_UNKNOWNS) if self.scale > 1 else np.inf
+
 
 def skew(v: np.ndarray) -> np.ndarray:
     """[v]x, the matrix of v x ."""

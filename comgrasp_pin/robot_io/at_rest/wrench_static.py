@@ -38,7 +38,7 @@ import pinocchio as pin
 from comgrasp_pin.errors import InvalidInputError, LogError
 from comgrasp_pin.estimation.drift import difference_covariance
 from comgrasp_pin.estimation.regressor import stacked_regressor
-from comgrasp_pin.estimation.wrench import N_UNKNOWNS, StaticWrenchFit, fit_static_wrench
+from comgrasp_pin.estimation.wrench import StaticWrenchFit, fit_static_wrench
 from comgrasp_pin.estimation.wrench_com import (
     UNKNOWNS,
     T_sensor_ee,
@@ -224,9 +224,7 @@ def _estimate(robot, fit, T_sensor_ee, log, windows, readings, tool, noise_from)
         )
     com_ee = R @ fit.com_sensor + T_ee_sensor[:3, 3]
     cov = _rotated_cov(fit, G)
-    # scaled by the residuals' chi-square: a variance estimated from 6 k - 10 readings' worth
-    dof = 6 * len(fit.residuals) - N_UNKNOWNS if fit.scale > 1 else np.inf
-    verdict, reasons = judge(fit.mass, com_ee, cov, arm_mass(robot), findings, t95(dof))
+    verdict, reasons = judge(fit.mass, com_ee, cov, arm_mass(robot), findings, t95(fit.cov_dof))
     res = fit.residuals
     residual_rms = np.sqrt([np.mean(res[:, :3] ** 2), np.mean(res[:, 3:] ** 2)])
     q = np.array([r.q for r in readings])
@@ -239,7 +237,7 @@ def _estimate(robot, fit, T_sensor_ee, log, windows, readings, tool, noise_from)
     return PayloadEstimate(
         fit.mass, com_ee, cov, robot.ee_frame, verdict, reasons, sole_source(WRENCH),
         at_rest=AtRest(q, {"still": still}, "closed form", "closed_form"), wrench=wrench,
-        dof=np.full(4, float(dof)),
+        dof=np.full(4, fit.cov_dof),
     )  # fmt: skip
 
 
