@@ -11,8 +11,8 @@ Three sources of error enter pi's covariance, each measured or given, never a fa
    M (sum_b A_b^T r_b r_b^T A_b) M. Blocks a few seconds long hold errors that are
    correlated over seconds (friction over a stroke, a mismodelled link over a swing), which
    a white-noise Laplace or a few-lag Newey-West estimate miss; for white rows it is
-   unbiased, where the delete-a-block jackknife (Kuensch 1989, used here before) overstated
-   the variance 1.4 to 2 times. Its ratio to the white-noise variance scales each
+   unbiased, where a delete-a-block jackknife (Kuensch 1989) overstates the variance 1.4
+   to 2 times. Its ratio to the white-noise variance scales each
    parameter's Laplace std. Its variance is estimated from B blocks: Satterthwaite's degrees
    of freedom (``BlockSandwich.dof``) set the t quantile of the 95 % interval.
 2. **The drive gains** (a log of motor currents): the efforts are K_j I_j. A relative error

@@ -131,8 +131,8 @@ def calibrate_gains(
     M, model = _current_model(theta, Y, d_rnea.reshape(-1), O, known_mass_kg, n)
     b_lin = y - model + M @ theta  # the linearised problem whose solution is theta
     white = du.white_cov(M, b_lin, w, n)
-    jk = bs.block_cov(M, b_lin, w, k, n, blocks, n)
-    factor = np.sqrt(np.maximum(np.diag(jk) / np.maximum(np.diag(white), 1e-300), 1.0))
+    block = bs.block_cov(M, b_lin, w, k, n, blocks, n)
+    factor = np.sqrt(np.maximum(np.diag(block) / np.maximum(np.diag(white), 1e-300), 1.0))
     c = theta[:n]
     dc_dm = -du.sensitivity(M, w, n) @ (np.tile(c, k) * Y[:, 0])  # d model / d m0
     cov_c = white * np.outer(factor, factor) + known_mass_std_kg**2 * np.outer(dc_dm, dc_dm)

@@ -51,8 +51,8 @@ def sensor_bias(A, b, w, st, duration, x, tool_params_cov):
     p = 16  # pi and the six biases
     blocks = du.contiguous_blocks(k, du.block_count(duration))
     white = du.white_cov(A, b, w, p)[10:, 10:]
-    jk = bs.block_cov(A, b, w, k, r, blocks, p)[10:, 10:]
-    var = np.maximum(np.diag(white), np.diag(jk))
+    block = bs.block_cov(A, b, w, k, r, blocks, p)[10:, 10:]
+    var = np.maximum(np.diag(white), np.diag(block))
     var += np.diag(tool_cov(du.sensitivity(A, w, p)[10:], st, tool_params_cov))
     extras = x[: 6 * (1 + DRIFT_DEGREE)].reshape(1 + DRIFT_DEGREE, 6)
     drift = 2 * extras[1 : 1 + DRIFT_DEGREE : 2].sum(axis=0)
