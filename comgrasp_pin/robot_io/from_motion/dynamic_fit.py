@@ -59,6 +59,11 @@ class ErrorSources:
     sandwich: bs.BlockSandwich
     arm_dof: float = np.inf
 
+    @property
+    def data_cov(self) -> np.ndarray:
+        """(p, p) the least squares' covariance from the data and the model: white, scaled."""
+        return self.white * np.outer(self.factor, self.factor)
+
 
 def error_sources(
     A: np.ndarray,
@@ -122,7 +127,7 @@ def fit_payload(A_pi: np.ndarray, A_x: np.ndarray, b_rows: np.ndarray, w: np.nda
     unconstrained least squares (nothing held).
     """
     pi_ls = err.sensitivity @ b_rows
-    data_cov = err.white * np.outer(err.factor, err.factor)
+    data_cov = err.data_cov
     m_std = np.sqrt(data_cov[0, 0] + err.gains[0, 0] + err.arm[0, 0])
     if trust.payload_seen(pi_ls[0], m_std, q):
         fit = fit_inertial(A_pi, A_x, b_rows, w, prior)
@@ -141,10 +146,7 @@ PIPELINE_PART = "pipeline bias (measured on the motion)"
 
 
 def std_parts(data_cov: np.ndarray, err: ErrorSources, gains: bool, arm: bool) -> dict:
-    """The mass's std (kg) by source.
-
-    Data and model, and the ``gains`` and the ``arm`` model where they were given.
-    """
+    """The mass's std (kg) by source: data and model, the ``gains`` and ``arm`` model if given."""
     parts = {DATA_PART: float(np.sqrt(data_cov[0, 0]))}
     if gains:
         parts["gains"] = float(np.sqrt(err.gains[0, 0]))
@@ -172,15 +174,15 @@ def motion_estimate(
     """
     mass, com, inertia_c, cov4, inertia_cov = about_com(fit.pi, params_cov)
     inertia_std = np.sqrt(np.clip(np.diag(inertia_cov), 0, None)).reshape(3, 3)
-    D = derived_jacobian(fit.pi)
-    dofs = np.array([np.inf if dof is None else dof(c) for c in D])
-    inertia_dof = float(dofs[4:][[0, 1, 2, 4, 5, 8]].min())  # its six distinct entries
-    q = trust.t95(dofs[:4])
-    word, reasons = trust.judge(mass, com, cov4, trust.arm_mass(robot), findings, q[0])
+    # the derived quantities' (mass, CoM, inertia about the CoM), then the ten parameters'
+    contrasts = np.vstack([derived_jacobian(fit.pi), np.eye(10)])
+    dofs = np.array([np.inf if dof is None else dof(c) for c in contrasts])
+    inertia_dof = float(dofs[4:13][[0, 1, 2, 4, 5, 8]].min())  # its six distinct entries
+    word, reasons = trust.judge(mass, com, cov4, trust.arm_mass(robot), findings,
+                                trust.t95(dofs[0]))  # fmt: skip
     i_word, i_reasons = trust.inertia_verdict(inertia_c, inertia_cov, trust.t95(inertia_dof))
-    params_dof = np.array([np.inf if dof is None else dof(c) for c in np.eye(10)])
     inertia = Inertia(inertia_c, inertia_cov, inertia_std, fit.pi, params_cov, fit.pi_ls,
-                      i_word, i_reasons, inertia_dof, params_dof)  # fmt: skip
+                      i_word, i_reasons, inertia_dof, dofs[13:])  # fmt: skip
     return PayloadEstimate(mass, com, cov4, robot.ee_frame, word, reasons, sources, std_parts,
                            motion=motion, inertia=inertia, dof=dofs[:4], **parts)  # fmt: skip
 
@@ -269,8 +271,7 @@ def fit_motion(
                                         rel_gain_cov, arm_model, arm_jac))  # fmt: skip
     extra = None if extra_cov is None else extra_cov(err)
     err_fit = err if extra is None else replace(err, arm=err.arm + extra)
-    e_mass = np.eye(10)[0]
-    q_mass = trust.t95(satterthwaite(e_mass, err.white * np.outer(err.factor, err.factor), err,
+    q_mass = trust.t95(satterthwaite(np.eye(10)[0], err.data_cov, err,
                                      0.0 if extra is None else extra))  # fmt: skip
     fit = fit_payload(rows.A_pi, rows.A_x, rows.b, rows.w, prior, err_fit, q_mass)
     params_cov = fit.data_cov + err.gains + err.arm

@@ -185,7 +185,7 @@ def alone(st: Stacked, name: str, duration_s: float, arm_model: ArmModel | None 
                             None, arm_model, arm_jac)  # fmt: skip
     except UnobservableError as exc:
         return f"{name} alone: {exc}"
-    data_cov = err.white * np.outer(err.factor, err.factor)
+    data_cov = err.data_cov
     dof = np.array([satterthwaite(c, data_cov, err) for c in np.eye(10)[:4]])
     return err.sensitivity @ b, data_cov + err.arm, float(np.sqrt(np.mean(err.factor**2))), dof
 

@@ -195,7 +195,7 @@ def _tool(robot, log, empty_log, empty_window, cutoff_hz, tool_params, tool_cov)
     err = _observable(robot, E, lambda: error_sources(
         A, b, w, (k, 6), float(E.S.t[-1] - E.S.t[0]), None, None, None, None),
         "the empty run")  # fmt: skip
-    return _Tool(err.sensitivity @ b, err.white * np.outer(err.factor, err.factor),
+    return _Tool(err.sensitivity @ b, err.data_cov,
                  TOOL_EMPTY_RUN)  # fmt: skip
 
 
