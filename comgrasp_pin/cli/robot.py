@@ -50,7 +50,7 @@ def write_json(path: str, data: dict) -> None:
 
 def _log_and_windows(args: argparse.Namespace, robot):
     """The log, its paired windows and the drive gains (or None), as the options ask."""
-    from comgrasp_pin.robot_io.at_rest import pair_by_configuration, parse_windows
+    from comgrasp_pin.robot_io.at_rest import pair_by_configuration, parse_windows, spans
     from comgrasp_pin.robot_io.log_files import read_bag, read_csv
 
     log_path(args.bag, args.csv)
@@ -60,11 +60,11 @@ def _log_and_windows(args: argparse.Namespace, robot):
         raise InvalidInputError("give --before and --after windows, or --auto --grasp-time T")
     before = after = []
     if not args.auto:
-        before = parse_windows(args.before, "--before")
-        after = parse_windows(args.after, "--after")
+        before = parse_windows(args.before, "--before", joined=True)
+        after = parse_windows(args.after, "--after", joined=True)
     gains = gains_from_args(args, robot)  # None: the log's efforts are torques
     if args.bag is not None:  # with windows, only the messages near them are decoded
-        wanted = None if args.auto else before + after
+        wanted = None if args.auto else [s for w in before + after for s in spans(w)]
         log = read_bag(args.bag, robot.joint_names, args.topic, wanted, gains)
     else:
         log = read_csv(args.csv, robot.joint_names, gains)
@@ -184,7 +184,10 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
                      "RTDE's record.py or ur_rtde writes it (timestamp, actual_q_i, "
                      "actual_current_i...)")  # fmt: skip
     add_gains_args(est)
-    est.add_argument("--before", default=None, help="empty-arm windows T0:T1[,T0:T1...] (s)")
+    est.add_argument("--before", default=None,
+                     help="empty-arm windows T0:T1[,T0:T1...] (s from the log's start); one "
+                     "pose's window may join spans, T0:T1+T2:T3 (the pose approached from both "
+                     "sides: the mean of the spans' means: stuck friction cancels)")  # fmt: skip
     est.add_argument("--after", default=None, help="holding windows, paired with --before")
     est.add_argument("--auto", action="store_true",
                      help="find static windows and pair them by configuration")  # fmt: skip

@@ -11,6 +11,7 @@ from comgrasp_pin.robot_io.at_rest.windows import (
     pair_by_configuration,
     parse_windows,
     read_window,
+    spans,
 )
 from comgrasp_pin.robot_io.at_rest.wrench_static import (
     estimate_wrench_pairs,
@@ -23,6 +24,7 @@ __all__ = [
     "pair_by_configuration",
     "parse_windows",
     "read_window",
+    "spans",
     "estimate_from_log",
     "estimate_wrench_static",
     "estimate_wrench_pairs",

@@ -20,7 +20,7 @@ the generalised least squares. A servo's sag between the windows is not in eithe
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -39,8 +39,14 @@ from comgrasp_pin.robot_io.results.estimate_result import (
     PayloadEstimate,
     sole_source,
 )
-from comgrasp_pin.robot_io.results.trust import arm_mass, judge
+from comgrasp_pin.robot_io.results.trust import arm_mass, judge, t95
 
+MAX_CHI2_DOF = 25.0
+"""Residuals above 5 times the readings' noise (chi-square per degree of freedom above 25):
+the rigid-body model does not explain the readings; the verdict is ``unreliable``. The rule
+of the joint torques and of the wrist sensor at rest."""
+RANK_TOL = 1e-9
+"""Singular values below this fraction of the largest are directions the fit left open."""
 NOISE_FLOOR = 1e-6
 """Smallest torque std (N m) taken from the samples (a noise-free log has spread 0)."""
 GAIN_STEP = 1e-4
@@ -52,8 +58,8 @@ estimates clear of the empty-gripper refusal)."""
 def estimate_from_log(
     robot: RobotModel,
     log: JointLog,
-    before: list[tuple[float, float]],
-    after: list[tuple[float, float]],
+    before: Sequence[tuple[float, ...]],
+    after: Sequence[tuple[float, ...]],
     torque_std: float | None = None,
     method: str = "lstsq",
     max_speed: float = MAX_SPEED,
@@ -112,6 +118,10 @@ def estimate_from_log(
                             dtau_cov=cov)  # fmt: skip
 
     est = solve(None, method)
+    chi2_dof, dof = residual_chi2(est, sigma, cov)
+    if chi2_dof > 1:  # the readings err more than their noise: the residuals' variance
+        est = dataclasses.replace(est, cov=est.cov * chi2_dof)
+    findings = [] if chi2_dof <= MAX_CHI2_DOF else [rigid_body_finding(chi2_dof)]
     gains_part = None
     if rel is not None:
         gains_part = _gains_covariance(lambda f: solve(f, "lstsq"), est, rel)
@@ -123,20 +133,59 @@ def estimate_from_log(
     )  # fmt: skip
     windows = {"before": [[r.t0, r.t1, r.n_samples] for r in rb],
                "after": [[r.t0, r.t1, r.n_samples] for r in ra]}  # fmt: skip
-    return judged_at_rest(robot, est, Q, windows, sole_source(JOINT_TORQUES), joint_torques=joints)
+    return judged_at_rest(robot, est, Q, windows, sole_source(JOINT_TORQUES), findings,
+                          dof=dof if chi2_dof > 1 else np.inf, joint_torques=joints)  # fmt: skip
+
+
+def residual_chi2(est: ComEstimate, sigma: np.ndarray, cov: np.ndarray | None):
+    """(chi-square per degree of freedom, degrees of freedom) of the fit's residuals.
+
+    Whitened by the differences' covariance (``cov``, pose-major) or, without it, by the
+    std of a difference of two readings, sqrt(2) ``sigma``. The degrees of freedom are the
+    readings (k n) less the directions the fit determined (the rank of its regressor).
+    NaN chi-square with none left. The wrist sensor's fit (``estimation.wrench``) follows
+    the same rule: the covariance is scaled by the chi-square where it exceeds 1, with
+    Student's t of these degrees of freedom.
+    """
+    r = np.asarray(est.residuals, dtype=float).ravel()
+    sv = np.asarray(est.singular_values, dtype=float)
+    dof = r.size - int(np.sum(sv > RANK_TOL * sv.max()))
+    if dof <= 0 or est.cov is None:
+        return float("nan"), np.inf
+    if cov is None:
+        z = r / np.tile(np.sqrt(2.0) * sigma, len(r) // len(sigma))
+        return float(z @ z / dof), float(dof)
+    return float(r @ np.linalg.solve(cov, r) / dof), float(dof)
+
+
+def rigid_body_finding(chi2_dof: float) -> str:
+    """The verdict's reason where the residuals exceed the readings' noise by far."""
+    return (
+        f"the residuals are {np.sqrt(chi2_dof):.1f} times the readings' noise: the readings "
+        "do not follow a rigid payload (contact, cable, a part moving, joint friction stuck "
+        "differently in the two runs: approach each pose from both sides)"
+    )
 
 
 def judged_at_rest(
-    robot: RobotModel, est: ComEstimate, q: np.ndarray, windows: dict, sources: dict, **parts
+    robot: RobotModel,
+    est: ComEstimate,
+    q: np.ndarray,
+    windows: dict,
+    sources: dict,
+    findings: list[str] | None = None,
+    dof: float = np.inf,
+    **parts,
 ) -> PayloadEstimate:
     """A ``PayloadEstimate`` of readings at rest from the estimator's ``ComEstimate``.
 
     Judged by ``trust``: a CoM that one pose leaves unseen along gravity is not identified
     (a payload file would place it on that line's point nearest the origin). ``parts``: the
     sources' own (``joint_torques=``, ``wrench=``). The mass's std by source where the drive
-    gains' part is known (``JointTorques.gains_cov``).
+    gains' part is known (``JointTorques.gains_cov``). ``findings``: the mode's own
+    objections; ``dof``: the degrees of freedom of the covariance (inf: known noise).
     """
-    findings = []
+    findings = list(findings or [])
     if est.unobservable_ee is not None:
         u = np.array2string(np.asarray(est.unobservable_ee), precision=3)
         findings.append(
@@ -144,7 +193,7 @@ def judged_at_rest(
             "the single pose): add poses that turn the wrist against gravity (comgrasp "
             "plan-poses)"
         )
-    verdict, reasons = judge(est.mass, est.com_ee, est.cov, arm_mass(robot), findings)
+    verdict, reasons = judge(est.mass, est.com_ee, est.cov, arm_mass(robot), findings, t95(dof))
     at_rest = AtRest(q, windows, est.method, est.solver_status, est.condition_number, est)
     joints = parts.get("joint_torques")
     std_parts = {}
@@ -155,15 +204,15 @@ def judged_at_rest(
                      "gains": float(np.sqrt(max(gains, 0.0)))}  # fmt: skip
     return PayloadEstimate(
         est.mass, est.com_ee, est.cov, robot.ee_frame, verdict, reasons, sources, std_parts,
-        est.unobservable_ee, at_rest, **parts,
+        est.unobservable_ee, at_rest, dof=np.full(4, dof), **parts,
     )  # fmt: skip
 
 
 def _read_windows(
     robot: RobotModel,
     log: JointLog,
-    before: list[tuple[float, float]],
-    after: list[tuple[float, float]],
+    before: Sequence[tuple[float, ...]],
+    after: Sequence[tuple[float, ...]],
     max_speed: float,
 ) -> tuple[tuple[StaticReading, ...], tuple[StaticReading, ...]]:
     """(before readings, after readings) of the paired windows, or a LogError saying why not."""

@@ -9,6 +9,7 @@ the torques, from which the noise of the mean follows (std / sqrt(n), white nois
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -53,21 +54,43 @@ class StaticReading:
         return self.tau_std / np.sqrt(self.n_samples)
 
 
-def parse_windows(text: str, option: str = "--before") -> list[tuple[float, float]]:
-    """``"T0:T1,T0:T1"`` (s) as a list of (t0, t1); InvalidInputError if malformed."""
+def parse_windows(
+    text: str, option: str = "--before", joined: bool = False
+) -> list[tuple[float, ...]]:
+    """``"T0:T1,T0:T1"`` (s) as a list of windows (t0, t1); InvalidInputError if malformed.
+
+    With ``joined``, a window may be spans joined by ``+`` (``T0:T1+T2:T3``): one reading,
+    the mean of its spans' means (``read_joined``), given as the flat tuple (t0, t1, t2, t3).
+    """
     out = []
     for part in (p.strip() for p in str(text).split(",")):
+        pieces = part.split("+") if joined else [part]
         try:
-            t0, t1 = (float(x) for x in part.split(":"))
+            bounds = [float(x) for piece in pieces for x in _span_text(piece)]
         except ValueError:
+            joins = " or spans joined by + (1.0:2.0+3.0:4.0)" if joined else ""
             raise InvalidInputError(
-                f"{option} {text!r}: each window is T0:T1 in seconds from the log's start, "
-                "windows separated by commas (e.g. 1.0:2.0,5.5:6.5)"
+                f"{option} {text!r}: each window is T0:T1 in seconds from the log's start"
+                f"{joins}, windows separated by commas (e.g. 1.0:2.0,5.5:6.5)"
             ) from None
-        if not (np.isfinite(t0) and np.isfinite(t1) and t1 > t0):
-            raise InvalidInputError(f"{option} window {part!r}: need finite T0 < T1")
-        out.append((t0, t1))
+        for t0, t1 in zip(bounds[::2], bounds[1::2]):
+            if not (np.isfinite(t0) and np.isfinite(t1) and t1 > t0):
+                raise InvalidInputError(f"{option} window {part!r}: need finite T0 < T1")
+        out.append(tuple(bounds))
     return out
+
+
+def _span_text(piece: str) -> list[str]:
+    """The two numbers of ``"T0:T1"``; ValueError otherwise."""
+    numbers = piece.split(":")
+    if len(numbers) != 2:
+        raise ValueError(piece)
+    return numbers
+
+
+def spans(window: tuple[float, ...]) -> list[tuple[float, float]]:
+    """The (t0, t1) spans of a window (one, or several joined by ``parse_windows``)."""
+    return list(zip(window[::2], window[1::2]))
 
 
 def joint_speed(time: np.ndarray, position: np.ndarray, span: float = SPEED_SPAN) -> np.ndarray:
@@ -137,14 +160,44 @@ def read_window(
     )
 
 
+def read_joined(
+    log: JointLog | WrenchLog,
+    window: tuple[float, ...],
+    max_speed: float = MAX_SPEED,
+    label: str = "window",
+    readings: np.ndarray | None = None,
+) -> StaticReading:
+    """One reading of a window of one or several spans (``parse_windows``'s ``joined``).
+
+    Several spans (a pose approached from both sides, whose stuck friction has opposite
+    signs) give the mean of their means, each span weighted alike: q, tau, and a
+    ``tau_std`` whose ``tau_mean_std`` is that mean's std, sqrt(sum s_i^2 / n_i) / k. One
+    span is ``read_window``'s reading.
+    """
+    parts = [read_window(log, t0, t1, max_speed, label, readings) for t0, t1 in spans(window)]
+    if len(parts) == 1:
+        return parts[0]
+    n = sum(r.n_samples for r in parts)
+    mean_std = np.sqrt(sum(r.tau_mean_std**2 for r in parts)) / len(parts)
+    return StaticReading(
+        t0=parts[0].t0,
+        t1=parts[-1].t1,
+        q=np.mean([r.q for r in parts], axis=0),
+        tau=np.mean([r.tau for r in parts], axis=0),
+        tau_std=mean_std * np.sqrt(n),
+        n_samples=n,
+        max_speed=max(r.max_speed for r in parts),
+    )
+
+
 def read_pairs(
     log: JointLog | WrenchLog,
-    before: list[tuple[float, float]],
-    after: list[tuple[float, float]],
+    before: Sequence[tuple[float, ...]],
+    after: Sequence[tuple[float, ...]],
     max_speed: float = MAX_SPEED,
     readings: np.ndarray | None = None,
 ) -> tuple[tuple[StaticReading, ...], tuple[StaticReading, ...]]:
-    """(before readings, after readings) of paired windows (``read_window``), or a LogError.
+    """(before readings, after readings) of paired windows (``read_joined``), or a LogError.
 
     ``before[i]`` is the empty arm at the pose of ``after[i]``; ``readings`` as
     ``read_window``'s.
@@ -156,10 +209,10 @@ def read_pairs(
         )
     if not before:
         raise LogError("no windows given: at least one before/after pair is needed")
-    rb = tuple(read_window(log, t0, t1, max_speed, f"before window {i}", readings)
-               for i, (t0, t1) in enumerate(before))  # fmt: skip
-    ra = tuple(read_window(log, t0, t1, max_speed, f"after window {i}", readings)
-               for i, (t0, t1) in enumerate(after))  # fmt: skip
+    rb = tuple(read_joined(log, w, max_speed, f"before window {i}", readings)
+               for i, w in enumerate(before))  # fmt: skip
+    ra = tuple(read_joined(log, w, max_speed, f"after window {i}", readings)
+               for i, w in enumerate(after))  # fmt: skip
     return rb, ra
 
 

@@ -32,6 +32,8 @@ after configuration (the tool's gravity wrench, the arm's gravity torques).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 import pinocchio as pin
 
@@ -49,7 +51,11 @@ from comgrasp_pin.estimation.wrench_com import (
     wrench_regressor,
 )
 from comgrasp_pin.robot import RobotModel
-from comgrasp_pin.robot_io.at_rest.joint_torques import judged_at_rest
+from comgrasp_pin.robot_io.at_rest.joint_torques import (
+    MAX_CHI2_DOF,
+    judged_at_rest,
+    rigid_body_finding,
+)
 from comgrasp_pin.robot_io.at_rest.windows import (
     MAX_SPEED,
     MIN_STATIC_S,
@@ -70,10 +76,6 @@ from comgrasp_pin.robot_io.results.estimate_result import (
 )
 from comgrasp_pin.robot_io.results.trust import Z95, arm_mass, judge, nominal_tool_reasons, t95
 
-MAX_CHI2_DOF = 25.0
-"""Residuals above 5 times the windows' own noise (chi-square per degree of freedom above
-25): the rigid-body model does not explain the readings (a contact, a cable pulling, a
-payload that moves in the gripper); the verdict is then ``unreliable``."""
 TOOL_BEFORE, TOOL_NONE = "the tool identified before", "none (everything beyond the sensor)"
 
 
@@ -213,10 +215,7 @@ def _estimate(robot, fit, T_sensor_ee, log, windows, readings, tool, noise_from)
     G[1:, 1:] = R
     findings = nominal_tool_reasons(tool[0] == TOOL_NOMINAL, float(tool[1]))
     if fit.chi2_dof > MAX_CHI2_DOF:
-        findings.append(
-            f"the residuals are {np.sqrt(fit.chi2_dof):.1f} times the windows' noise: the "
-            "readings do not follow a rigid payload (contact, cable, a part moving)"
-        )
+        findings.append(rigid_body_finding(fit.chi2_dof))
     if not fit.held and fit.mass - Z95 * np.sqrt(fit.cov[0, 0]) > 0:
         findings.append(
             f"the mass {fit.mass:.4g} kg is within 3 standard deviations "
@@ -244,8 +243,8 @@ def _estimate(robot, fit, T_sensor_ee, log, windows, readings, tool, noise_from)
 def estimate_wrench_pairs(
     robot: RobotModel,
     log: WrenchLog,
-    before: list[tuple[float, float]],
-    after: list[tuple[float, float]],
+    before: Sequence[tuple[float, ...]],
+    after: Sequence[tuple[float, ...]],
     max_speed: float = MAX_SPEED,
     use_joint_torques: bool = True,
     method: str = "lstsq",

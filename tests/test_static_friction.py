@@ -1,0 +1,128 @@
+"""Static joint torques with stuck joint friction: joined windows and the residuals' rule.
+
+A joint that stops under a position controller holds its stuck friction: the torque read at
+rest is the gravity torque plus up to the friction's limit, with the sign of the approach.
+The log here is made from an independent model (Pinocchio RNEA with a payload body,
+tests/_payload) plus, at every visit of a pose, a friction torque drawn per joint with the
+approach's sign, plus white noise. Approached from both sides and joined
+(``T0:T1+T2:T3``), the friction cancels to first order; read from one side it does not, and
+the residuals say so.
+"""
+
+import numpy as np
+import pytest
+from _payload import panda, payload_torques
+
+from comgrasp_pin.errors import InvalidInputError
+from comgrasp_pin.robot_io import JointLog, estimate_from_log
+from comgrasp_pin.robot_io.at_rest import parse_windows, read_window
+from comgrasp_pin.robot_io.at_rest.windows import read_joined
+
+Q = np.array(
+    [
+        [0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8],
+        [0.5, -0.6, 0.3, -1.8, 1.2, 1.2, -0.6],
+        [-0.4, 0.2, -0.2, -2.4, -1.0, 2.6, 1.5],
+        [0.2, -0.5, 0.4, -2.0, 0.8, 1.6, 0.1],
+    ]
+)
+MASS, COM = 0.9, np.array([0.03, -0.02, 0.06])
+FRICTION_NM = (0.3, 0.9)  # the stuck friction's range at a visit (N m), as the FR3's sim shows
+ASYMMETRY = 0.03  # the two sides' friction differ by up to this share
+RATE_HZ, HOLD_S, MOVE_S, NOISE = 200.0, 0.6, 0.3, 0.05
+
+
+@pytest.fixture(scope="module")
+def robot():
+    return panda()
+
+
+def friction_log(robot, seed=0):
+    """(log, joined before, joined after, one-sided before, one-sided after).
+
+    Each run (empty, then loaded) visits each pose twice, approaching from +, then from -;
+    each visit holds HOLD_S with the friction torque of that visit.
+    """
+    rng = np.random.default_rng(seed)
+    tb, ta = payload_torques(robot, Q, MASS, COM)
+    qs, taus, windows = [], [], {False: [], True: []}
+    t = 0.0
+    dt = 1.0 / RATE_HZ
+    for loaded, tau_g in ((False, tb), (True, ta)):
+        for i, q in enumerate(Q):
+            f = rng.uniform(*FRICTION_NM, size=robot.nq)
+            sides = []
+            for sign in (1.0, -1.0):
+                f_side = f * (1 + ASYMMETRY * rng.uniform(-1, 1, robot.nq))
+                n_move, n_hold = int(MOVE_S * RATE_HZ), int(HOLD_S * RATE_HZ)
+                ramp = q + sign * 0.05 * np.sin(np.linspace(0, np.pi, n_move))[:, None]
+                hold = np.tile(q, (n_hold, 1))
+                qs += [ramp, hold]
+                taus += [
+                    np.tile(tau_g[i], (n_move, 1)),
+                    np.tile(tau_g[i] + sign * f_side, (n_hold, 1)),
+                ]
+                t_hold = t + n_move * dt
+                sides.append((t_hold + 0.1, t_hold + HOLD_S - 0.1))
+                t += (n_move + n_hold) * dt
+            windows[loaded].append(sides)
+    q = np.concatenate(qs)
+    tau = np.concatenate(taus) + NOISE * rng.standard_normal(q.shape)
+    log = JointLog(np.arange(len(q)) * dt, tuple(robot.joint_names), q, tau, "friction")
+    joined = {k: [(*w[0], *w[1]) for w in v] for k, v in windows.items()}
+    one_side = {k: [w[0] for w in v] for k, v in windows.items()}
+    return log, joined[False], joined[True], one_side[False], one_side[True]
+
+
+def test_parse_joined_windows():
+    assert parse_windows("1:2+3:4, 5:6", joined=True) == [(1.0, 2.0, 3.0, 4.0), (5.0, 6.0)]
+    with pytest.raises(InvalidInputError, match="joined by"):
+        parse_windows("1:2+3", joined=True)
+    with pytest.raises(InvalidInputError):
+        parse_windows("1:2+3:4")  # joins are only for the readings at rest
+    with pytest.raises(InvalidInputError, match="T0 < T1"):
+        parse_windows("1:2+4:3", joined=True)
+
+
+def test_joined_reading_is_the_mean_of_the_spans(robot):
+    log, before, *_ = friction_log(robot)
+    w = before[0]
+    a, b = read_window(log, w[0], w[1]), read_window(log, w[2], w[3])
+    r = read_joined(log, w)
+    np.testing.assert_allclose(r.tau, (a.tau + b.tau) / 2)
+    np.testing.assert_allclose(r.q, (a.q + b.q) / 2)
+    expected = np.sqrt(a.tau_mean_std**2 + b.tau_mean_std**2) / 2
+    np.testing.assert_allclose(r.tau_mean_std, expected)
+    single = read_joined(log, w[:2])
+    np.testing.assert_array_equal(single.tau, a.tau)
+
+
+def test_both_sides_cancel_the_friction(robot):
+    log, before, after, _, _ = friction_log(robot)
+    est = estimate_from_log(robot, log, before, after)
+    assert est.verdict == "identified", est.reasons
+    assert abs(est.mass - MASS) < 0.02 * MASS
+    assert np.linalg.norm(est.com_ee - COM) < 5e-3
+    # the residuals (the friction's asymmetry) exceed the samples' noise: the covariance
+    # is theirs, with Student's t of 4 * 7 - 4 degrees of freedom
+    assert np.all(est.dof == 4 * 7 - 4)
+    half = est.t95[0] * est.std[0]
+    assert abs(est.mass - MASS) < half
+
+
+def test_one_side_is_refused_by_its_residuals(robot):
+    log, _, _, before, after = friction_log(robot)
+    est = estimate_from_log(robot, log, before, after)
+    assert est.verdict == "unreliable"
+    assert any("do not follow a rigid payload" in r for r in est.reasons), est.reasons
+
+
+def test_intervals_cover_the_truth_over_seeds(robot):
+    """The residuals' covariance covers the mass in about 95 % of sessions (binomial band)."""
+    inside = 0
+    n = 40
+    for seed in range(n):
+        log, before, after, _, _ = friction_log(robot, seed=100 + seed)
+        est = estimate_from_log(robot, log, before, after)
+        inside += abs(est.mass - MASS) < est.t95[0] * est.std[0]
+    assert 0.85 * n <= inside  # P(X < 34 | n=40, p=0.95) < 0.5 %
