@@ -221,6 +221,11 @@ class MissingAssetError(ComGraspError, FileNotFoundError):
     the installation is broken."""
 
 
+class RobotError(ComGraspError, RuntimeError):
+    """A connected robot refused, reported an error or a contact, or its connection was lost
+    (``comgrasp live``); what was recorded up to then is kept."""
+
+
 class OutputError(ComGraspError, OSError):
     """A result file (video, figure, CSV) cannot be written where it was asked for."""
 

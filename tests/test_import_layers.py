@@ -31,7 +31,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "comgrasp_pin"
 
 LAYERS = [
     {"cli"},
-    {"experiments"},
+    {"experiments", "live"},
     {"simulation", "__init__"},
     {"procedures", "robot_io"},
     {"planning"},

@@ -29,12 +29,19 @@ import argparse
 import sys
 
 from comgrasp_pin import __version__
-from comgrasp_pin.cli import arm, robot
+from comgrasp_pin.cli import arm, live, robot
 from comgrasp_pin.errors import ComGraspError
 
 __all__ = ["ROBOT_COMMANDS", "build_parser", "main"]
 
-ROBOT_COMMANDS = ("estimate", "plan-poses", "plan-motion", "identify-arm", "calibrate-gains")
+ROBOT_COMMANDS = (
+    "estimate",
+    "plan-poses",
+    "plan-motion",
+    "identify-arm",
+    "calibrate-gains",
+    "live",
+)
 """The real-arm commands (``robot``, ``arm``): logs and URDFs in, no simulator."""
 
 
@@ -57,6 +64,7 @@ def build_parser(robot_only: bool = False) -> argparse.ArgumentParser:
         sweep.add_subcommand(sub)
     robot.add_subcommands(sub)  # estimate, plan-poses, plan-motion: the real-arm path
     arm.add_arm_subcommands(sub)  # identify-arm, calibrate-gains: an arm's own model, once
+    live.add_subcommand(sub)  # live: a connected Franka, measured and told its load
     return parser
 
 

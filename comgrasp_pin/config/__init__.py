@@ -4,6 +4,7 @@
     sensors.py  the sensors' part (torque sensor, depth cameras' errors) and its presets
     wrench.py   the wrist force/torque sensor's part (data-sheet classes, part of the sensors')
     depth_line.py  the wrist camera's depth-line error model (part of the sensors')
+    live.py     a connected arm's measurement (comgrasp live): speeds, holds, contact limits
     log_limits.py  the largest values a robot log may hold (beyond them no sensor gives them)
     trial.py    the trial grasp's part, and the procedure a real arm's sensors need
     paths.py    every number of the tree by its dotted path (``motion.grip_force``), for sweeps
@@ -14,6 +15,7 @@ package, and every layer above reads its numbers from here. Import the names fro
 """
 
 from comgrasp_pin.config.depth_line import DepthLineErrorConfig
+from comgrasp_pin.config.live import LiveConfig
 from comgrasp_pin.config.log_limits import (
     MAX_ABS_FORCE_N,
     MAX_ABS_JOINT_EFFORT,
@@ -49,6 +51,7 @@ __all__ = [
     "TorqueSensorConfig",
     "TrialConfig",
     "hardware_trial",
+    "LiveConfig",
     "MAX_ABS_FORCE_N",
     "MAX_ABS_JOINT_EFFORT",
     "MAX_ABS_JOINT_POSITION_RAD",

@@ -35,7 +35,7 @@ class SelfCollision:
         if robot.urdf_path is None:
             raise CollisionError("the robot has no URDF path: its collision model is unknown")
         urdf = Path(robot.urdf_path)
-        dirs = [*robot.package_dirs, str(example_robot_data_dir().parent)]
+        dirs = [*robot.package_dirs, str(urdf.parent), str(example_robot_data_dir().parent)]
         self.model = pin.buildModelFromUrdf(str(urdf))
         try:
             self.geom_model = pin.buildGeomFromUrdf(

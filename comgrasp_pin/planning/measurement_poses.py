@@ -76,6 +76,8 @@ def plan_measurement_poses(
     min_height: float = 0.05,
     sensor_frame: str | None = None,
     wrench_std: tuple[float, float] = (0.01, 0.0005),
+    max_offset: float = 1.2,
+    margin: float = 0.05,
 ) -> PosePlan:
     """``k`` static poses that best determine the mass and the full 3-D CoM.
 
@@ -97,6 +99,8 @@ def plan_measurement_poses(
             ``estimation.wrench``); ``k`` >= 3 then.
         wrench_std: (force N, torque N m) std of one averaged wrench reading the wrench's
             prediction assumes.
+        max_offset: with ``start``, candidates lie within this of it on every joint (rad).
+        margin: candidates keep this from the joint limits (rad).
 
     Raises:
         InvalidInputError: bad k, start, torque_std or mass; CollisionError: the start
@@ -113,7 +117,7 @@ def plan_measurement_poses(
                 f"{checker.colliding_pairs(start)}) or is below {min_height} m"
             )
     rng = np.random.default_rng(seed)
-    cand = candidate_poses(robot, n_candidates, rng, start)
+    cand = candidate_poses(robot, n_candidates, rng, start, max_offset, margin)
     cand = np.array([q for q in cand if feasible(robot, checker, q, min_height)])
     need = k - (start is not None)
     if len(cand) < max(need, 1):

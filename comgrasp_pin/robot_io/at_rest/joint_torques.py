@@ -39,12 +39,15 @@ from comgrasp_pin.robot_io.results.estimate_result import (
     PayloadEstimate,
     sole_source,
 )
-from comgrasp_pin.robot_io.results.trust import arm_mass, judge, t95
+from comgrasp_pin.robot_io.results.trust import (
+    MIN_EXPLAINED,
+    arm_mass,
+    judge,
+    payload_seen,
+    t95,
+    unexplained_reason,
+)
 
-MAX_CHI2_DOF = 25.0
-"""Residuals above 5 times the readings' noise (chi-square per degree of freedom above 25):
-the rigid-body model does not explain the readings; the verdict is ``unreliable``. The rule
-of the joint torques and of the wrist sensor at rest."""
 RANK_TOL = 1e-9
 """Singular values below this fraction of the largest are directions the fit left open."""
 NOISE_FLOOR = 1e-6
@@ -118,10 +121,7 @@ def estimate_from_log(
                             dtau_cov=cov)  # fmt: skip
 
     est = solve(None, method)
-    chi2_dof, dof = residual_chi2(est, sigma, cov)
-    if chi2_dof > 1:  # the readings err more than their noise: the residuals' variance
-        est = dataclasses.replace(est, cov=est.cov * chi2_dof)
-    findings = [] if chi2_dof <= MAX_CHI2_DOF else [rigid_body_finding(chi2_dof)]
+    est, dof, findings = _residual_rules(est, sigma, cov, tau_a - tau_b)
     gains_part = None
     if rel is not None:
         gains_part = _gains_covariance(lambda f: solve(f, "lstsq"), est, rel)
@@ -134,37 +134,52 @@ def estimate_from_log(
     windows = {"before": [[r.t0, r.t1, r.n_samples] for r in rb],
                "after": [[r.t0, r.t1, r.n_samples] for r in ra]}  # fmt: skip
     return judged_at_rest(robot, est, Q, windows, sole_source(JOINT_TORQUES), findings,
-                          dof=dof if chi2_dof > 1 else np.inf, joint_torques=joints)  # fmt: skip
+                          dof=dof, joint_torques=joints)  # fmt: skip
 
 
-def residual_chi2(est: ComEstimate, sigma: np.ndarray, cov: np.ndarray | None):
-    """(chi-square per degree of freedom, degrees of freedom) of the fit's residuals.
+def _residual_rules(est: ComEstimate, sigma, cov, dtau) -> tuple[ComEstimate, float, list[str]]:
+    """(estimate, dof of its covariance, findings) after the residuals' two rules.
 
-    Whitened by the differences' covariance (``cov``, pose-major) or, without it, by the
-    std of a difference of two readings, sqrt(2) ``sigma``. The degrees of freedom are the
-    readings (k n) less the directions the fit determined (the rank of its regressor).
-    NaN chi-square with none left. The wrist sensor's fit (``estimation.wrench``) follows
-    the same rule: the covariance is scaled by the chi-square where it exceeds 1, with
-    Student's t of these degrees of freedom.
+    The covariance is scaled by the chi-square per degree of freedom where that exceeds 1
+    (the readings err more than their noise; the wrist sensor's rule), with its dof; and the
+    payload must explain ``trust.MIN_EXPLAINED`` of the torque differences (the motion's).
+    """
+    chi2_dof, dof, explained = residual_chi2(est, sigma, cov, dtau)
+    if chi2_dof > 1:
+        est = dataclasses.replace(est, cov=est.cov * chi2_dof)
+    else:
+        dof = np.inf
+    findings = []
+    seen = est.cov is not None and payload_seen(est.mass, np.sqrt(est.cov[0, 0]), t95(dof))
+    if seen and explained < MIN_EXPLAINED:
+        findings.append(unexplained_reason(explained, "torque differences"))
+    return est, dof, findings
+
+
+def residual_chi2(est: ComEstimate, sigma: np.ndarray, cov: np.ndarray | None, dtau):
+    """(chi-square per degree of freedom, degrees of freedom, share explained) of the fit.
+
+    The residuals are whitened by the differences' covariance (``cov``, pose-major) or,
+    without it, by the std of a difference of two readings, sqrt(2) ``sigma``. The degrees
+    of freedom are the readings (k n) less the directions the fit determined (the rank of
+    its regressor); NaN chi-square with none left. The share explained is 1 - |r|^2 /
+    |dtau|^2 of the whitened residuals r and torque differences ``dtau`` (k, n): the
+    motion's rule (``trust.MIN_EXPLAINED``) at rest.
     """
     r = np.asarray(est.residuals, dtype=float).ravel()
+    d = np.asarray(dtau, dtype=float).ravel()
+    if cov is None:
+        w = np.tile(np.sqrt(2.0) * sigma, len(r) // len(sigma))
+        r, d = r / w, d / w
+    else:
+        L = np.linalg.cholesky(cov)
+        r, d = np.linalg.solve(L, r), np.linalg.solve(L, d)
+    explained = 1.0 - float(r @ r) / max(float(d @ d), 1e-300)
     sv = np.asarray(est.singular_values, dtype=float)
     dof = r.size - int(np.sum(sv > RANK_TOL * sv.max()))
     if dof <= 0 or est.cov is None:
-        return float("nan"), np.inf
-    if cov is None:
-        z = r / np.tile(np.sqrt(2.0) * sigma, len(r) // len(sigma))
-        return float(z @ z / dof), float(dof)
-    return float(r @ np.linalg.solve(cov, r) / dof), float(dof)
-
-
-def rigid_body_finding(chi2_dof: float) -> str:
-    """The verdict's reason where the residuals exceed the readings' noise by far."""
-    return (
-        f"the residuals are {np.sqrt(chi2_dof):.1f} times the readings' noise: the readings "
-        "do not follow a rigid payload (contact, cable, a part moving, joint friction stuck "
-        "differently in the two runs: approach each pose from both sides)"
-    )
+        return float("nan"), np.inf, explained
+    return float(r @ r / dof), float(dof), explained
 
 
 def judged_at_rest(

@@ -51,11 +51,7 @@ from comgrasp_pin.estimation.wrench_com import (
     wrench_regressor,
 )
 from comgrasp_pin.robot import RobotModel
-from comgrasp_pin.robot_io.at_rest.joint_torques import (
-    MAX_CHI2_DOF,
-    judged_at_rest,
-    rigid_body_finding,
-)
+from comgrasp_pin.robot_io.at_rest.joint_torques import judged_at_rest
 from comgrasp_pin.robot_io.at_rest.windows import (
     MAX_SPEED,
     MIN_STATIC_S,
@@ -76,6 +72,10 @@ from comgrasp_pin.robot_io.results.estimate_result import (
 )
 from comgrasp_pin.robot_io.results.trust import Z95, arm_mass, judge, nominal_tool_reasons, t95
 
+MAX_CHI2_DOF = 25.0
+"""Residuals above 5 times the windows' noise (chi-square per degree of freedom above
+25): the rigid-body model does not explain the readings (a contact, a cable pulling, a
+payload that moves in the gripper); the verdict is then ``unreliable``."""
 TOOL_BEFORE, TOOL_NONE = "the tool identified before", "none (everything beyond the sensor)"
 
 
@@ -215,7 +215,10 @@ def _estimate(robot, fit, T_sensor_ee, log, windows, readings, tool, noise_from)
     G[1:, 1:] = R
     findings = nominal_tool_reasons(tool[0] == TOOL_NOMINAL, float(tool[1]))
     if fit.chi2_dof > MAX_CHI2_DOF:
-        findings.append(rigid_body_finding(fit.chi2_dof))
+        findings.append(
+            f"the residuals are {np.sqrt(fit.chi2_dof):.1f} times the windows' noise: the "
+            "readings do not follow a rigid payload (contact, cable, a part moving)"
+        )
     if not fit.held and fit.mass - Z95 * np.sqrt(fit.cov[0, 0]) > 0:
         findings.append(
             f"the mass {fit.mass:.4g} kg is within 3 standard deviations "

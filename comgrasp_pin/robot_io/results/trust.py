@@ -109,12 +109,7 @@ def motion_reasons(c: Checks) -> list[str]:
             "(comgrasp identify-arm, then --arm-model)"
         )
     if seen and c.explained < MIN_EXPLAINED:
-        reasons.append(
-            f"the payload explains {100 * c.explained:.0f} % of the held-out readings (at "
-            f"least {100 * MIN_EXPLAINED:.0f} % expected): they hold more than a rigid payload "
-            "(an arm model or friction that does not hold, wrong gains, a payload moving in "
-            "the gripper)"
-        )
+        reasons.append(unexplained_reason(c.explained, "held-out readings"))
     m1, m2 = c.halves_mass_kg
     z = abs(m1 - m2) / max(c.halves_diff_std_kg, 1e-300)
     if seen and z > MAX_HALVES_Z:
@@ -124,6 +119,16 @@ def motion_reasons(c: Checks) -> list[str]:
             "motion (gains, friction, the arm model)"
         )
     return reasons
+
+
+def unexplained_reason(explained: float, what: str) -> str:
+    """The reason where the payload explains less than MIN_EXPLAINED of ``what``."""
+    return (
+        f"the payload explains {100 * explained:.0f} % of the {what} (at least "
+        f"{100 * MIN_EXPLAINED:.0f} % expected): they hold more than a rigid payload (an arm "
+        "model or friction that does not hold, wrong gains, a payload moving in the gripper, "
+        "a contact or a cable)"
+    )
 
 
 def nominal_tool_reasons(nominal: bool, tool_mass_kg: float) -> list[str]:

@@ -1,0 +1,264 @@
+"""`comgrasp live`: measure a payload on a connected Franka and, if identified, set its load.
+
+The steps: connect and check the robot (errors, mode, contact); plan the poses (or read
+them); show them and ask before anything moves (``--yes`` skips); the empty run; attach the
+payload (a prompt); the loaded run; the estimate with its verdict; ``--set-load`` sends
+mass, CoM (flange frame) and inertia only for an ``identified`` verdict and checks what the
+robot reports back. ``DIR/live_log.csv`` holds every state read and ``DIR/live.json`` the
+windows and the command that estimates the same file offline with the same result.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from comgrasp_pin.cli.robot import write_json
+from comgrasp_pin.config import LiveConfig
+from comgrasp_pin.errors import InvalidInputError, RobotError
+
+LOOPBACK = "127.0.0.1"
+
+
+def add_subcommand(sub: argparse._SubParsersAction) -> None:
+    """Add `live` to the `comgrasp` subparsers ``sub``."""
+    from comgrasp_pin.robot_io.payload_files.payload import INERTIA_HELP
+
+    d = LiveConfig()
+    p = sub.add_parser(
+        "live",
+        help="measure a payload on a connected Franka (libfranka's protocol) and set its load",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    where = p.add_mutually_exclusive_group(required=True)
+    where.add_argument("--host", help="the robot's address (its FCI, as in Desk)")
+    where.add_argument(
+        "--sim", action="store_true", help=f"a simulated FR3 (franky-sim, MuJoCo) on {LOOPBACK}"
+    )
+    p.add_argument("--urdf", default=None,
+                   help="the arm's URDF (default: the FR3 of franka_description, as franky-sim "
+                   "ships it)")  # fmt: skip
+    p.add_argument(
+        "--ee-frame",
+        default="fr3_link8",
+        help="the flange frame, where libfranka's F_x_Cload is (default fr3_link8)",
+    )
+    p.add_argument("--poses", default=None, metavar="POSES.json",
+                   help="the poses of comgrasp plan-poses (default: planned here, near the "
+                   "arm's pose, free of self-collision, D-optimal)")  # fmt: skip
+    p.add_argument(
+        "--n-poses", type=int, default=d.n_poses, help="poses planned (default %(default)s)"
+    )
+    p.add_argument("--dynamics-factor", type=float, default=d.dynamics_factor,
+                   help=f"share of the arm's speed limits each move uses, at most "
+                   f"{d.max_dynamics_factor:g} (default %(default)s)")  # fmt: skip
+    p.add_argument("--yes", action="store_true",
+                   help="do not ask before moving nor wait for the payload (scripts; the "
+                   "payload must be attached when the empty run ends)")  # fmt: skip
+    p.add_argument("--dry-run", action="store_true", help="plan and show the poses; move nothing")
+    p.add_argument("--set-load", action="store_true",
+                   help="send the identified load to the robot (set_load); never for another "
+                   "verdict")  # fmt: skip
+    p.add_argument("--inertia", default="point", help=f"the inertia sent: {INERTIA_HELP}")
+    p.add_argument("--sim-payload", default=None, metavar="M,CX,CY,CZ[,IXX,IYY,IZZ]",
+                   help="with --sim: the payload attached at the prompt: kg, CoM in the flange "
+                   "frame (m), principal moments in the flange's axes (kg m^2)")  # fmt: skip
+    p.add_argument(
+        "--sim-fault",
+        choices=["reflex"],
+        default=None,
+        help="with --sim: the robot reports a joint reflex (to try the refusal)",
+    )
+    p.add_argument("--out", required=True, metavar="DIR", help="folder for the log and results")
+    p.set_defaults(func=run_live, command="live")
+
+
+def run_live(args: argparse.Namespace) -> int:
+    """The `live` command; its exit status."""
+    from comgrasp_pin.live import FrankaSim, fr3_urdf
+    from comgrasp_pin.live.protocol import check_dynamics_factor
+
+    config = dataclasses.replace(LiveConfig(), n_poses=args.n_poses)
+    config = dataclasses.replace(
+        config, dynamics_factor=check_dynamics_factor(args.dynamics_factor, config)
+    )
+    if not args.sim and (args.sim_payload or args.sim_fault):
+        raise InvalidInputError("--sim-payload and --sim-fault are for --sim")
+    urdf = args.urdf or fr3_urdf()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    if not args.sim:
+        return _session(args, config, urdf, out, args.host, lambda: _prompt_attach(args))
+    payload = _sim_payload(args.sim_payload)
+    with FrankaSim(payload, args.sim_fault) as sim:
+        return _session(args, config, urdf, out, LOOPBACK,
+                        lambda: (_prompt_attach(args), sim.attach()))  # fmt: skip
+
+
+def _session(args, config: LiveConfig, urdf: str, out: Path, host: str, attach) -> int:
+    """Connect, plan, ask, measure, write, estimate, maybe set the load."""
+    from comgrasp_pin.live import FrankaArm, measure
+    from comgrasp_pin.robot_io import load_robot
+    from comgrasp_pin.robot_io.log_files.record import write_csv
+
+    started = time.monotonic()
+    robot = load_robot(urdf, args.ee_frame)
+    arm = FrankaArm(host, config)
+    arm.check_ready()
+    q_start = np.array(arm.state().q, dtype=float)
+    Q = _poses(args, robot, q_start, config)
+    _show_plan(robot, Q, config)
+    if args.dry_run:
+        print("dry run: nothing moved")
+        return 0
+    _confirm(args)
+    arm.configure()
+    rec = measure(arm, tuple(robot.joint_names), Q, attach, config)
+    if len(rec.log.time):
+        write_csv(rec.log, out / "live_log.csv")
+    if rec.wrench is not None:  # the robot's own estimate of the external wrench, for a look
+        np.savetxt(out / "O_F_ext_hat_K.csv", np.column_stack([rec.log.time, rec.wrench]),
+                   delimiter=",", header="time,fx,fy,fz,tx,ty,tz", comments="")  # fmt: skip
+    info = _live_info(args, config, urdf, out, host, Q, rec, time.monotonic() - started)
+    write_json(str(out / "live.json"), info)
+    if not rec.complete:
+        raise RobotError(f"the measurement ended early: {rec.stopped_by}. Kept {len(rec.log.time)} "
+                         f"readings in {out / 'live_log.csv'}; {rec.n_pairs} pose(s) recorded in "
+                         f"both runs ({out / 'live.json'})")  # fmt: skip
+    return _estimate_and_set(args, robot, arm, rec, out, info, config)
+
+
+def _estimate_and_set(args, robot, arm, rec, out: Path, info: dict, config: LiveConfig) -> int:
+    """The estimate of the log as written (offline's computation, on the same file and the
+    same windows' text), then ``--set-load``."""
+    from comgrasp_pin.live.protocol import load_read_back, load_to_send
+    from comgrasp_pin.robot_io import estimate_from_log
+    from comgrasp_pin.robot_io.at_rest import parse_windows
+    from comgrasp_pin.robot_io.log_files import read_csv
+    from comgrasp_pin.robot_io.payload_files.exports import franka_load
+    from comgrasp_pin.robot_io.payload_files.payload import payload_in_flange
+    from comgrasp_pin.robot_io.results.result_file import write_result
+    from comgrasp_pin.robot_io.results.text_summary import summary
+
+    log = read_csv(out / "live_log.csv", robot.joint_names)
+    before = parse_windows(rec.before, "--before", joined=True)
+    after = parse_windows(rec.after, "--after", joined=True)
+    est = estimate_from_log(robot, log, before, after)
+    write_result(est, out / "RESULT.json")
+    print(summary(est))
+    print(f"wrote {out / 'RESULT.json'}, {out / 'live_log.csv'}, {out / 'live.json'}")
+    if not args.set_load:
+        return 0
+    payload = None
+    if est.verdict == "identified":
+        payload = payload_in_flange(robot, est, args.ee_frame, args.inertia)
+    send, why = load_to_send(est, payload)
+    if not send:
+        print(f"comgrasp live: set_load refused: {why}", file=sys.stderr)
+        return 2
+    load = franka_load(payload)
+    m, com, inertia = arm.set_load(load)
+    wrong = load_read_back(load, m, com, inertia, config.load_tolerance)
+    info["set_load"] = {"sent": load, "read_back": {"m_load": m, "F_x_Cload": com.tolist(),
+                                                    "I_load": inertia.tolist()},
+                        "agrees": not wrong}  # fmt: skip
+    write_json(str(out / "live.json"), info)
+    if wrong:
+        raise RobotError(f"the robot reports a load other than the one sent: {'; '.join(wrong)}")
+    print(f"set_load: {load['mass']:.4f} kg, CoM {np.round(1e3 * np.array(load['F_x_Cload']), 2)} "
+          f"mm in {args.ee_frame}; the robot reports the same")  # fmt: skip
+    return 0
+
+
+def _poses(args, robot, q_start: np.ndarray, config: LiveConfig) -> np.ndarray:
+    """The measurement poses (k, n): read from --poses, or planned near ``q_start``."""
+    import json
+
+    from comgrasp_pin.live.protocol import check_poses_fit
+    from comgrasp_pin.planning.measurement_poses import plan_measurement_poses
+
+    if args.poses is not None:
+        try:
+            Q = np.array(json.loads(Path(args.poses).read_text())["q_rad"], dtype=float)
+        except (OSError, ValueError, KeyError, TypeError) as exc:
+            msg = f"--poses {args.poses}: not a plan-poses JSON ({exc})"
+            raise InvalidInputError(msg) from None
+        if Q.ndim != 2 or Q.shape[1] != robot.nq or not np.all(np.isfinite(Q)):
+            raise InvalidInputError(f"--poses {args.poses}: q_rad must be (k, {robot.nq}) finite")
+    else:
+        margin = config.approach_rad + config.joint_margin_rad
+        plan = plan_measurement_poses(
+            robot, config.n_poses, start=q_start, n_candidates=600,
+            min_height=config.min_height_m, max_offset=config.max_pose_offset_rad, margin=margin,
+        )  # fmt: skip
+        Q = plan.q
+    check_poses_fit(Q, robot.q_lower, robot.q_upper, config.approach_rad)
+    return Q
+
+
+def _show_plan(robot, Q: np.ndarray, config: LiveConfig) -> None:
+    print(f"{len(Q)} poses for {robot.ee_frame}, each approached from both sides "
+          f"(+-{config.approach_rad:g} rad), the empty arm first, then the payload; moves at "
+          f"{config.dynamics_factor:g} of the arm's limits:")  # fmt: skip
+    for i, q in enumerate(Q):
+        print(f"  pose {i}: " + " ".join(f"{v:7.1f}" for v in np.degrees(q)) + "  deg")
+
+
+def _confirm(args) -> None:
+    if args.yes:
+        return
+    if not sys.stdin.isatty():
+        raise InvalidInputError("the arm would move: give --yes to move without asking")
+    answer = input("Keep clear of the arm. Move through these poses? [y/N] ")
+    if answer.strip().lower() not in ("y", "yes"):
+        raise InvalidInputError("not confirmed: nothing moved")
+
+
+def _prompt_attach(args) -> None:
+    if args.yes or not sys.stdin.isatty():
+        return
+    input("Empty run done. Attach the payload, keep clear of the arm, and press Enter ")
+
+
+def _sim_payload(text: str | None):
+    from comgrasp_pin.live import SimPayload
+
+    if text is None:
+        return None
+    try:
+        v = [float(x) for x in text.split(",")]
+    except ValueError:
+        v = []
+    if len(v) not in (4, 7) or not np.all(np.isfinite(v)) or v[0] <= 0:
+        raise InvalidInputError(f"--sim-payload {text!r}: give M,CX,CY,CZ[,IXX,IYY,IZZ], M > 0")
+    moments = v[4:] if len(v) == 7 else [1e-3] * 3
+    return SimPayload(v[0], (v[1], v[2], v[3]), tuple(map(tuple, np.diag(moments))))
+
+
+def _live_info(args, config, urdf, out, host, Q, rec, wall_s: float) -> dict:
+    """live.json: what ran, the windows, and the offline command that reads the same log."""
+    offline = (f"comgrasp estimate --urdf {urdf} --ee-frame {args.ee_frame} --csv "
+               f"{out / 'live_log.csv'} --before {rec.before} --after {rec.after} "
+               f"--out {out / 'RESULT_offline.json'}")  # fmt: skip
+    return {
+        "host": host,
+        "simulated": bool(args.sim),
+        "urdf": str(urdf),
+        "ee_frame": args.ee_frame,
+        "config": dataclasses.asdict(config),
+        "poses_rad": Q.tolist(),
+        "complete": rec.complete,
+        "stopped_by": rec.stopped_by,
+        "n_readings": len(rec.log.time),
+        "before": rec.before,
+        "after": rec.after,
+        "robot_wrench_estimate_nonzero": rec.wrench is not None,
+        "wall_time_s": round(wall_s, 2),
+        "offline": offline,
+    }

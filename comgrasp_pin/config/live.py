@@ -1,0 +1,60 @@
+"""The live measurement's numbers: how a connected arm is moved, held and read.
+
+``comgrasp live`` records them in its ``live.json`` beside the log it writes. SI units.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+
+@dataclass(frozen=True)
+class LiveConfig:
+    """How ``comgrasp live`` moves, holds and reads a Franka arm.
+
+    Attributes:
+        dynamics_factor: share of the arm's velocity, acceleration and jerk limits every
+            move uses (libfranka's relative dynamics factor), in (0, max_dynamics_factor].
+        max_dynamics_factor: the cap; a larger ``dynamics_factor`` is refused. Slow moves
+            keep a person beside the arm safe and the torques at rest free of the moves'
+            after-effects.
+        approach_rad: each pose is reached twice, from q + approach and from q - approach on
+            every joint (rad): a joint's stuck friction has opposite signs on the two sides
+            and cancels in their mean (``windows.read_joined``).
+        settle_s: wait after a move before recording (s), and then on until every joint
+            is slower than ``still_speed`` (at most ``max_settle_s``).
+        still_speed: the joint speed (rad/s, over 0.1 s) below which the arm is still: half
+            the static windows' threshold (``windows.MAX_SPEED``).
+        max_settle_s: the longest wait for the arm to be still (s); past it, the window is
+            recorded anyway and the estimate's static check judges it.
+        record_s: the window recorded at each side of each pose (s).
+        sample_period_s: the period at which the robot's state is read (s).
+        n_poses: measurement poses planned when none are given.
+        max_pose_offset_rad: planned poses lie within this of the start on every joint (rad).
+        joint_margin_rad: planned poses keep this from the joint limits, beside the approach
+            (rad).
+        min_height_m: the flange and wrist joints stay this high above the base (m).
+        collision_torque_nm: the contact thresholds sent to the robot before it moves
+            (libfranka's collision behaviour), per joint (N m).
+        collision_force_n: the same for the Cartesian wrench (N, N m).
+        load_tolerance: set_load's read-back must match what was sent within this (kg, m,
+            kg m^2).
+        motion_timeout_s: a move that has not ended after this is stopped (s).
+    """
+
+    dynamics_factor: float = 0.2
+    max_dynamics_factor: float = 0.3
+    approach_rad: float = 0.04
+    settle_s: float = 0.3
+    still_speed: float = 0.005
+    max_settle_s: float = 3.0
+    record_s: float = 0.5
+    sample_period_s: float = 0.002
+    n_poses: int = 4
+    max_pose_offset_rad: float = 0.6
+    joint_margin_rad: float = 0.1
+    min_height_m: float = 0.15
+    collision_torque_nm: tuple[float, ...] = field(default=(25.0,) * 7)
+    collision_force_n: tuple[float, ...] = field(default=(30.0,) * 6)
+    load_tolerance: float = 1e-4
+    motion_timeout_s: float = 30.0
