@@ -222,7 +222,7 @@ def test_a_rerun_recording_has_the_cameras_clouds_com_and_torques(tmp_path, monk
     """What RerunLog logs, and when: against a stand-in ``rerun`` module that records each
     call (``_fake_rerun``).
 
-    The real rerun-sdk is not in the ``test`` extra, so CI (``pip install ".[test,ray]"``)
+    The real rerun-sdk is not in the ``test`` extra, so CI (``pip install ".[test,ray,franka]"``)
     would skip a test that needs it, as it always did: its wheel is 170 MB (rerun-sdk 0.41,
     manylinux x86_64), too much for every CI run. This test runs everywhere instead: the
     entities, timeline, torques (the sensor's own samples), clouds (``cloud_world`` of each

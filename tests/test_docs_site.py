@@ -3,7 +3,7 @@ builds it without a single warning (a broken link or anchor, a page the nav leav
 docstring griffe cannot parse), and the API pages document every name of their module's
 ``__all__``.
 
-The docs tools are part of the ``test`` extra (CI installs ``.[test,ray]``); locally
+The docs tools are part of the ``test`` extra (CI installs ``.[test,ray,franka]``); locally
 ``pip install ".[docs]" && mkdocs serve`` serves the site.
 """
 

@@ -20,7 +20,7 @@ import numpy as np
 
 from comgrasp_pin.cli.robot import write_json
 from comgrasp_pin.config import LiveConfig
-from comgrasp_pin.errors import InvalidInputError, RobotError
+from comgrasp_pin.errors import EmptyGripperError, InvalidInputError, RobotError
 
 LOOPBACK = "127.0.0.1"
 
@@ -75,6 +75,9 @@ def add_subcommand(sub: argparse._SubParsersAction) -> None:
         default=None,
         help="with --sim: the robot reports a joint reflex (to try the refusal)",
     )
+    p.add_argument("--sim-lose-after", type=float, default=None, metavar="S",
+                   help="with --sim: the server ends after S s, as a pulled cable would (to try "
+                   "the refusal)")  # fmt: skip
     p.add_argument("--out", required=True, metavar="DIR", help="folder for the log and results")
     p.set_defaults(func=run_live, command="live")
 
@@ -88,15 +91,15 @@ def run_live(args: argparse.Namespace) -> int:
     config = dataclasses.replace(
         config, dynamics_factor=check_dynamics_factor(args.dynamics_factor, config)
     )
-    if not args.sim and (args.sim_payload or args.sim_fault):
-        raise InvalidInputError("--sim-payload and --sim-fault are for --sim")
+    if not args.sim and (args.sim_payload or args.sim_fault or args.sim_lose_after):
+        raise InvalidInputError("--sim-payload, --sim-fault and --sim-lose-after are for --sim")
     urdf = args.urdf or fr3_urdf()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     if not args.sim:
         return _session(args, config, urdf, out, args.host, lambda: _prompt_attach(args))
     payload = _sim_payload(args.sim_payload)
-    with FrankaSim(payload, args.sim_fault) as sim:
+    with FrankaSim(payload, args.sim_fault, args.sim_lose_after) as sim:
         return _session(args, config, urdf, out, LOOPBACK,
                         lambda: (_prompt_attach(args), sim.attach()))  # fmt: skip
 
@@ -149,7 +152,10 @@ def _estimate_and_set(args, robot, arm, rec, out: Path, info: dict, config: Live
     log = read_csv(out / "live_log.csv", robot.joint_names)
     before = parse_windows(rec.before, "--before", joined=True)
     after = parse_windows(rec.after, "--after", joined=True)
-    est = estimate_from_log(robot, log, before, after)
+    try:
+        est = estimate_from_log(robot, log, before, after)
+    except EmptyGripperError as exc:  # the estimator's own refusal: nothing held
+        raise EmptyGripperError(f"{exc}. Nothing was sent to the robot") from None
     write_result(est, out / "RESULT.json")
     print(summary(est))
     print(f"wrote {out / 'RESULT.json'}, {out / 'live_log.csv'}, {out / 'live.json'}")

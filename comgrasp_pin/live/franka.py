@@ -10,6 +10,8 @@ stops the motion (``robot.stop()``) first.
 
 from __future__ import annotations
 
+import contextlib
+import signal
 import time
 from dataclasses import dataclass, field
 
@@ -64,6 +66,34 @@ class FrankaArm:
                 "simulated FR3)?"
             ) from None
         self.robot.relative_dynamics_factor = config.dynamics_factor
+        self.interrupted = False
+
+    @contextlib.contextmanager
+    def ctrl_c_stops(self):
+        """Within: Ctrl-C stops the arm, then raises KeyboardInterrupt in ``move``/``hold``.
+
+        franky turns a KeyboardInterrupt raised while it waits for a motion into a
+        preempted motion (a ControlException), which would hide that the user stopped the
+        arm; so the signal only sets ``interrupted``, which the loops check every read.
+        """
+
+        def handler(signum, frame):
+            self.interrupted = True
+
+        try:
+            previous = signal.signal(signal.SIGINT, handler)
+        except ValueError:  # not the main thread: Ctrl-C keeps Python's behaviour
+            yield
+            return
+        try:
+            yield
+        finally:
+            signal.signal(signal.SIGINT, previous)
+
+    def _check_interrupt(self) -> None:
+        if self.interrupted:
+            self._stop_quietly()
+            raise KeyboardInterrupt
 
     # -- checks ---------------------------------------------------------------------------
 
@@ -119,6 +149,7 @@ class FrankaArm:
             self.robot.move(franky.JointMotion([float(v) for v in q]), asynchronous=True)
             while not self.robot.join_motion(self.config.sample_period_s):
                 self.read()
+                self._check_interrupt()
                 if time.monotonic() - start > self.config.motion_timeout_s:
                     self.robot.stop()
                     raise RobotError(
@@ -141,6 +172,7 @@ class FrankaArm:
         try:
             while time.monotonic() < end:
                 self.read()
+                self._check_interrupt()
                 time.sleep(self.config.sample_period_s)
         except KeyboardInterrupt:
             self._stop_quietly()

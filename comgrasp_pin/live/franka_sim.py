@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import multiprocessing as mp
 import os
+import signal
 import threading
 from dataclasses import dataclass
 
@@ -109,7 +110,11 @@ class FrankaSim:
 
 
 def _serve(conn, payload: SimPayload | None, fault: str | None, lose_after_s: float | None):
-    """The server process: build the scene, serve on 127.0.0.1, obey the pipe."""
+    """The server process: build the scene, serve on 127.0.0.1, obey the pipe.
+
+    Ctrl-C is the client's: the user stops the arm, not the robot's controller.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:
         import franky_sim
         from franky_sim.mujoco_simulator import MujocoSimulator

@@ -86,15 +86,16 @@ def measure(
     try:
         for run in (EMPTY, LOADED):
             if run == LOADED:
-                attach()
+                attach()  # a prompt: Ctrl-C there is Python's own
                 arm.check_ready()
-            for stop in plan:
-                bar.set_postfix_str(f"{run} pose {stop.pose} side {stop.side:+.0f}")
-                arm.move(stop.q)
-                if stop.record:
-                    arm.settle()
-                    spans[run][stop.pose].append(arm.hold(config.record_s))
-                bar.update()
+            with arm.ctrl_c_stops():
+                for stop in plan:
+                    bar.set_postfix_str(f"{run} pose {stop.pose} side {stop.side:+.0f}")
+                    arm.move(stop.q)
+                    if stop.record:
+                        arm.settle()
+                        spans[run][stop.pose].append(arm.hold(config.record_s))
+                    bar.update()
     except KeyboardInterrupt:
         stopped_by = "interrupted (Ctrl-C): the arm was stopped"
     except Exception as exc:  # RobotError, or anything else: keep what was recorded
