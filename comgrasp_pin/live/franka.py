@@ -19,6 +19,7 @@ import numpy as np
 
 from comgrasp_pin.config import LiveConfig
 from comgrasp_pin.errors import MissingExtraError, RobotError
+from comgrasp_pin.robot_io.at_rest.windows import MAX_SPEED, joint_speed
 
 FRANKA_JOINTS = 7
 SPEED_SPAN_S = 0.1  # the static windows' speed span (windows.SPEED_SPAN)
@@ -197,6 +198,23 @@ class FrankaArm:
             return np.inf
         i = int(np.flatnonzero(early)[-1])
         return float(np.abs(q[-1] - q[i]).max() / (t[-1] - t[i]))
+
+    def record_still(self, seconds: float, tries: int = 3) -> tuple[float, float]:
+        """Settle, then a window of ``seconds`` (s) that passes the static windows' check.
+
+        The check is the offline estimate's (``windows.joint_speed`` at most ``MAX_SPEED``);
+        a window that fails it (the arm still creeping) is recorded again, ``tries`` times
+        at most. The (t0, t1) of the last window (s).
+        """
+        for _ in range(tries):
+            self.settle()
+            first = len(self.samples)
+            t0, t1 = self.hold(seconds)
+            t = np.asarray(self.samples.time[first:])
+            q = np.asarray(self.samples.q[first:])
+            if joint_speed(t, q).max() <= MAX_SPEED:
+                break
+        return t0, t1
 
     def _stop_quietly(self) -> None:
         try:

@@ -93,8 +93,7 @@ def measure(
                     bar.set_postfix_str(f"{run} pose {stop.pose} side {stop.side:+.0f}")
                     arm.move(stop.q)
                     if stop.record:
-                        arm.settle()
-                        spans[run][stop.pose].append(arm.hold(config.record_s))
+                        spans[run][stop.pose].append(arm.record_still(config.record_s))
                     bar.update()
     except KeyboardInterrupt:
         stopped_by = "interrupted (Ctrl-C): the arm was stopped"
