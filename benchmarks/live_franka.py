@@ -125,12 +125,19 @@ def main() -> None:
     ap.add_argument("--n-poses", type=int, default=None, help="comgrasp live's (its default)")
     ap.add_argument("--dynamics-factor", type=float, default=None, help="comgrasp live's")
     ap.add_argument("--out", default="benchmarks/results/live_franka.json")
+    ap.add_argument(
+        "--keep",
+        default=None,
+        metavar="DIR",
+        help="keep each session's folder (log, live.json, RESULT.json) in DIR",
+    )
     args = ap.parse_args()
     options = [] if args.n_poses is None else ["--n-poses", str(args.n_poses)]
     if args.dynamics_factor is not None:
         options += ["--dynamics-factor", str(args.dynamics_factor)]
     rows, empty = [], []
-    with tempfile.TemporaryDirectory() as tmp:
+    with tempfile.TemporaryDirectory() as scratch:
+        tmp = args.keep or scratch
         for i, payload in enumerate(draw_payloads(args.n, args.seed)):
             out = Path(tmp) / f"p{i}"
             res, wall = run_live(out, payload, options)

@@ -153,7 +153,7 @@ def _estimate_and_set(args, robot, arm, rec, out: Path, info: dict, config: Live
     before = parse_windows(rec.before, "--before", joined=True)
     after = parse_windows(rec.after, "--after", joined=True)
     try:
-        est = estimate_from_log(robot, log, before, after)
+        est = estimate_from_log(robot, log, before, after, pose_errors=True)
     except EmptyGripperError as exc:  # the estimator's own refusal: nothing held
         raise EmptyGripperError(f"{exc}. Nothing was sent to the robot") from None
     write_result(est, out / "RESULT.json")
@@ -250,7 +250,7 @@ def _sim_payload(text: str | None):
 def _live_info(args, config, urdf, out, host, Q, rec, wall_s: float) -> dict:
     """live.json: what ran, the windows, and the offline command that reads the same log."""
     offline = (f"comgrasp estimate --urdf {urdf} --ee-frame {args.ee_frame} --csv "
-               f"{out / 'live_log.csv'} --before {rec.before} --after {rec.after} "
+               f"{out / 'live_log.csv'} --before {rec.before} --after {rec.after} --pose-errors "
                f"--out {out / 'RESULT_offline.json'}")  # fmt: skip
     return {
         "host": host,

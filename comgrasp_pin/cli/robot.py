@@ -84,7 +84,8 @@ def _cmd_estimate(args: argparse.Namespace) -> int:
     log, before, after, gains = _log_and_windows(args, robot)
     gain_cov = None if gains is None else gains.cov  # the gains' error enters the covariance
     est = rio.estimate_from_log(robot, log, before, after, args.torque_std, args.method,
-                                args.max_speed, args.drift_std, gain_cov)  # fmt: skip
+                                args.max_speed, args.drift_std, gain_cov,
+                                pose_errors=args.pose_errors)  # fmt: skip
     return finish_estimate(args, robot, est)
 
 
@@ -189,6 +190,10 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
                      "pose's window may join spans, T0:T1+T2:T3 (the pose approached from both "
                      "sides: the mean of the spans' means: stuck friction cancels)")  # fmt: skip
     est.add_argument("--after", default=None, help="holding windows, paired with --before")
+    est.add_argument("--pose-errors", action="store_true",
+                     help="errors that stay over a pose and vary between poses (stuck joint "
+                     "friction): the interval from the poses' spread (block sandwich, "
+                     "Student's t of its dof; 2 poses or more)")  # fmt: skip
     est.add_argument("--auto", action="store_true",
                      help="find static windows and pair them by configuration")  # fmt: skip
     est.add_argument("--grasp-time", type=float, default=None,

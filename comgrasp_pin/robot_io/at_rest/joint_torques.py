@@ -29,6 +29,7 @@ from comgrasp_pin.estimation import ComEstimate, estimate_com
 from comgrasp_pin.estimation.drift import difference_covariance
 from comgrasp_pin.estimation.dynamic_uncertainty import relative_gain_cov
 from comgrasp_pin.estimation.estimate import delta_method
+from comgrasp_pin.estimation.static_errors import pose_block_cov, residual_chi2
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.at_rest.windows import MAX_SPEED, StaticReading, read_pairs
 from comgrasp_pin.robot_io.log_files.joint_readers import JointLog
@@ -48,8 +49,6 @@ from comgrasp_pin.robot_io.results.trust import (
     unexplained_reason,
 )
 
-RANK_TOL = 1e-9
-"""Singular values below this fraction of the largest are directions the fit left open."""
 NOISE_FLOOR = 1e-6
 """Smallest torque std (N m) taken from the samples (a noise-free log has spread 0)."""
 GAIN_STEP = 1e-4
@@ -68,6 +67,7 @@ def estimate_from_log(
     max_speed: float = MAX_SPEED,
     drift_std: float = 0.0,
     gain_cov: np.ndarray | None = None,
+    pose_errors: bool = False,
 ) -> PayloadEstimate:
     """Estimate the payload from paired static windows of ``log``.
 
@@ -91,6 +91,8 @@ def estimate_from_log(
             them; ``_gains_covariance``) and added to the estimate's covariance
             (``JointTorques.gains_cov`` holds that part). Ignored when None or when the log
             holds torques.
+        pose_errors: the covariance from the poses' block sandwich (``static_errors``):
+            errors that stay over a pose (stuck friction), k >= 2.
 
     Raises:
         LogError: the log's joints are not the arm's, or a window is outside the log or
@@ -121,7 +123,7 @@ def estimate_from_log(
                             dtau_cov=cov)  # fmt: skip
 
     est = solve(None, method)
-    est, dof, findings = _residual_rules(est, sigma, cov, tau_a - tau_b)
+    est, dof, findings = _residual_rules(robot, est, Q, sigma, cov, tau_a - tau_b, pose_errors)
     gains_part = None
     if rel is not None:
         gains_part = _gains_covariance(lambda f: solve(f, "lstsq"), est, rel)
@@ -137,49 +139,31 @@ def estimate_from_log(
                           dof=dof, joint_torques=joints)  # fmt: skip
 
 
-def _residual_rules(est: ComEstimate, sigma, cov, dtau) -> tuple[ComEstimate, float, list[str]]:
+def _residual_rules(robot, est: ComEstimate, Q, sigma, cov, dtau, pose_errors: bool):
     """(estimate, dof of its covariance, findings) after the residuals' two rules.
 
     The covariance is scaled by the chi-square per degree of freedom where that exceeds 1
     (the readings err more than their noise; the wrist sensor's rule), with its dof; and the
     payload must explain ``trust.MIN_EXPLAINED`` of the torque differences (the motion's).
+    With ``pose_errors``, the covariance and its (4,) dof are the poses' block sandwich.
     """
     chi2_dof, dof, explained = residual_chi2(est, sigma, cov, dtau)
     if chi2_dof > 1:
         est = dataclasses.replace(est, cov=est.cov * chi2_dof)
     else:
         dof = np.inf
+    if pose_errors:
+        if len(Q) < 2:
+            raise InvalidInputError("pose errors need 2 poses or more: their spread is the error")
+        theta = np.r_[est.mass, est.mass * est.com_ee]
+        cov_mc, dof = pose_block_cov(robot, Q, dtau, sigma, theta)
+        est = dataclasses.replace(est, cov=cov_mc)
     findings = []
-    seen = est.cov is not None and payload_seen(est.mass, np.sqrt(est.cov[0, 0]), t95(dof))
+    q = t95(np.atleast_1d(dof)[0])
+    seen = est.cov is not None and payload_seen(est.mass, np.sqrt(est.cov[0, 0]), q)
     if seen and explained < MIN_EXPLAINED:
         findings.append(unexplained_reason(explained, "torque differences"))
     return est, dof, findings
-
-
-def residual_chi2(est: ComEstimate, sigma: np.ndarray, cov: np.ndarray | None, dtau):
-    """(chi-square per degree of freedom, degrees of freedom, share explained) of the fit.
-
-    The residuals are whitened by the differences' covariance (``cov``, pose-major) or,
-    without it, by the std of a difference of two readings, sqrt(2) ``sigma``. The degrees
-    of freedom are the readings (k n) less the directions the fit determined (the rank of
-    its regressor); NaN chi-square with none left. The share explained is 1 - |r|^2 /
-    |dtau|^2 of the whitened residuals r and torque differences ``dtau`` (k, n): the
-    motion's rule (``trust.MIN_EXPLAINED``) at rest.
-    """
-    r = np.asarray(est.residuals, dtype=float).ravel()
-    d = np.asarray(dtau, dtype=float).ravel()
-    if cov is None:
-        w = np.tile(np.sqrt(2.0) * sigma, len(r) // len(sigma))
-        r, d = r / w, d / w
-    else:
-        L = np.linalg.cholesky(cov)
-        r, d = np.linalg.solve(L, r), np.linalg.solve(L, d)
-    explained = 1.0 - float(r @ r) / max(float(d @ d), 1e-300)
-    sv = np.asarray(est.singular_values, dtype=float)
-    dof = r.size - int(np.sum(sv > RANK_TOL * sv.max()))
-    if dof <= 0 or est.cov is None:
-        return float("nan"), np.inf, explained
-    return float(r @ r / dof), float(dof), explained
 
 
 def judged_at_rest(
@@ -189,7 +173,7 @@ def judged_at_rest(
     windows: dict,
     sources: dict,
     findings: list[str] | None = None,
-    dof: float = np.inf,
+    dof: float | np.ndarray = np.inf,
     **parts,
 ) -> PayloadEstimate:
     """A ``PayloadEstimate`` of readings at rest from the estimator's ``ComEstimate``.
@@ -198,7 +182,8 @@ def judged_at_rest(
     (a payload file would place it on that line's point nearest the origin). ``parts``: the
     sources' own (``joint_torques=``, ``wrench=``). The mass's std by source where the drive
     gains' part is known (``JointTorques.gains_cov``). ``findings``: the mode's own
-    objections; ``dof``: the degrees of freedom of the covariance (inf: known noise).
+    objections; ``dof``: the degrees of freedom of the covariance, one or (4,) for (mass,
+    com_ee) (inf: known noise).
     """
     findings = list(findings or [])
     if est.unobservable_ee is not None:
@@ -208,7 +193,9 @@ def judged_at_rest(
             "the single pose): add poses that turn the wrist against gravity (comgrasp "
             "plan-poses)"
         )
-    verdict, reasons = judge(est.mass, est.com_ee, est.cov, arm_mass(robot), findings, t95(dof))
+    dofs = np.broadcast_to(np.asarray(dof, dtype=float), (4,)).copy()
+    verdict, reasons = judge(est.mass, est.com_ee, est.cov, arm_mass(robot), findings,
+                             t95(dofs[0]))  # fmt: skip
     at_rest = AtRest(q, windows, est.method, est.solver_status, est.condition_number, est)
     joints = parts.get("joint_torques")
     std_parts = {}
@@ -219,7 +206,7 @@ def judged_at_rest(
                      "gains": float(np.sqrt(max(gains, 0.0)))}  # fmt: skip
     return PayloadEstimate(
         est.mass, est.com_ee, est.cov, robot.ee_frame, verdict, reasons, sources, std_parts,
-        est.unobservable_ee, at_rest, dof=np.full(4, dof), **parts,
+        est.unobservable_ee, at_rest, dof=dofs, **parts,
     )  # fmt: skip
 
 
