@@ -23,8 +23,11 @@ class LiveConfig:
             and cancels in their mean (``windows.read_joined``).
         settle_s: wait after a move before recording (s), and then on until every joint
             is slower than ``still_speed`` (at most ``max_settle_s``).
-        still_speed: the joint speed (rad/s, over 0.1 s) below which the arm is still: half
-            the static windows' threshold (``windows.MAX_SPEED``).
+        still_speed: the joint speed (rad/s, over 0.1 s) below which the arm is still. Far
+            below the static windows' threshold (``windows.MAX_SPEED``, 0.01): a joint that
+            stops holds friction, which relaxes while it creeps the last fraction of a
+            milliradian (franky-sim's FR3: at 0.005 rad/s a side's reading still erred by
+            up to 0.7 N m, the CoM by up to 18 mm over 20 payloads; at 1e-4 by 1-4 mm).
         max_settle_s: the longest wait for the arm to be still (s); past it, the window is
             recorded anyway and the estimate's static check judges it.
         record_s: the window recorded at each side of each pose (s).
@@ -46,8 +49,8 @@ class LiveConfig:
     max_dynamics_factor: float = 0.3
     approach_rad: float = 0.04
     settle_s: float = 0.3
-    still_speed: float = 0.005
-    max_settle_s: float = 3.0
+    still_speed: float = 1e-4
+    max_settle_s: float = 4.0
     record_s: float = 0.5
     sample_period_s: float = 0.002
     n_poses: int = 4
