@@ -33,6 +33,7 @@ from comgrasp_pin.errors import (
     OutputError,
     PerceptionError,
     ResumeError,
+    RobotError,
     RodDroppedError,
     RodSlippedError,
     SolverError,
@@ -59,6 +60,7 @@ HARNESS = {
     ResumeError: OSError,
     MissingAssetError: FileNotFoundError,
     MissingExtraError: ImportError,
+    RobotError: RuntimeError,
 }
 PHYSICAL = [RodDroppedError, RodSlippedError]
 

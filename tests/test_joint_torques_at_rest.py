@@ -100,7 +100,10 @@ def test_tilted_mount(robot, planned):
     assert abs(est.mass - MASS) < 3 * est.std[0]
     assert np.all(np.abs(est.com_ee - COM) < 3 * est.std[1:])
     wrong = estimate_from_log(robot, log, before, after)  # floor gravity assumed
-    assert np.max(np.abs(wrong.com_ee - COM) / wrong.std[1:]) > 10
+    assert np.max(np.abs(wrong.com_ee - COM)) > 0.05  # the mount matters: 5 cm off
+    # and the residuals say so (the chi-square rule): its interval widens to hold the truth
+    assert wrong.std[1:].max() > 10 * est.std[1:].max()
+    assert np.all(np.abs(wrong.com_ee - COM) < wrong.t95[1:] * wrong.std[1:])
 
 
 def test_unpaired_windows_are_refused(robot, planned):
@@ -119,7 +122,9 @@ def test_one_pose_reports_the_unobservable_direction(robot, planned):
 def test_a_drifting_sensor_is_covered_with_drift_std(robot, planned):
     """200 logs whose efforts drift (a random walk of 0.01 N m / sqrt(s) per joint, drawn on
     the log's own clock, and the white noise): with ``drift_std`` the reported std is within
-    30 % of the estimates' spread; taken as white noise, the std understates it."""
+    30 % of the estimates' spread. Taken as white noise, the drift shows in the residuals and
+    their chi-square widens the std towards the spread (0.66-1.03 of it here): not as close
+    as the model of the drift."""
     log, before, after, _ = session(planned, rnea_torques(robot, MASS, COM), robot.joint_names,
                                     RATE, 0.0)  # fmt: skip
     rng = np.random.default_rng(8)
@@ -138,7 +143,8 @@ def test_a_drifting_sensor_is_covered_with_drift_std(robot, planned):
         ratios[drift_std] = np.mean(stds, axis=0) / np.std(estimates, axis=0, ddof=1)
     print("sigma / MC spread without and with drift_std:", ratios)
     assert np.all(np.abs(ratios[drift] - 1) < 0.3), ratios[drift]
-    assert np.all(ratios[0.0] < 0.7), ratios[0.0]
+    assert np.all(ratios[0.0] > 0.5), ratios[0.0]
+    assert np.mean(np.abs(ratios[drift] - 1)) < np.mean(np.abs(ratios[0.0] - 1))
 
 
 def test_a_negative_drift_is_refused(robot, planned):

@@ -204,7 +204,7 @@ def test_result_json_reads_back_and_refuses_other_schemas(robot, tmp_path):
     assert data["schema_version"] == 3 and data["mass_kg"] == est.mass
     np.testing.assert_allclose(data["cov"], est.cov, rtol=1e-15)
     lo, hi = data["interval95_mass_kg"]
-    assert lo < est.mass < hi and hi - lo == pytest.approx(2 * 1.959964 * est.std[0], rel=1e-6)
+    assert lo < est.mass < hi and hi - lo == pytest.approx(2 * est.t95[0] * est.std[0], rel=1e-6)
     mean, cov = prior_of_result(tmp_path / "R.json")
     np.testing.assert_allclose(mean, np.r_[est.mass, est.com_ee], rtol=1e-15)
     old = tmp_path / "old.json"

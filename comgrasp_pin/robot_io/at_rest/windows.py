@@ -65,14 +65,13 @@ def parse_windows(
     out = []
     for part in (p.strip() for p in str(text).split(",")):
         pieces = part.split("+") if joined else [part]
-        try:
-            bounds = [float(x) for piece in pieces for x in _span_text(piece)]
-        except ValueError:
+        bounds = _bounds([piece.split(":") for piece in pieces])
+        if bounds is None:
             joins = " or spans joined by + (1.0:2.0+3.0:4.0)" if joined else ""
             raise InvalidInputError(
                 f"{option} {text!r}: each window is T0:T1 in seconds from the log's start"
                 f"{joins}, windows separated by commas (e.g. 1.0:2.0,5.5:6.5)"
-            ) from None
+            )
         for t0, t1 in zip(bounds[::2], bounds[1::2]):
             if not (np.isfinite(t0) and np.isfinite(t1) and t1 > t0):
                 raise InvalidInputError(f"{option} window {part!r}: need finite T0 < T1")
@@ -80,12 +79,14 @@ def parse_windows(
     return out
 
 
-def _span_text(piece: str) -> list[str]:
-    """The two numbers of ``"T0:T1"``; ValueError otherwise."""
-    numbers = piece.split(":")
-    if len(numbers) != 2:
-        raise ValueError(piece)
-    return numbers
+def _bounds(numbers: list[list[str]]) -> list[float] | None:
+    """The floats of spans' ``[T0, T1]`` texts, or None where one is not two numbers."""
+    if any(len(n) != 2 for n in numbers):
+        return None
+    try:
+        return [float(x) for n in numbers for x in n]
+    except ValueError:
+        return None
 
 
 def spans(window: tuple[float, ...]) -> list[tuple[float, float]]:
