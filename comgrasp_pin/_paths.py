@@ -13,7 +13,7 @@ from functools import cache
 from importlib import metadata
 from pathlib import Path
 
-from comgrasp_pin.errors import InvalidInputError, MissingAssetError
+from comgrasp_pin.errors import InvalidInputError, MissingAssetError, MissingExtraError
 
 _PACKAGE = Path(__file__).resolve().parent
 DATA_FOLDERS = ("urdf", "sim")
@@ -63,6 +63,17 @@ def example_robot_urdf(relative: str) -> Path:
     if not path.exists():
         raise MissingAssetError(f"no such example-robot-data file: {path}")
     return path
+
+
+def fr3_urdf() -> Path:
+    """The FR3's URDF that franky-sim ships (franka_description's), found without importing
+    franky-sim (whose import loads MuJoCo); MissingExtraError where the extra is missing."""
+    import importlib.util
+
+    spec = importlib.util.find_spec("franky_sim")
+    if spec is None or not spec.submodule_search_locations:
+        raise MissingExtraError('the FR3 needs franky-sim: pip install ".[franka]"')
+    return Path(spec.submodule_search_locations[0]) / "assets" / "fr3.urdf"
 
 
 def results_dir() -> Path:

@@ -84,7 +84,7 @@ def add_subcommand(sub: argparse._SubParsersAction) -> None:
 
 def run_live(args: argparse.Namespace) -> int:
     """The `live` command; its exit status."""
-    from comgrasp_pin.live import FrankaSim, fr3_urdf
+    from comgrasp_pin._paths import fr3_urdf
     from comgrasp_pin.live.protocol import check_dynamics_factor
 
     config = dataclasses.replace(LiveConfig(), n_poses=args.n_poses)
@@ -93,11 +93,13 @@ def run_live(args: argparse.Namespace) -> int:
     )
     if not args.sim and (args.sim_payload or args.sim_fault or args.sim_lose_after):
         raise InvalidInputError("--sim-payload, --sim-fault and --sim-lose-after are for --sim")
-    urdf = args.urdf or fr3_urdf()
+    urdf = args.urdf or str(fr3_urdf())
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     if not args.sim:
         return _session(args, config, urdf, out, args.host, lambda: _prompt_attach(args))
+    from comgrasp_pin.simulation.franka_sim import FrankaSim  # the simulated FR3: MuJoCo
+
     payload = _sim_payload(args.sim_payload)
     with FrankaSim(payload, args.sim_fault, args.sim_lose_after) as sim:
         return _session(args, config, urdf, out, LOOPBACK,
@@ -233,7 +235,7 @@ def _prompt_attach(args) -> None:
 
 
 def _sim_payload(text: str | None):
-    from comgrasp_pin.live import SimPayload
+    from comgrasp_pin.simulation.franka_sim import SimPayload
 
     if text is None:
         return None

@@ -2,7 +2,8 @@
 
 World building, the running simulation, servo, torque sensors, cameras and their depth
 errors, objects, skills, the eyes (render -> perception), the simulated ``Cell``, scoring
-against the truth, recorder, viewer, episode.
+against the truth, recorder, viewer, episode; the simulated FR3 that speaks libfranka's
+protocol (``franka_sim``, franky-sim in its own process).
 
 Layer: above ``procedures`` (the simulated ``Cell`` runs them) and ``robot_io`` (its
 ``JointLog``), and everything under them; only ``experiments`` and ``cli`` import it.

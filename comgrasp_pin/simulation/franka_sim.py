@@ -2,7 +2,7 @@
 
 A payload is attached mid-session, as a user would. The server runs in its own process on
 the loopback address (127.0.0.1), as a robot would run on its own controller: the client
-side (``franka``) cannot tell it from an FR3 and imports no MuJoCo. The payload is a body on
+side (``live.franka``) cannot tell it from an FR3 and imports no MuJoCo. The payload is a body on
 the arm's last link (``fr3_link7``, whose axes are the flange's) with the given mass, CoM
 (flange frame) and inertia about the CoM; it weighs nothing until ``attach`` (the prompt's
 "attach the payload now"), which sets its mass and inertia in the running model as a
@@ -20,7 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from comgrasp_pin.errors import MissingExtraError, RobotError
+from comgrasp_pin._paths import fr3_urdf
+from comgrasp_pin.errors import RobotError
 
 HOST = "127.0.0.1"
 LINK7, FLANGE_Z_M = "robot0_fr3_link7", 0.107  # the flange: 0.107 m along link 7's z
@@ -42,16 +43,6 @@ class SimPayload:
     mass: float
     com_flange: tuple[float, float, float]
     inertia: tuple[tuple[float, ...], ...] = ((1e-3, 0, 0), (0, 1e-3, 0), (0, 0, 1e-3))
-
-
-def fr3_urdf() -> str:
-    """The FR3's URDF that franky-sim ships (franka_description's), without importing it."""
-    import importlib.util
-
-    spec = importlib.util.find_spec("franky_sim")
-    if spec is None or not spec.submodule_search_locations:
-        raise MissingExtraError('the simulated FR3 needs franky-sim: pip install ".[franka]"')
-    return os.path.join(spec.submodule_search_locations[0], "assets", "fr3.urdf")
 
 
 class FrankaSim:
