@@ -19,10 +19,9 @@ import numpy as np
 
 from comgrasp_pin.config import LiveConfig
 from comgrasp_pin.errors import MissingExtraError, RobotError
-from comgrasp_pin.robot_io.at_rest.windows import MAX_SPEED, joint_speed
+from comgrasp_pin.robot_io.at_rest.windows import MAX_SPEED, SPEED_SPAN, joint_speed
 
 FRANKA_JOINTS = 7
-SPEED_SPAN_S = 0.1  # the static windows' speed span (windows.SPEED_SPAN)
 INSTALL_HINT = 'pip install ".[franka]" (franky-control, and franky-sim for --sim)'
 
 
@@ -185,19 +184,19 @@ class FrankaArm:
         c = self.config
         self.hold(c.settle_s)
         waited = c.settle_s
-        while waited < c.max_settle_s and self.speed(SPEED_SPAN_S) > c.still_speed:
-            self.hold(SPEED_SPAN_S)
-            waited += SPEED_SPAN_S
+        while waited < c.max_settle_s and self.speed() > c.still_speed:
+            self.hold(SPEED_SPAN)
+            waited += SPEED_SPAN
 
-    def speed(self, span: float) -> float:
-        """The largest joint speed (rad/s) over the last ``span`` seconds of readings."""
-        t = np.asarray(self.samples.time[-int(4 * span / self.config.sample_period_s) :])
+    def speed(self) -> float:
+        """The largest joint speed (rad/s) over the last ``SPEED_SPAN`` of readings.
+
+        The static windows' ``joint_speed``, at the reading that span before the last.
+        """
+        t = np.asarray(self.samples.time[-int(4 * SPEED_SPAN / self.config.sample_period_s) :])
         q = np.asarray(self.samples.q[-len(t) :])
-        early = t <= t[-1] - span
-        if not early.any():
-            return np.inf
-        i = int(np.flatnonzero(early)[-1])
-        return float(np.abs(q[-1] - q[i]).max() / (t[-1] - t[i]))
+        early = np.flatnonzero(t <= t[-1] - SPEED_SPAN)
+        return float(joint_speed(t, q)[early[-1]]) if len(early) else np.inf
 
     def record_still(self, seconds: float, tries: int = 3) -> tuple[float, float]:
         """Settle, then a window of ``seconds`` (s) that passes the static windows' check.

@@ -148,16 +148,16 @@ def _residual_rules(robot, est: ComEstimate, Q, sigma, cov, dtau, pose_errors: b
     With ``pose_errors``, the covariance and its (4,) dof are the poses' block sandwich.
     """
     chi2_dof, dof, explained = residual_chi2(est, sigma, cov, dtau)
-    if chi2_dof > 1:
-        est = dataclasses.replace(est, cov=est.cov * chi2_dof)
-    else:
-        dof = np.inf
     if pose_errors:
         if len(Q) < 2:
             raise InvalidInputError("pose errors need 2 poses or more: their spread is the error")
         theta = np.r_[est.mass, est.mass * est.com_ee]
         cov_mc, dof = pose_block_cov(robot, Q, dtau, sigma, theta)
         est = dataclasses.replace(est, cov=cov_mc)
+    elif chi2_dof > 1:
+        est = dataclasses.replace(est, cov=est.cov * chi2_dof)
+    else:
+        dof = np.inf
     findings = []
     q = t95(np.atleast_1d(dof)[0])
     seen = est.cov is not None and payload_seen(est.mass, np.sqrt(est.cov[0, 0]), q)
