@@ -9,8 +9,12 @@ interval (Student's t of its dof) holds the truth, whether the load was set, and
 time of one identification (connect, plan, both runs, estimate, set_load). Then ``--empty``
 sessions with nothing attached: the load must never be set.
 
+``--motion``: the same payloads measured along one planned motion instead (``comgrasp
+plan-motion`` for the FR3 at the sim's pose, 8 s, ``MOTION_OPTIONS``: slow enough for
+dynamics factor 0.2; planned once, its time given apart), written to ``live_franka_motion.json``.
+
     python benchmarks/live_franka.py [--n 20] [--empty 2] [--seed 0] [--n-poses K]
-        [--dynamics-factor F] [--out benchmarks/results/live_franka.json]
+        [--dynamics-factor F] [--motion] [--out JSON]
 
 Needs the franka extra (``pip install ".[franka]"``); connects only to 127.0.0.1.
 """
@@ -26,6 +30,20 @@ import time
 from pathlib import Path
 
 import numpy as np
+
+SIM_START = "0,0,0,-1.5708,0,1.5708,0.7854"  # franky-sim's FR3 at start (rad)
+MOTION_OPTIONS = ["--duration", "8", "--velocity-scale", "0.3", "--acceleration", "3"]
+
+
+def plan_motion(path: Path) -> float:
+    """Plan the benchmark's motion into ``path``; the planning's wall time (s)."""
+    from comgrasp_pin._paths import fr3_urdf
+
+    cmd = [sys.executable, "-m", "comgrasp_pin.cli", "plan-motion", "--urdf", str(fr3_urdf()),
+           "--ee-frame", "fr3_link8", "--start", SIM_START, *MOTION_OPTIONS, "--out", str(path)]  # fmt: skip
+    start = time.monotonic()
+    subprocess.run(cmd, check=True, capture_output=True, text=True, timeout=600)
+    return time.monotonic() - start
 
 
 def draw_payloads(n: int, seed: int) -> list[dict]:
@@ -80,6 +98,7 @@ def score(payload: dict, out: Path, res, wall_s: float) -> dict:
         mass_held=bool(lo <= m_true <= hi),
         com_held=[bool(a <= t <= b) for (a, b), t in zip(c_iv, c_true)],
         dof=r.get("dof"),
+        inertia_verdict=(r.get("inertia") or {}).get("verdict"),
     )
     return row
 
@@ -124,7 +143,9 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--n-poses", type=int, default=None, help="comgrasp live's (its default)")
     ap.add_argument("--dynamics-factor", type=float, default=None, help="comgrasp live's")
-    ap.add_argument("--out", default="benchmarks/results/live_franka.json")
+    ap.add_argument("--motion", action="store_true", help="along a planned motion")
+    ap.add_argument("--out", default=None, help="JSON (default benchmarks/results/"
+                    "live_franka.json, or live_franka_motion.json with --motion)")  # fmt: skip
     ap.add_argument(
         "--keep",
         default=None,
@@ -135,9 +156,16 @@ def main() -> None:
     options = [] if args.n_poses is None else ["--n-poses", str(args.n_poses)]
     if args.dynamics_factor is not None:
         options += ["--dynamics-factor", str(args.dynamics_factor)]
-    rows, empty = [], []
+    args.out = args.out or "benchmarks/results/" + (
+        "live_franka_motion.json" if args.motion else "live_franka.json"
+    )
+    rows, empty, plan_s = [], [], None
     with tempfile.TemporaryDirectory() as scratch:
         tmp = args.keep or scratch
+        if args.motion:
+            Path(tmp).mkdir(parents=True, exist_ok=True)
+            plan_s = plan_motion(Path(tmp) / "motion.json")
+            options += ["--motion", str(Path(tmp) / "motion.json")]
         for i, payload in enumerate(draw_payloads(args.n, args.seed)):
             out = Path(tmp) / f"p{i}"
             res, wall = run_live(out, payload, options)
@@ -154,8 +182,8 @@ def main() -> None:
                           "set_load": info.get("set_load"),
                           "message": res.stderr.strip().splitlines()[-1]})  # fmt: skip
             print(f"empty {i}: exit {res.returncode}, {empty[-1]['message'][-90:]}", flush=True)
-    result = {"args": vars(args), "summary": summary(rows, empty), "payloads": rows,
-              "empty": empty}  # fmt: skip
+    result = {"args": vars(args), "summary": {**summary(rows, empty), "plan_motion_s": plan_s},
+              "payloads": rows, "empty": empty}  # fmt: skip
     Path(args.out).write_text(json.dumps(result, indent=2) + "\n")
     print(json.dumps(result["summary"], indent=2))
     print(f"wrote {args.out}")

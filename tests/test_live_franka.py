@@ -164,3 +164,59 @@ def test_the_dynamics_factor_is_capped(tmp_path):
     res = live(tmp_path, "--sim", "--yes", "--dynamics-factor", "0.8", timeout=60)
     no_traceback(res)
     assert res.returncode == 2 and "--dynamics-factor 0.8: must be in (0, 0.3]" in res.stderr
+
+
+@pytest.fixture(scope="module")
+def motion_file(tmp_path_factory):
+    """A short excitation motion for the FR3 at the sim's pose, slow enough for factor 0.2."""
+    from comgrasp_pin._paths import fr3_urdf
+
+    out = tmp_path_factory.mktemp("motion") / "motion.json"
+    cmd = [sys.executable, "-m", "comgrasp_pin.cli", "plan-motion", "--urdf", str(fr3_urdf()),
+           "--ee-frame", "fr3_link8", "--start", "0,0,0,-1.5708,0,1.5708,0.7854",
+           "--duration", "8", "--velocity-scale", "0.3", "--acceleration", "3",
+           "--candidates", "200", "--starts", "1", "--out", str(out)]  # fmt: skip
+    res = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+    return out
+
+
+def test_a_payload_is_identified_along_a_planned_motion(tmp_path, motion_file):
+    spec = ",".join(f"{v:g}" for v in (MASS, *COM, *MOMENTS))
+    res = live(tmp_path, "--sim", "--yes", "--set-load", "--motion", str(motion_file),
+               "--sim-payload", spec)  # fmt: skip
+    assert res.returncode == 0, res.stderr
+    r = json.loads((tmp_path / "RESULT.json").read_text())
+    assert r["verdict"] == "identified" and r["mode"] == "a motion's joint torques"
+    mass, com = r["mass_kg"], np.array(r["com_m"])
+    # 20 payloads (benchmarks/live_franka.py --motion): see benchmarks/README.md
+    assert abs(mass - MASS) < 0.05 * MASS
+    assert np.linalg.norm(com - COM) < 20e-3
+    std = np.array([r["std"]["mass_kg"], *r["std"]["com_m"]])
+    assert np.all(np.abs(np.r_[mass, com] - np.r_[MASS, COM]) < 4.5 * std)
+    info = json.loads((tmp_path / "live.json").read_text())
+    assert info["set_load"]["agrees"] and info["motion"] == str(motion_file)
+    # the same numbers offline, from the written log and windows
+    cmd = [sys.executable, "-m", "comgrasp_pin.cli", *info["offline"].split()[1:]]
+    off = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    assert off.returncode == 0, off.stderr
+    assert json.loads((tmp_path / "RESULT_offline.json").read_text()) == r
+
+
+def test_a_motion_dry_run_shows_it_and_moves_nothing(tmp_path, motion_file):
+    res = live(tmp_path, "--sim", "--dry-run", "--motion", str(motion_file), timeout=120)
+    assert res.returncode == 0, res.stderr
+    assert "a planned motion for fr3_link8" in res.stdout and "waypoints" in res.stdout
+    assert "dry run: nothing moved" in res.stdout
+    assert not (tmp_path / "live_log.csv").exists()
+
+
+def test_another_arms_motion_is_refused(tmp_path, motion_file):
+    d = json.loads(motion_file.read_text())
+    d["joint_names"] = [f"joint{i}" for i in range(7)]
+    other = tmp_path / "other.json"
+    other.write_text(json.dumps(d))
+    res = live(tmp_path, "--sim", "--yes", "--motion", str(other), timeout=120)
+    no_traceback(res)
+    assert res.returncode == 2 and "not of this arm's" in res.stderr
+    assert not (tmp_path / "live_log.csv").exists()

@@ -12,7 +12,9 @@ from comgrasp_pin.live.protocol import (
     check_poses_fit,
     load_read_back,
     load_to_send,
+    motion_waypoints,
     stops,
+    visit_order,
     windows_text,
 )
 from comgrasp_pin.live.session import Recording
@@ -31,6 +33,50 @@ def test_each_pose_is_reached_from_both_sides_and_recorded_twice():
     # the stop before each recording is the pose moved by the approach, on the recorded side
     for before, at in zip(plan[::2], plan[1::2]):
         np.testing.assert_allclose(before.q - at.q, at.side * 0.04)
+
+
+def test_poses_are_visited_along_the_shortest_path():
+    # on a line: from 0 the shortest path visits 0.1, 0.5, 1.0 in that order, whatever the
+    # order given; a path's length is the sum of its moves' largest joint excursions
+    Q = np.array([[1.0, 0.0], [0.1, 0.05], [0.5, -0.2]])
+    assert visit_order(np.zeros(2), Q) == [1, 2, 0]
+    assert visit_order(np.array([1.2, 0.0]), Q) == [0, 2, 1]
+    # beyond 7 poses the nearest next: still the line's order
+    line = np.linspace(0, 1, 9)[::-1, None] * np.ones((1, 2))
+    assert visit_order(np.zeros(2), line) == list(range(8, -1, -1))
+    # the stops follow the order given
+    plan = stops(Q, 0.04, [1, 2, 0])
+    assert [s.pose for s in plan if s.record] == [1, 1, 2, 2, 0, 0]
+
+
+def test_a_motion_too_fast_for_the_dynamics_factor_is_played_slower():
+    # q = A sin(w t): peak velocity A w, acceleration A w^2, jerk A w^3; the slow-down is
+    # the largest of v/v_max, sqrt(a/a_max), cbrt(j/j_max) (derived by hand), at least 1
+    c = LiveConfig()
+    t = np.linspace(0, 2 * np.pi, 2001)
+    A, w = 0.3, 2.0
+    q = np.column_stack([A * np.sin(w * t), np.zeros_like(t)])
+    qd = np.column_stack([A * w * np.cos(w * t), np.zeros_like(t)])
+    qdd = np.column_stack([-A * w**2 * np.sin(w * t), np.zeros_like(t)])
+    share = c.motion_limit_share * 0.2
+    for v_max, a_max, j_max, expected in [
+        (10.0, 1.0, 100.0, np.sqrt(A * w**2 / (share * 1.0))),  # acceleration-bound
+        (1.0, 100.0, 100.0, A * w / (share * 1.0)),  # velocity-bound
+        (100.0, 100.0, 1.0, np.cbrt(A * w**3 / (share * 1.0))),  # jerk-bound
+        (1e3, 1e3, 1e4, 1.0),  # within: as planned
+    ]:
+        limits = (np.full(2, v_max), np.full(2, a_max), np.full(2, j_max))
+        wp = motion_waypoints(t, q, qd, qdd, limits, 0.2, c)
+        assert wp.slow_down == pytest.approx(expected, rel=2e-3)
+        assert wp.duration_s == pytest.approx(t[-1] * wp.slow_down)
+        np.testing.assert_allclose(np.diff(wp.t), c.waypoint_period_s, rtol=0.05)
+        # the waypoints lie on the planned path at the slowed time (to linear interpolation
+        # error), velocities divided
+        s = wp.t[:-1] / wp.slow_down
+        np.testing.assert_allclose(wp.q[:-1, 0], A * np.sin(w * s), atol=1e-5)
+        np.testing.assert_allclose(wp.qd[:-1, 0], A * w * np.cos(w * s) / wp.slow_down, atol=1e-5)
+        np.testing.assert_array_equal(wp.qd[-1], 0.0)
+        np.testing.assert_array_equal(wp.start, q[0])
 
 
 def test_dynamics_factor_is_capped():

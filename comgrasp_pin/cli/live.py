@@ -1,8 +1,9 @@
 """`comgrasp live`: measure a payload on a connected Franka and, if identified, set its load.
 
 The steps: connect and check the robot (errors, mode, contact); plan the poses (or read
-them); show them and ask before anything moves (``--yes`` skips); the empty run; attach the
-payload (a prompt); the loaded run; the estimate with its verdict; ``--set-load`` sends
+them, or read a planned motion: ``--motion``); show them and ask before anything moves
+(``--yes`` skips); the empty run; attach the payload (a prompt); the loaded run; the estimate
+with its verdict (along a motion: the inertia too); ``--set-load`` sends
 mass, CoM (flange frame) and inertia only for an ``identified`` verdict and checks what the
 robot reports back. ``DIR/live_log.csv`` holds every state read and ``DIR/live.json`` the
 windows and the command that estimates the same file offline with the same result.
@@ -18,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from comgrasp_pin.cli.live_plan import prompt_attach, sim_payload
 from comgrasp_pin.cli.robot import write_json
 from comgrasp_pin.config import LiveConfig
 from comgrasp_pin.errors import EmptyGripperError, InvalidInputError, RobotError
@@ -55,13 +57,18 @@ def add_subcommand(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--n-poses", type=int, default=d.n_poses, help="poses planned (default %(default)s)"
     )
+    p.add_argument("--motion", default=None, metavar="MOTION.json",
+                   help="measure along this motion of comgrasp plan-motion instead of at rest "
+                   "(the inertia too; played slower where it would exceed the dynamics "
+                   "factor)")  # fmt: skip
     p.add_argument("--dynamics-factor", type=float, default=d.dynamics_factor,
                    help=f"share of the arm's speed limits each move uses, at most "
                    f"{d.max_dynamics_factor:g} (default %(default)s)")  # fmt: skip
     p.add_argument("--yes", action="store_true",
                    help="do not ask before moving nor wait for the payload (scripts; the "
                    "payload must be attached when the empty run ends)")  # fmt: skip
-    p.add_argument("--dry-run", action="store_true", help="plan and show the poses; move nothing")
+    p.add_argument("--dry-run", action="store_true",
+                   help="plan and show the poses or the motion; move nothing")  # fmt: skip
     p.add_argument("--set-load", action="store_true",
                    help="send the identified load to the robot (set_load); never for another "
                    "verdict")  # fmt: skip
@@ -93,22 +100,25 @@ def run_live(args: argparse.Namespace) -> int:
     )
     if not args.sim and (args.sim_payload or args.sim_fault or args.sim_lose_after):
         raise InvalidInputError("--sim-payload, --sim-fault and --sim-lose-after are for --sim")
+    if args.motion is not None and args.poses is not None:
+        raise InvalidInputError("give --poses (at rest) or --motion (along a motion), not both")
     urdf = args.urdf or str(fr3_urdf())
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     if not args.sim:
-        return _session(args, config, urdf, out, args.host, lambda: _prompt_attach(args))
+        return _session(args, config, urdf, out, args.host, lambda: prompt_attach(args))
     from comgrasp_pin.simulation.franka_sim import FrankaSim  # the simulated FR3: MuJoCo
 
-    payload = _sim_payload(args.sim_payload)
+    payload = sim_payload(args.sim_payload)
     with FrankaSim(payload, args.sim_fault, args.sim_lose_after) as sim:
         return _session(args, config, urdf, out, LOOPBACK,
-                        lambda: (_prompt_attach(args), sim.attach()))  # fmt: skip
+                        lambda: (prompt_attach(args), sim.attach()))  # fmt: skip
 
 
 def _session(args, config: LiveConfig, urdf: str, out: Path, host: str, attach) -> int:
     """Connect, plan, ask, measure, write, estimate, maybe set the load."""
-    from comgrasp_pin.live import FrankaArm, measure
+    from comgrasp_pin.cli import live_plan as lp
+    from comgrasp_pin.live import FrankaArm, measure, measure_motion
     from comgrasp_pin.robot_io import load_robot
     from comgrasp_pin.robot_io.log_files.record import write_csv
 
@@ -116,26 +126,33 @@ def _session(args, config: LiveConfig, urdf: str, out: Path, host: str, attach) 
     robot = load_robot(urdf, args.ee_frame)
     arm = FrankaArm(host, config)
     arm.check_ready()
-    q_start = np.array(arm.state().q, dtype=float)
-    Q = _poses(args, robot, q_start, config)
-    _show_plan(robot, Q, config)
+    q_now = np.array(arm.state().q, dtype=float)
+    if args.motion is None:
+        plan = lp.poses(args, robot, q_now, config)
+        lp.show_poses(robot, plan, config)
+    else:
+        plan = lp.motion(args, robot, arm.limits(), config)
+        lp.show_motion(robot, plan, q_now, config)
     if args.dry_run:
         print("dry run: nothing moved")
         return 0
-    _confirm(args)
+    lp.confirm(args, "through these poses" if args.motion is None else "along this motion")
     arm.configure()
-    rec = measure(arm, tuple(robot.joint_names), Q, attach, config)
+    names = tuple(robot.joint_names)
+    if args.motion is None:
+        rec = measure(arm, names, plan, attach, config)
+    else:
+        rec = measure_motion(arm, names, plan, attach, config)
     if len(rec.log.time):
         write_csv(rec.log, out / "live_log.csv")
     if rec.wrench is not None:  # the robot's own estimate of the external wrench, for a look
         np.savetxt(out / "O_F_ext_hat_K.csv", np.column_stack([rec.log.time, rec.wrench]),
                    delimiter=",", header="time,fx,fy,fz,tx,ty,tz", comments="")  # fmt: skip
-    info = _live_info(args, config, urdf, out, host, Q, rec, time.monotonic() - started)
+    info = lp.live_info(args, config, urdf, out, host, plan, rec, time.monotonic() - started)
     write_json(str(out / "live.json"), info)
     if not rec.complete:
         raise RobotError(f"the measurement ended early: {rec.stopped_by}. Kept {len(rec.log.time)} "
-                         f"readings in {out / 'live_log.csv'}; {rec.n_pairs} pose(s) recorded in "
-                         f"both runs ({out / 'live.json'})")  # fmt: skip
+                         f"readings in {out / 'live_log.csv'} ({out / 'live.json'})")  # fmt: skip
     return _estimate_and_set(args, robot, arm, rec, out, info, config)
 
 
@@ -145,6 +162,7 @@ def _estimate_and_set(args, robot, arm, rec, out: Path, info: dict, config: Live
     from comgrasp_pin.live.protocol import load_read_back, load_to_send
     from comgrasp_pin.robot_io import estimate_from_log
     from comgrasp_pin.robot_io.at_rest import parse_windows
+    from comgrasp_pin.robot_io.from_motion.dynamic import estimate_payload_dynamic
     from comgrasp_pin.robot_io.log_files import read_csv
     from comgrasp_pin.robot_io.payload_files.exports import franka_load
     from comgrasp_pin.robot_io.payload_files.payload import payload_in_flange
@@ -152,10 +170,14 @@ def _estimate_and_set(args, robot, arm, rec, out: Path, info: dict, config: Live
     from comgrasp_pin.robot_io.results.text_summary import summary
 
     log = read_csv(out / "live_log.csv", robot.joint_names)
-    before = parse_windows(rec.before, "--before", joined=True)
-    after = parse_windows(rec.after, "--after", joined=True)
     try:
-        est = estimate_from_log(robot, log, before, after, pose_errors=True)
+        if rec.motion_windows is not None:
+            empty, loaded = (parse_windows(text, "window")[0] for text in rec.motion_windows)
+            est = estimate_payload_dynamic(robot, log, log, loaded, empty)
+        else:
+            before = parse_windows(rec.before, "--before", joined=True)
+            after = parse_windows(rec.after, "--after", joined=True)
+            est = estimate_from_log(robot, log, before, after, pose_errors=True)
     except EmptyGripperError as exc:  # the estimator's own refusal: nothing held
         raise EmptyGripperError(f"{exc}. Nothing was sent to the robot") from None
     write_result(est, out / "RESULT.json")
@@ -182,91 +204,3 @@ def _estimate_and_set(args, robot, arm, rec, out: Path, info: dict, config: Live
     print(f"set_load: {load['mass']:.4f} kg, CoM {np.round(1e3 * np.array(load['F_x_Cload']), 2)} "
           f"mm in {args.ee_frame}; the robot reports the same")  # fmt: skip
     return 0
-
-
-def _poses(args, robot, q_start: np.ndarray, config: LiveConfig) -> np.ndarray:
-    """The measurement poses (k, n): read from --poses, or planned near ``q_start``."""
-    import json
-
-    from comgrasp_pin.live.protocol import check_poses_fit
-    from comgrasp_pin.planning.measurement_poses import plan_measurement_poses
-
-    if args.poses is not None:
-        try:
-            Q = np.array(json.loads(Path(args.poses).read_text())["q_rad"], dtype=float)
-        except (OSError, ValueError, KeyError, TypeError) as exc:
-            msg = f"--poses {args.poses}: not a plan-poses JSON ({exc})"
-            raise InvalidInputError(msg) from None
-        if Q.ndim != 2 or Q.shape[1] != robot.nq or not np.all(np.isfinite(Q)):
-            raise InvalidInputError(f"--poses {args.poses}: q_rad must be (k, {robot.nq}) finite")
-    else:
-        margin = config.approach_rad + config.joint_margin_rad
-        plan = plan_measurement_poses(
-            robot, config.n_poses, start=q_start, n_candidates=600,
-            min_height=config.min_height_m, max_offset=config.max_pose_offset_rad, margin=margin,
-        )  # fmt: skip
-        Q = plan.q
-    check_poses_fit(Q, robot.q_lower, robot.q_upper, config.approach_rad)
-    return Q
-
-
-def _show_plan(robot, Q: np.ndarray, config: LiveConfig) -> None:
-    print(f"{len(Q)} poses for {robot.ee_frame}, each approached from both sides "
-          f"(+-{config.approach_rad:g} rad), the empty arm first, then the payload; moves at "
-          f"{config.dynamics_factor:g} of the arm's limits:")  # fmt: skip
-    for i, q in enumerate(Q):
-        print(f"  pose {i}: " + " ".join(f"{v:7.1f}" for v in np.degrees(q)) + "  deg")
-
-
-def _confirm(args) -> None:
-    if args.yes:
-        return
-    if not sys.stdin.isatty():
-        raise InvalidInputError("the arm would move: give --yes to move without asking")
-    answer = input("Keep clear of the arm. Move through these poses? [y/N] ")
-    if answer.strip().lower() not in ("y", "yes"):
-        raise InvalidInputError("not confirmed: nothing moved")
-
-
-def _prompt_attach(args) -> None:
-    if args.yes or not sys.stdin.isatty():
-        return
-    input("Empty run done. Attach the payload, keep clear of the arm, and press Enter ")
-
-
-def _sim_payload(text: str | None):
-    from comgrasp_pin.simulation.franka_sim import SimPayload
-
-    if text is None:
-        return None
-    try:
-        v = [float(x) for x in text.split(",")]
-    except ValueError:
-        v = []
-    if len(v) not in (4, 7) or not np.all(np.isfinite(v)) or v[0] <= 0:
-        raise InvalidInputError(f"--sim-payload {text!r}: give M,CX,CY,CZ[,IXX,IYY,IZZ], M > 0")
-    moments = v[4:] if len(v) == 7 else [1e-3] * 3
-    return SimPayload(v[0], (v[1], v[2], v[3]), tuple(map(tuple, np.diag(moments))))
-
-
-def _live_info(args, config, urdf, out, host, Q, rec, wall_s: float) -> dict:
-    """live.json: what ran, the windows, and the offline command that reads the same log."""
-    offline = (f"comgrasp estimate --urdf {urdf} --ee-frame {args.ee_frame} --csv "
-               f"{out / 'live_log.csv'} --before {rec.before} --after {rec.after} --pose-errors "
-               f"--out {out / 'RESULT_offline.json'}")  # fmt: skip
-    return {
-        "host": host,
-        "simulated": bool(args.sim),
-        "urdf": str(urdf),
-        "ee_frame": args.ee_frame,
-        "config": dataclasses.asdict(config),
-        "poses_rad": Q.tolist(),
-        "complete": rec.complete,
-        "stopped_by": rec.stopped_by,
-        "n_readings": len(rec.log.time),
-        "before": rec.before,
-        "after": rec.after,
-        "robot_wrench_estimate_nonzero": rec.wrench is not None,
-        "wall_time_s": round(wall_s, 2),
-        "offline": offline,
-    }

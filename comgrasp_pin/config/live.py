@@ -42,7 +42,18 @@ class LiveConfig:
         collision_force_n: the same for the Cartesian wrench (N, N m).
         load_tolerance: set_load's read-back must match what was sent within this (kg, m,
             kg m^2).
-        motion_timeout_s: a move that has not ended after this is stopped (s).
+        motion_timeout_s: a move that has not ended after this is stopped (s); a planned
+            motion (``--motion``) gets its own played length on top.
+        waypoint_period_s: a planned motion is played through joint waypoints (position and
+            velocity) taken this far apart in its time (s); its highest harmonic's period is
+            0.5 s at plan-motion's defaults. (Every 0.1 or 0.25 s, franky-sim's joint 7 chattered by
+            +-24 N m.)
+        motion_limit_share: a planned motion is played slower than planned where its peak
+            velocity, acceleration or jerk exceeds this share of ``dynamics_factor`` times
+            the robot's limits (the margin lets the robot's trajectory generator reach
+            every waypoint's velocity).
+        motion_hold_s: the arm is held still this long before and after a planned motion,
+            inside its window (s).
     """
 
     dynamics_factor: float = 0.2
@@ -61,3 +72,6 @@ class LiveConfig:
     collision_force_n: tuple[float, ...] = field(default=(30.0,) * 6)
     load_tolerance: float = 1e-4
     motion_timeout_s: float = 30.0
+    waypoint_period_s: float = 0.5
+    motion_limit_share: float = 0.9
+    motion_hold_s: float = 0.5

@@ -143,18 +143,42 @@ class FrankaArm:
 
     def move(self, q: np.ndarray) -> None:
         """Move to ``q`` (rad), reading the state meanwhile; Ctrl-C stops the arm."""
+        motion = self._franky.JointMotion([float(v) for v in q])
+        self._run(motion, f"the move to {np.round(q, 3)}", self.config.motion_timeout_s)
+
+    def play(self, waypoints) -> None:
+        """Play a planned motion (``protocol.Waypoints``) from its start, reading meanwhile.
+
+        The robot's trajectory generator (Ruckig, in libfranka's client) passes each
+        waypoint's position and velocity in turn, each segment as fast as the dynamics
+        factor allows: the same path at the same pace in both runs. (With the waypoints'
+        times as minimum durations, franky-sim's FR3 failed 2 of 5 plays with Ruckig's
+        synchronisation error -111.) The arm must be at ``waypoints.start``.
+        """
         franky = self._franky
+        points = [franky.JointWaypoint(franky.JointState([float(v) for v in q],
+                                                         [float(v) for v in qd]))
+                  for q, qd in zip(waypoints.q, waypoints.qd)]  # fmt: skip
+        timeout = waypoints.duration_s + self.config.motion_timeout_s
+        self._run(franky.JointWaypointMotion(points), "the planned motion", timeout)
+
+    def limits(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The robot's joint (velocity, acceleration, jerk) limits (rad/s, /s^2, /s^3)."""
+        r = self.robot
+        return tuple(np.array(lim.max, dtype=float) for lim in
+                     (r.joint_velocity_limit, r.joint_acceleration_limit, r.joint_jerk_limit))  # type: ignore[return-value]  # fmt: skip
+
+    def _run(self, motion, what: str, timeout_s: float) -> None:
+        """Run a franky motion, reading the state meanwhile; Ctrl-C stops the arm."""
         start = time.monotonic()
         try:
-            self.robot.move(franky.JointMotion([float(v) for v in q]), asynchronous=True)
+            self.robot.move(motion, asynchronous=True)
             while not self.robot.join_motion(self.config.sample_period_s):
                 self.read()
                 self._check_interrupt()
-                if time.monotonic() - start > self.config.motion_timeout_s:
+                if time.monotonic() - start > timeout_s:
                     self.robot.stop()
-                    raise RobotError(
-                        f"a move did not end within {self.config.motion_timeout_s:g} s: stopped"
-                    )
+                    raise RobotError(f"{what} did not end within {timeout_s:g} s: stopped")
         except KeyboardInterrupt:
             self._stop_quietly()
             raise
@@ -162,8 +186,7 @@ class FrankaArm:
             raise
         except Exception as exc:  # ControlException (a reflex), NetworkException
             self._stop_quietly()
-            raise RobotError(f"the move to {np.round(q, 3)} failed: "
-                             f"{type(exc).__name__}: {exc}") from None  # fmt: skip
+            raise RobotError(f"{what} failed: {type(exc).__name__}: {exc}") from None
 
     def hold(self, seconds: float) -> tuple[float, float]:
         """Read the state for ``seconds`` (s) at rest; the (t0, t1) of the readings (s)."""

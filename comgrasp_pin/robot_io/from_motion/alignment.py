@@ -9,7 +9,10 @@ samples and joints), searched over every shift at which the runs overlap:
 1. coarse: both runs' positions on one uniform grid (``COARSE_PER_CUTOFF`` points per second
    per Hz of cutoff, above the positions' Nyquist rate), the mean squared distance at every
    grid lag from cross-correlations (``scipy.signal.correlate``, FFT), counting only the
-   samples where the runs overlap, at least ``MIN_OVERLAP`` of the loaded span;
+   samples where the runs overlap, at least ``MIN_OVERLAP`` of the loaded span; of the lags
+   within ``REPEAT_RAD`` (rms) of the best, the one that overlaps most: a motion of
+   repeated periods (plan-motion's) matches itself one period off as well over a shorter
+   overlap;
 2. fine: around the coarse best, every shift at the empty log's own rate, the loaded samples'
    own times interpolated exactly, then a parabola through the three best for a fraction of a
    sample.
@@ -53,6 +56,9 @@ still parts (the same rest pose) instead of the motion."""
 COARSE_PER_CUTOFF = 4.0
 """The coarse grid's points per second per Hz of cutoff (4 Hz -> every 1/16 s): twice the
 filtered positions' Nyquist rate, so the distance between grid lags is not aliased."""
+REPEAT_RAD = 1e-3
+"""Shifts whose rms position distance is within this (rad) of the best match as well: the
+coarse search takes the one with the longest overlap."""
 REFINE_COARSE_STEPS = 2
 """The fine search spans this many coarse steps either side of the coarse best."""
 
@@ -161,7 +167,9 @@ def _coarse_shift(S: MotionSamples, full: MotionSamples, cutoff_hz: float) -> fl
     lags = correlation_lags(len(e), len(s))
     enough = count >= MIN_OVERLAP * len(s)
     mean_square = np.where(enough, (ee - 2 * cross + ss) / np.maximum(count, 1), np.inf)
-    k = int(lags[int(np.argmin(mean_square))])
+    rms = np.sqrt(np.maximum(mean_square, 0.0))
+    near = rms <= rms.min() + REPEAT_RAD
+    k = int(lags[np.lexsort((mean_square, -np.where(near, count, -1)))[0]])
     return float(grid_e[0] + k * h - grid_s[0])
 
 

@@ -156,3 +156,36 @@ def write_urscript(m: ExcitationMotion, path: str | Path, **options) -> Path:
 def write_ros2(m: ExcitationMotion, path: str | Path, **options) -> Path:
     """Write ``ros2_trajectory_yaml(m, **options)`` to ``path``."""
     return write_text(path, ros2_trajectory_yaml(m, **options))
+
+
+def read_motion(path: str | Path, joint_names) -> tuple[np.ndarray, ...]:
+    """A motion JSON of ``write_json`` (comgrasp plan-motion) for the arm of ``joint_names``.
+
+    Returns:
+        (t, q, qd, qdd): its samples, (k,) s from 0, (k, n) rad, rad/s, rad/s^2.
+
+    Raises:
+        InvalidInputError: not such a JSON, another arm's joints, samples not finite or times
+            not increasing.
+    """
+    try:
+        d = json.loads(Path(path).read_text())
+        s = d["samples"]
+        t, q, qd, qdd = (np.asarray(s[k], dtype=float)
+                         for k in ("time_s", "q_rad", "qd_rad_s", "qdd_rad_s2"))  # fmt: skip
+        names = tuple(d["joint_names"])
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise InvalidInputError(f"{path}: not a motion of comgrasp plan-motion ({exc})") from None
+    if names != tuple(joint_names):
+        raise InvalidInputError(
+            f"{path}: a motion of the joints {list(names)}, not of this arm's "
+            f"{list(joint_names)}: plan it for this arm's URDF"
+        )
+    n = len(names)
+    shapes_ok = t.ndim == 1 and len(t) >= 2 and all(a.shape == (len(t), n) for a in (q, qd, qdd))
+    if not shapes_ok or not all(np.all(np.isfinite(a)) for a in (t, q, qd, qdd)):
+        raise InvalidInputError(f"{path}: samples must be finite, time (k,) and q, qd, qdd "
+                                f"(k, {n}) with k >= 2")  # fmt: skip
+    if np.any(np.diff(t) <= 0) or t[0] != 0:
+        raise InvalidInputError(f"{path}: sample times must start at 0 s and increase")
+    return t, q, qd, qdd
