@@ -9,6 +9,12 @@ depth image by the frame's authors). No camera pose is used: the table's plane i
 its clear rectangle is the pick area, as ``comgrasp views`` does without ``--T-world-cam``.
 A frame with a mask of one object is judged against it (issue 34: *wrong* when the length is
 20 % off, the yaw 10 deg, the centre 3 cm); a frame of several objects should be refused.
+
+A frame whose folder holds ``T_world_cam.txt`` (the camera's pose; the PrimeSense frames) is
+also run in the world frame with ``WORLD_AREA`` and that area moved by 3 cm in x and in y
+either way, where the authors' mask stays inside (no object enters or leaves): one answer
+per scene (issue 44), each judged against the mask in the world frame, and a frame measured
+in the table's frame must be measured in the world's within 1 cm of length and 3 deg of yaw.
 The results (outcomes, errors, messages) are written; the frames are not.
 """
 
@@ -50,6 +56,19 @@ def truth_from_mask(depth, camera, T, mask):
     return c + 0.5 * (lo + hi) * d, float(hi - lo), float(np.arctan2(d[1], d[0]))
 
 
+WORLD_AREA = (0.26, 0.56, -0.20, 0.15)  # the PrimeSense frames' board (world, m), 4 cm
+# short of the robot's fingers (they reach over it up to x = 0.22 m)
+SHIFTS = [(0.0, 0.0), (0.03, 0.0), (-0.03, 0.0), (0.0, 0.03), (0.0, -0.03)]  # m
+
+
+def world_yaw(found, T_frame_cam, T_world_cam) -> float:
+    """The detection's yaw (in the frame of ``T_frame_cam``) as a yaw in the world (rad)."""
+    axis = np.array([np.cos(found.grasp.yaw), np.sin(found.grasp.yaw), 0.0])
+    R = T_world_cam[:3, :3] @ T_frame_cam[:3, :3].T
+    v = R @ axis
+    return float(np.arctan2(v[1], v[0]))
+
+
 def judge(found, truth, scene: str) -> dict:
     if isinstance(found, PerceptionError):
         return {"outcome": "refused", "error": type(found).__name__, "why": str(found)[:240]}
@@ -79,13 +98,51 @@ def run(name, folder, colour, depth_file, info, scale, mask_file, scene) -> dict
     if mask_file and (folder / mask_file).is_file() and scene == "one object":
         mask = cv2.imread(str(folder / mask_file), cv2.IMREAD_GRAYSCALE) > 0
         truth = truth_from_mask(depth, camera, T, mask)
+    table_found = {}
     for label, image in (("with_colour", rgb), ("depth_alone", None)):
         try:
             found = detect_rod_top_down(image, depth, camera, T, area)
         except PerceptionError as exc:
             found = exc
         row[label] = judge(found, truth, scene)
+        table_found[label] = found
+    if (folder / "T_world_cam.txt").is_file():
+        T_world = np.loadtxt(folder / "T_world_cam.txt")
+        mask = cv2.imread(str(folder / mask_file), cv2.IMREAD_GRAYSCALE) > 0
+        row["world"] = in_world(rgb, depth, camera, T, T_world, mask, scene, table_found)
     return row
+
+
+def in_world(rgb, depth, camera, T_table, T_world, mask, scene, table_found) -> list[dict]:
+    """The frame in the world frame, the pick area moved where the mask stays inside."""
+    truth = truth_from_mask(depth, camera, T_world, mask) if scene == "one object" else None
+    p = points_in(T_world, depth, camera)[mask & (depth > 0)]
+    out = []
+    for dx, dy in SHIFTS:
+        x0, x1, y0, y1 = WORLD_AREA
+        area = (x0 + dx, x1 + dx, y0 + dy, y1 + dy)
+        held = bool(np.all((p[:, 0] > area[0] + 0.01) & (p[:, 0] < area[1] - 0.01)
+                           & (p[:, 1] > area[2] + 0.01) & (p[:, 1] < area[3] - 0.01)))  # fmt: skip
+        if not held and scene == "one object":
+            continue
+        for label, image in (("with_colour", rgb), ("depth_alone", None)):
+            try:
+                found = detect_rod_top_down(image, depth, camera, T_world, area)
+            except PerceptionError as exc:
+                found = exc
+            r = {"area": area, "label": label, **judge(found, truth, scene)}
+            r["same_as_table_frame"] = same(table_found[label], found, T_table, T_world)
+            out.append(r)
+    return out
+
+
+def same(in_table, in_world, T_table, T_world) -> bool:
+    """The same answer both ways: both refused, or both measured within 1 cm and 3 deg."""
+    if isinstance(in_table, PerceptionError) or isinstance(in_world, PerceptionError):
+        return isinstance(in_table, PerceptionError) and isinstance(in_world, PerceptionError)
+    dyaw = np.degrees(world_yaw(in_table, T_table, T_world) - in_world.grasp.yaw)
+    return bool(abs(in_table.length - in_world.length) <= 0.01
+                and abs((dyaw + 90) % 180 - 90) <= 3.0)  # fmt: skip
 
 
 def main() -> None:
@@ -110,6 +167,10 @@ def main() -> None:
     totals = {label: {o: sum(r[label]["outcome"] == o for r in rows)
                       for o in ("right", "refused", "wrong", "measured")}
               for label in ("with_colour", "depth_alone")}  # fmt: skip
+    world = [w for r in rows for w in r.get("world", [])]
+    totals["world"] = {o: sum(w["outcome"] == o for w in world)
+                       for o in ("right", "refused", "wrong", "measured")}  # fmt: skip
+    totals["world"]["not_same_as_table_frame"] = sum(not w["same_as_table_frame"] for w in world)
     result = {"frames": len(rows), "extra_source": args.source, "totals": totals, "rows": rows,
               "wall_s": round(time.time() - start, 1),
               "date": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())}  # fmt: skip

@@ -51,6 +51,30 @@ def test_no_handle_or_one_lower_than_an_object_is_not_a_thin_part(handle_height)
     check_no_thin_part(heights, head, table, PX_PER_M)
 
 
+def test_something_beyond_bare_table_is_not_a_thin_part():
+    """A rod's end, 4 cm of bare table, then something 2 cm high across the ray (another
+    object, a robot's finger at the image's edge) in 0.4 mm of noise: a 16 cm stretch's
+    mean would stand far above its noise, but the part is not joined to the rod."""
+    heights, head, table = _head_and_handle(0.0, 0.0004, seed=2)
+    finger = np.zeros((H, W), bool)
+    finger[100:200, 140:170] = True  # from 4 cm beyond the head's end (20 px at 2 mm)
+    heights[finger] += 0.02
+    table &= ~cv2.dilate(finger.astype(np.uint8), np.ones((9, 9), np.uint8)).astype(bool)
+    check_no_thin_part(heights, head, table, PX_PER_M)
+
+
+def test_a_handle_fading_into_the_table_is_refused():
+    """A handle whose height in the depth falls from 2.5 mm at the head to nothing over
+    6 cm, in 0.4 mm of noise (a structured-light camera's mallet): joined to the head, about
+    1.4 mm high on average, many times its noise: refused."""
+    heights, head, table = _head_and_handle(0.0, 0.0004, seed=3)
+    fade = np.clip(np.linspace(0.0025, -0.0005, 30), 0, None)  # over 30 px, 6 cm
+    heights[148:153, 120:150] += fade[None, :]
+    table[140:160, 115:160] = False
+    with pytest.raises(UntrustedImageError, match=r"at (\d|35\d) deg .* joined to it"):
+        check_no_thin_part(heights, head, table, PX_PER_M)
+
+
 def _rod_mask(du: int = 0, dv: int = 0) -> np.ndarray:
     mask = np.zeros((H, W), bool)
     mask[140 + dv : 152 + dv, 80 + du : 300 + du] = True  # a rod 12 px wide along u

@@ -40,30 +40,45 @@ PROFILE_VALLEY_SHARE = 0.15
 _KERNEL3, _KERNEL5 = np.ones((3, 3), np.uint8), np.ones((5, 5), np.uint8)
 
 
-def check_one_object(standing: np.ndarray, blob: np.ndarray, min_pixels: int = 40) -> None:
+def check_one_object(standing: np.ndarray, blob: np.ndarray, min_pixels: int = 40,
+                     at_edge: np.ndarray | None = None) -> None:  # fmt: skip
     """AmbiguousObjectError for a second object in the pick area, ClutterError for more.
 
     That is: besides ``blob``, other blobs of ``standing`` (both (H, W) bool) of at least
     SECOND_OBJECT of its size, each another object (or a pile of them): ClutterError when
-    CLUTTER_OBJECTS or more lie there.
+    CLUTTER_OBJECTS or more lie there. ``at_edge``: (H, W) bool, what stands and reaches the
+    image's edge (``reaching_border``): blobs on it are named as the robot's own parts.
     """
     mask = cv2.morphologyEx(standing.astype(np.uint8), cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
     count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
     area = int(blob.sum())
     own = set(np.unique(labels[blob & (labels > 0)]).tolist())
-    others = [int(stats[k, cv2.CC_STAT_AREA]) for k in range(1, count) if k not in own]
-    big = [a for a in others if a >= max(min_pixels, SECOND_OBJECT * area)]
+    least = max(min_pixels, SECOND_OBJECT * area)
+    big = [k for k in range(1, count) if k not in own and stats[k, cv2.CC_STAT_AREA] >= least]
+    edge = [] if at_edge is None else [k for k in big if np.any(at_edge[labels == k])]
+    named = (f"; {len(edge)} of them reach the image's edge: the robot's own parts (a "
+             "gripper's fingers?), keep the pick area off them") if edge else ""  # fmt: skip
     if 1 + len(big) >= CLUTTER_OBJECTS:
         raise ClutterError(
             f"clutter: {1 + len(big)} objects or piles lie in the pick area (the largest "
-            f"{area} px seen from above); the top view measures one rod alone on the table: "
-            "clear the table around it"
+            f"{area} px seen from above){named}; the top view measures one rod alone on the "
+            "table: clear the table around it"
         )
     if big:
+        second = max(int(stats[k, cv2.CC_STAT_AREA]) for k in big)
         raise AmbiguousObjectError(
-            f"2 objects lie in the pick area ({area} px and {max(big)} px seen from above); "
-            "the top view measures one rod alone on the table: clear the other"
+            f"2 objects lie in the pick area ({area} px and {second} px seen from above)"
+            f"{named}; the top view measures one rod alone on the table: clear the other"
         )
+
+
+def reaching_border(standing: np.ndarray) -> np.ndarray:
+    """(H, W) bool: the blobs of ``standing`` that reach the image's border."""
+    count, labels = cv2.connectedComponents(standing.astype(np.uint8), connectivity=8)
+    edge = np.zeros(count, bool)
+    edge[np.unique(np.concatenate([labels[0], labels[-1], labels[:, 0], labels[:, -1]]))] = True
+    edge[0] = False
+    return edge[labels]
 
 
 def check_ends_seen(

@@ -15,7 +15,7 @@ import numpy as np
 from comgrasp_pin.errors import ObjectCutByBorderError, ObjectNotFoundError
 from comgrasp_pin.perception._points import border_pixels, largest_component
 from comgrasp_pin.perception.registration import check_registered
-from comgrasp_pin.perception.rod_shape import check_one_object
+from comgrasp_pin.perception.rod_shape import check_one_object, reaching_border
 from comgrasp_pin.perception.table_view import TableView, differs_in_colour, in_area, over_the_edge
 
 MIN_HEIGHT = 0.003  # a pixel counts as object if it stands this far above the table (m)
@@ -59,7 +59,8 @@ def segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, np
     if view.cleaned:
         standing = closed(standing)
     mask = largest_component(inside & standing, MIN_PIXELS, "top-down image")
-    check_one_object(inside & standing, mask)  # other objects are the reason to refuse first
+    check_one_object(inside & standing, mask, at_edge=reaching_border(standing))  # other
+    # objects are the reason to refuse first
     if border_pixels(mask).any():
         raise ObjectCutByBorderError(
             "the object runs out of the top-down image (inside the pick area): part of it is "

@@ -3,12 +3,13 @@
 On a noisy depth image (a structured-light camera's, a table far away) a handle under 1 cm
 high does not stand above the height threshold pixel by pixel, and what the top view finds
 is the tool's head alone: a measurement of the wrong object, with nothing to say so. Along
-a line the handle does stand out: the mean height of a strip LENGTH long, one pixel wide,
+a line the handle does stand out: the mean height of a strip STEP long, one pixel wide,
 has a noise several times smaller than a pixel's. From the object's outline, rays are cast
-every degree (OpenCV ``warpPolar`` around its centre); the mean height of each ray's
-stretch beyond the outline, of each of LENGTHS, is compared with the same mean's noise
-measured on the table (strips of the same length along the image's rows and columns, away
-from the object).
+every degree (OpenCV ``warpPolar`` around its centre) and followed outwards; a stretch's
+mean height is compared with the same stretch's noise measured on the table (strips along
+the image's rows and columns, away from the object). A thin part is part of the object
+only while it stays joined to it: the first STEP-long window of bare table ends it, so that
+another object or the robot's fingers further along the ray are never taken for a handle.
 """
 
 from __future__ import annotations
@@ -19,11 +20,18 @@ import numpy as np
 from comgrasp_pin.errors import UntrustedImageError
 from comgrasp_pin.perception._points import noise_level
 
-LENGTHS = (0.08, 0.16)  # the stretches of each ray looked at beyond the outline (m)
-GAP = 0.01  # ... starting this far beyond it (m): the outline's own fringe and smear
-SIGMAS = 4.0  # a stretch this many of its noise stds above the table is a thin part
+GAP = 0.01  # rays are followed from this far beyond the outline (m): its fringe and smear
+STEP = 0.01  # a part is followed along a ray in windows this long (m) up to the first
+BARE_SIGMAS = 1.0  # ... whose mean is less than this many of its noise stds above the
+# table: bare table, the part joined to the object ends there
+LENGTHS = (0.08, 0.16)  # a stretch this long beyond the fringe, its joined part's heights
+SIGMAS = 4.0  # ... averaged (the rest as table), this many of its noise stds above the table
 MIN_MEAN = 0.003  # ... and at least this high (m): the top view's least height of an object
 # (a cord or a cable lower than that is no part of a rod's extent in any image)
+MIN_EXTENT = 0.02  # or a joined part at least this long (m) ...
+JOINED_SIGMAS = 8.0  # ... whose mean height stands this many of its noise stds above the
+# table (a realistic camera's smear at a rod's end: 4-5)
+MIN_JOINED = 0.0005  # ... and at least this high (m): the table's own unevenness
 ANGLES = 360
 _KERNEL5 = np.ones((5, 5), np.uint8)
 
@@ -35,39 +43,86 @@ def check_no_thin_part(heights: np.ndarray, mask: np.ndarray, table: np.ndarray,
     ``heights``: (H, W) heights above the table (m, NaN where none); ``mask``: (H, W) bool,
     the object found; ``table``: (H, W) bool, the pixels that see the empty table (where the
     noise is measured); ``px_per_m``: pixels per metre on the table at the object.
+
+    Along each ray, the part joined to the object runs from where the ray is GAP from the
+    object (beyond its fringe; along a long rod's side, beyond its end) to
+    the first STEP-long window of bare table (``BARE_SIGMAS``): table between the object
+    and something else (another object, the robot's fingers) ends it. A thin part is a
+    joined part whose mean over each of LENGTHS (the rest counted as table) stands SIGMAS
+    of its noise and MIN_MEAN above the table, or one at least MIN_EXTENT long whose own
+    mean stands JOINED_SIGMAS and MIN_JOINED above it (a handle that fades into the table).
     """
     rows, cols = np.nonzero(mask)
     centre = (float(cols.mean()), float(rows.mean()))
     gap_px = max(2, int(round(GAP * px_per_m)))
+    step_px = max(3, int(round(STEP * px_per_m)))
     longest = max(5, int(round(max(LENGTHS) * px_per_m)))
-    reach = np.hypot(rows - centre[1], cols - centre[0]).max() + gap_px + longest + 2
+    reach = np.hypot(rows - centre[1], cols - centre[0]).max() + gap_px + longest + step_px + 2
     size = (int(reach), ANGLES)  # (radius samples, angles): a row per angle
     flags = cv2.INTER_LINEAR | cv2.WARP_POLAR_LINEAR | cv2.WARP_FILL_OUTLIERS
     h = cv2.warpPolar(np.nan_to_num(heights).astype(np.float32), size, centre, reach, flags)
     seen = cv2.warpPolar(np.isfinite(heights).astype(np.float32), size, centre, reach, flags)
     inside = cv2.warpPolar(mask.astype(np.float32), size, centre, reach, flags) > 0.5
+    dist = cv2.distanceTransform((~mask).astype(np.uint8), cv2.DIST_L2, 5)
+    away = cv2.warpPolar(dist, size, centre, reach, flags) >= gap_px
     radius = np.arange(h.shape[1])
-    start = np.where(inside, radius, 0).max(axis=1) + gap_px  # beyond the outline, per ray
+    # per ray, the first sample beyond the outline at least GAP from the object: a ray
+    # that grazes a long rod's side starts only where it leaves the rod's fringe
+    outline = np.where(inside, radius, 0).max(axis=1)
+    leaves = away & (radius > outline[:, None])
+    start = np.where(leaves.any(axis=1), np.argmax(leaves, axis=1), h.shape[1])
+    noise = _stretch_noise(heights, table, step_px)
+    if not np.isfinite(noise):
+        return
+    seen = seen > 0.5
+    means = _window_means(h, seen, step_px)  # per ray, the STEP-long window at each radius
+    beyond = radius >= start[:, None]
+    bare = beyond & (means < BARE_SIGMAS * noise)  # a window of table: the part ends
+    end = np.where(bare.any(axis=1), np.argmax(bare, axis=1), h.shape[1])
+    end = np.minimum(end, start + longest)
+    extent_px = np.maximum(end - start, 0)
+    joined = seen & (radius >= start[:, None]) & (radius < end[:, None])
     for length in LENGTHS:
         length_px = max(5, int(round(length * px_per_m)))
-        noise = _stretch_noise(heights, table, length_px)
-        if not np.isfinite(noise) or noise <= 0:
-            continue
-        stretch = (radius >= start[:, None]) & (radius < (start + length_px)[:, None])
-        stretch &= seen > 0.5
+        stretch = seen & (radius >= start[:, None]) & (radius < (start + length_px)[:, None])
         counts = stretch.sum(axis=1)
-        means = np.where(counts > length_px // 2,
-                         (h * stretch).sum(axis=1) / np.maximum(counts, 1), 0.0)  # fmt: skip
+        sums = (h * (joined & stretch)).sum(axis=1)
+        means = np.where(counts > length_px // 2, sums / np.maximum(counts, 1), 0.0)
         k = int(np.argmax(means))
-        if means[k] > max(SIGMAS * noise, MIN_MEAN):
-            raise UntrustedImageError(
-                f"a thin part lower than the depth can tell pixel by pixel goes on from the "
-                f"object (at {360.0 * k / ANGLES:.0f} deg in the image from its centre, u to "
-                f"v: {1e3 * means[k]:.1f} mm high on average over {1e2 * length:.0f} cm, the "
-                f"table's noise over the same stretch {1e3 * noise:.1f} mm): a handle? Its "
-                "extent is not known from this depth; view it closer or with a less noisy "
-                "camera"
-            )
+        stretch_noise = _stretch_noise(heights, table, length_px)
+        if np.isfinite(stretch_noise) and means[k] > max(SIGMAS * stretch_noise, MIN_MEAN):
+            _refuse(k, float(means[k]), length, stretch_noise)
+    for k in np.argsort(extent_px)[::-1][: ANGLES // 8]:
+        extent = extent_px[k] / px_per_m
+        if extent < MIN_EXTENT:
+            return
+        part_noise = _stretch_noise(heights, table, int(extent_px[k]))
+        mean = float(h[k, joined[k]].mean())
+        if np.isfinite(part_noise) and mean > max(JOINED_SIGMAS * part_noise, MIN_JOINED):
+            _refuse(k, mean, extent, part_noise)
+
+
+def _refuse(ray: int, mean: float, length: float, noise: float) -> None:
+    raise UntrustedImageError(
+        f"a thin part lower than the depth can tell pixel by pixel goes on from the object "
+        f"(at {360.0 * ray / ANGLES:.0f} deg in the image from its centre, u to v: "
+        f"{1e3 * mean:.1f} mm high on average over {1e2 * length:.0f} cm, joined to it; the "
+        f"table's noise over the same stretch {1e3 * noise:.2f} mm): a handle? Its extent is "
+        "not known from this depth; view it closer or with a less noisy camera"
+    )
+
+
+def _window_means(h: np.ndarray, seen: np.ndarray, step_px: int) -> np.ndarray:
+    """(angles, radii) the mean of ``h`` over the seen samples of each window.
+
+    The window of ``step_px`` starting at each radius; 0 where fewer than half are seen.
+    """
+    csum = np.cumsum(np.pad(h * seen, ((0, 0), (1, step_px))), axis=1)
+    ccount = np.cumsum(np.pad(seen.astype(np.float32), ((0, 0), (1, step_px))), axis=1)
+    n = h.shape[1]
+    total = csum[:, step_px : step_px + n] - csum[:, :n]
+    count = ccount[:, step_px : step_px + n] - ccount[:, :n]
+    return np.where(count > step_px / 2, total / np.maximum(count, 1), 0.0)
 
 
 def _stretch_noise(heights: np.ndarray, table: np.ndarray, length_px: int) -> float:

@@ -226,11 +226,10 @@ def inertia_verdict(
     largest = float(np.max(moments))
     if np.all(np.isfinite(std)) and np.all(q * std < largest):
         return IDENTIFIED, ()
+    text = " ".join(f"{m:.2g} +- {h:.2g}" for m, h in zip(moments, q * std))
     return NOT_DETERMINED, (
-        f"the motion did not determine the inertia: principal moments "
-        f"{np.array2string(moments, precision=3)} kg m^2 with 95 % half-widths "
-        f"{np.array2string(q * std, precision=2)}; excite the wrist more (comgrasp "
-        "plan-motion) or give the inertia (--inertia)",
+        f"the motion did not determine the inertia: principal moments (95 %) {text} kg m^2; "
+        "excite the wrist more (comgrasp plan-motion) or give the inertia (--inertia)",
     )
 
 
