@@ -13,7 +13,7 @@ from comgrasp_pin.camera import PinholeCamera
 from comgrasp_pin.errors import ColourDepthMismatchError, UntrustedImageError
 from comgrasp_pin.perception.registration import check_registered, cover_by_shift
 from comgrasp_pin.perception.table_plane import fit_table_plane
-from comgrasp_pin.perception.thin_parts import check_no_thin_part
+from comgrasp_pin.perception.thin_parts import check_no_thin_part, robot_parts
 
 PX_PER_M = 500.0  # 2 mm pixels
 H, W = 300, 400
@@ -51,16 +51,22 @@ def test_no_handle_or_one_lower_than_an_object_is_not_a_thin_part(handle_height)
     check_no_thin_part(heights, head, table, PX_PER_M)
 
 
-def test_something_beyond_bare_table_is_not_a_thin_part():
-    """A rod's end, 4 cm of bare table, then something 2 cm high across the ray (another
-    object, a robot's finger at the image's edge) in 0.4 mm of noise: a 16 cm stretch's
-    mean would stand far above its noise, but the part is not joined to the rod."""
+def test_the_robots_fingers_beyond_bare_table_are_not_a_thin_part():
+    """A head's end, 4 cm of bare table, then a finger 2 cm high reaching the image's edge,
+    its fringe fading from 2 mm, in 0.4 mm of noise: a 16 cm stretch's mean would stand far
+    above its noise. As the top view hands it in (only what is too low to stand, the
+    robot's parts and their fringe left out: ``robot_parts``), no thin part."""
     heights, head, table = _head_and_handle(0.0, 0.0004, seed=2)
     finger = np.zeros((H, W), bool)
-    finger[100:200, 140:170] = True  # from 4 cm beyond the head's end (20 px at 2 mm)
+    finger[130:, 140:170] = True  # from 4 cm beyond the head (20 px at 2 mm) to the edge
     heights[finger] += 0.02
+    fringe = cv2.dilate(finger.astype(np.uint8), np.ones((7, 7), np.uint8)).astype(bool)
+    heights[fringe & ~finger] += 0.002
     table &= ~cv2.dilate(finger.astype(np.uint8), np.ones((9, 9), np.uint8)).astype(bool)
-    check_no_thin_part(heights, head, table, PX_PER_M)
+    low = ~robot_parts(heights, 0.003, 1 / PX_PER_M) & ~(heights > 0.003)
+    check_no_thin_part(np.where(low, heights, np.nan), head, table, PX_PER_M)
+    with pytest.raises(UntrustedImageError):  # handed in whole, the finger is counted
+        check_no_thin_part(heights, head, table, PX_PER_M)
 
 
 def test_a_handle_fading_into_the_table_is_refused():

@@ -3,13 +3,13 @@
 On a noisy depth image (a structured-light camera's, a table far away) a handle under 1 cm
 high does not stand above the height threshold pixel by pixel, and what the top view finds
 is the tool's head alone: a measurement of the wrong object, with nothing to say so. Along
-a line the handle does stand out: the mean height of a strip STEP long, one pixel wide,
-has a noise several times smaller than a pixel's. From the object's outline, rays are cast
-every degree (OpenCV ``warpPolar`` around its centre) and followed outwards; a stretch's
-mean height is compared with the same stretch's noise measured on the table (strips along
-the image's rows and columns, away from the object). A thin part is part of the object
-only while it stays joined to it: the first STEP-long window of bare table ends it, so that
-another object or the robot's fingers further along the ray are never taken for a handle.
+a line the handle does stand out: the mean height of a strip a few cm long, one pixel
+wide, has a noise several times smaller than a pixel's. From the object's outline, rays are
+cast every degree (OpenCV ``warpPolar`` around its centre) and followed outwards; a
+stretch's mean height is compared with the same stretch's noise measured on the table
+(strips along the image's rows and columns, away from the object). Only what is too low to
+stand is looked at: the robot's own parts in view (``robot_parts``: a gripper's fingers at
+the image's edge) are never taken for a handle, and other objects are counted as such.
 """
 
 from __future__ import annotations
@@ -24,6 +24,7 @@ GAP = 0.01  # rays are followed from this far beyond the outline (m): its fringe
 STEP = 0.01  # a part is followed along a ray in windows this long (m) up to the first
 BARE_SIGMAS = 1.0  # ... whose mean is less than this many of its noise stds above the
 # table: bare table, the part joined to the object ends there
+BARE_NOISE = 0.001  # (windows 2 or 4 STEP long where a STEP's mean is noisier than this, m)
 LENGTHS = (0.08, 0.16)  # a stretch this long beyond the fringe, its joined part's heights
 SIGMAS = 4.0  # ... averaged (the rest as table), this many of its noise stds above the table
 MIN_MEAN = 0.003  # ... and at least this high (m): the top view's least height of an object
@@ -44,13 +45,14 @@ def check_no_thin_part(heights: np.ndarray, mask: np.ndarray, table: np.ndarray,
     the object found; ``table``: (H, W) bool, the pixels that see the empty table (where the
     noise is measured); ``px_per_m``: pixels per metre on the table at the object.
 
-    Along each ray, the part joined to the object runs from where the ray is GAP from the
-    object (beyond its fringe; along a long rod's side, beyond its end) to
-    the first STEP-long window of bare table (``BARE_SIGMAS``): table between the object
-    and something else (another object, the robot's fingers) ends it. A thin part is a
-    joined part whose mean over each of LENGTHS (the rest counted as table) stands SIGMAS
-    of its noise and MIN_MEAN above the table, or one at least MIN_EXTENT long whose own
-    mean stands JOINED_SIGMAS and MIN_JOINED above it (a handle that fades into the table).
+    ``heights`` holds only what is too low to stand (NaN elsewhere, and on the robot's own
+    parts: ``robot_parts``).
+    Each ray is followed from where it is GAP from the object (beyond its fringe; along a
+    long rod's side, beyond its end). A thin part is a stretch of each of LENGTHS whose
+    mean height stands SIGMAS of its noise and MIN_MEAN above the table (a handle beyond
+    the projector's shadow too), or the part joined to the object (up to the first window
+    of bare table, ``BARE_SIGMAS``) at least MIN_EXTENT long whose own mean stands
+    JOINED_SIGMAS and MIN_JOINED above it (a handle that fades into the table).
     """
     rows, cols = np.nonzero(mask)
     centre = (float(cols.mean()), float(rows.mean()))
@@ -71,11 +73,11 @@ def check_no_thin_part(heights: np.ndarray, mask: np.ndarray, table: np.ndarray,
     outline = np.where(inside, radius, 0).max(axis=1)
     leaves = away & (radius > outline[:, None])
     start = np.where(leaves.any(axis=1), np.argmax(leaves, axis=1), h.shape[1])
-    noise = _stretch_noise(heights, table, step_px)
+    step_px, noise = _bare_window(heights, table, step_px)
     if not np.isfinite(noise):
         return
     seen = seen > 0.5
-    means = _window_means(h, seen, step_px)  # per ray, the STEP-long window at each radius
+    means = _window_means(h, seen, step_px)  # per ray, the window at each radius
     beyond = radius >= start[:, None]
     bare = beyond & (means < BARE_SIGMAS * noise)  # a window of table: the part ends
     end = np.where(bare.any(axis=1), np.argmax(bare, axis=1), h.shape[1])
@@ -86,7 +88,7 @@ def check_no_thin_part(heights: np.ndarray, mask: np.ndarray, table: np.ndarray,
         length_px = max(5, int(round(length * px_per_m)))
         stretch = seen & (radius >= start[:, None]) & (radius < (start + length_px)[:, None])
         counts = stretch.sum(axis=1)
-        sums = (h * (joined & stretch)).sum(axis=1)
+        sums = (h * stretch).sum(axis=1)
         means = np.where(counts > length_px // 2, sums / np.maximum(counts, 1), 0.0)
         k = int(np.argmax(means))
         stretch_noise = _stretch_noise(heights, table, length_px)
@@ -102,6 +104,26 @@ def check_no_thin_part(heights: np.ndarray, mask: np.ndarray, table: np.ndarray,
             _refuse(k, mean, extent, part_noise)
 
 
+def robot_parts(height: np.ndarray, threshold: float, pixel: float) -> np.ndarray:
+    """(H, W) bool: the robot's own parts in view, with a GAP around them.
+
+    ``height``: (H, W) above the table (m, NaN where none); ``threshold``: the height a
+    pixel stands at (m); ``pixel``: a pixel's size on the table (m). What stands and reaches
+    the image's edge (a gripper's fingers reaching into the view), and anything higher
+    than an object on the table may be (``standing.MAX_HEIGHT``): never a thin part of the
+    object, nor their fringes. Other objects on the table are counted as such
+    (``rod_shape.check_one_object``).
+    """
+    from comgrasp_pin.perception.rod_shape import reaching_border
+    from comgrasp_pin.perception.standing import MAX_HEIGHT
+
+    tall = np.isfinite(height) & (height > threshold)
+    robot = reaching_border(tall) | (np.isfinite(height) & (height > MAX_HEIGHT))
+    gap_px = max(2, int(round(GAP / pixel)))
+    kernel = np.ones((2 * gap_px + 1, 2 * gap_px + 1), np.uint8)
+    return cv2.dilate(robot.astype(np.uint8), kernel).astype(bool)
+
+
 def _refuse(ray: int, mean: float, length: float, noise: float) -> None:
     raise UntrustedImageError(
         f"a thin part lower than the depth can tell pixel by pixel goes on from the object "
@@ -110,6 +132,19 @@ def _refuse(ray: int, mean: float, length: float, noise: float) -> None:
         f"table's noise over the same stretch {1e3 * noise:.2f} mm): a handle? Its extent is "
         "not known from this depth; view it closer or with a less noisy camera"
     )
+
+
+def _bare_window(heights, table, step_px: int) -> tuple[int, float]:
+    """(window length (px), its mean's noise (m)) for telling bare table.
+
+    STEP, or longer (2, 4 STEP) until the noise is at most BARE_NOISE: in a noisy image a
+    short window of a handle may look bare.
+    """
+    for factor in (1, 2, 4):
+        noise = _stretch_noise(heights, table, factor * step_px)
+        if not noise > BARE_NOISE:
+            break
+    return factor * step_px, noise
 
 
 def _window_means(h: np.ndarray, seen: np.ndarray, step_px: int) -> np.ndarray:

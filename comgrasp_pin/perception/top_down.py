@@ -55,7 +55,7 @@ from comgrasp_pin.perception.table_view import (
     overhang,
     view_table,
 )
-from comgrasp_pin.perception.thin_parts import check_no_thin_part
+from comgrasp_pin.perception.thin_parts import check_no_thin_part, robot_parts
 
 PICK_AREA = (0.30, 0.80, -0.35, 0.35)  # x_min, x_max, y_min, y_max of the table (m, world)
 # In a cleaned image (``table_view``) the rod is measured without its 1 px fringe
@@ -156,8 +156,11 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
     if view.cleaned:
         area = in_area(view.points, pick_area, EDGE_BAND)
         table = area & ~cv2.dilate(standing.astype(np.uint8), THIN_PART_CLEAR).astype(bool)
-        heights = np.where(area, view.points[..., 2] - view.table_z, np.nan)
-        check_no_thin_part(heights, mask, table, 1.0 / pixel)
+        height = view.points[..., 2] - view.table_z
+        threshold = max(MIN_HEIGHT, HEIGHT_SIGMAS * view.noise)
+        # only what is too low to stand: what stands is the object or another one
+        low = area & ~robot_parts(height, threshold, pixel) & ~(height > threshold)
+        check_no_thin_part(np.where(low, height, np.nan), mask, table, 1.0 / pixel)
     along = (p[:, :2] - centroid) @ direction
     lo, hi = np.percentile(along, [0.02, 99.98])
     if view.cleaned:
