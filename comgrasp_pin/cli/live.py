@@ -111,14 +111,19 @@ def run_live(args: argparse.Namespace) -> int:
 
     payload = sim_payload(args.sim_payload)
     with FrankaSim(payload, args.sim_fault, args.sim_lose_after) as sim:
-        return _session(args, config, urdf, out, LOOPBACK,
-                        lambda: (prompt_attach(args), sim.attach()))  # fmt: skip
+
+        def attach() -> None:
+            prompt_attach(args)
+            sim.attach()
+
+        return _session(args, config, urdf, out, LOOPBACK, attach)
 
 
 def _session(args, config: LiveConfig, urdf: str, out: Path, host: str, attach) -> int:
     """Connect, plan, ask, measure, write, estimate, maybe set the load."""
     from comgrasp_pin.cli import live_plan as lp
     from comgrasp_pin.live import FrankaArm, measure, measure_motion
+    from comgrasp_pin.live.protocol import Waypoints
     from comgrasp_pin.robot_io import load_robot
     from comgrasp_pin.robot_io.log_files.record import write_csv
 
@@ -127,6 +132,7 @@ def _session(args, config: LiveConfig, urdf: str, out: Path, host: str, attach) 
     arm = FrankaArm(host, config)
     arm.check_ready()
     q_now = np.array(arm.state().q, dtype=float)
+    plan: np.ndarray | Waypoints
     if args.motion is None:
         plan = lp.poses(args, robot, q_now, config)
         lp.show_poses(robot, plan, config)
@@ -139,10 +145,10 @@ def _session(args, config: LiveConfig, urdf: str, out: Path, host: str, attach) 
     lp.confirm(args, "through these poses" if args.motion is None else "along this motion")
     arm.configure()
     names = tuple(robot.joint_names)
-    if args.motion is None:
-        rec = measure(arm, names, plan, attach, config)
-    else:
+    if isinstance(plan, Waypoints):
         rec = measure_motion(arm, names, plan, attach, config)
+    else:
+        rec = measure(arm, names, plan, attach, config)
     if len(rec.log.time):
         write_csv(rec.log, out / "live_log.csv")
     if rec.wrench is not None:  # the robot's own estimate of the external wrench, for a look
@@ -172,8 +178,8 @@ def _estimate_and_set(args, robot, arm, rec, out: Path, info: dict, config: Live
     log = read_csv(out / "live_log.csv", robot.joint_names)
     try:
         if rec.motion_windows is not None:
-            empty, loaded = (parse_windows(text, "window")[0] for text in rec.motion_windows)
-            est = estimate_payload_dynamic(robot, log, log, loaded, empty)
+            (e0, e1), (l0, l1) = (parse_windows(text, "window")[0] for text in rec.motion_windows)
+            est = estimate_payload_dynamic(robot, log, log, (l0, l1), (e0, e1))
         else:
             before = parse_windows(rec.before, "--before", joined=True)
             after = parse_windows(rec.after, "--after", joined=True)
@@ -189,7 +195,7 @@ def _estimate_and_set(args, robot, arm, rec, out: Path, info: dict, config: Live
     if est.verdict == "identified":
         payload = payload_in_flange(robot, est, args.ee_frame, args.inertia)
     send, why = load_to_send(est, payload)
-    if not send:
+    if not send or payload is None:
         print(f"comgrasp live: set_load refused: {why}", file=sys.stderr)
         return 2
     load = franka_load(payload)
