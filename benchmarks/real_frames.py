@@ -27,7 +27,12 @@ from pathlib import Path
 
 import cv2
 import numpy as np
-from unseen.real_failures import WRONG_CENTRE, WRONG_LENGTH, WRONG_YAW_DEG  # (benchmarks/)
+from unseen.real_failures import (  # (benchmarks/)
+    WRONG_CENTRE,
+    WRONG_LENGTH,
+    WRONG_YAW_DEG,
+    same_answer,
+)
 
 from comgrasp_pin.errors import PerceptionError
 from comgrasp_pin.perception import detect_rod_top_down
@@ -59,14 +64,6 @@ def truth_from_mask(depth, camera, T, mask):
 WORLD_AREA = (0.26, 0.56, -0.20, 0.15)  # the PrimeSense frames' board (world, m), 4 cm
 # short of the robot's fingers (they reach over it up to x = 0.22 m)
 SHIFTS = [(0.0, 0.0), (0.03, 0.0), (-0.03, 0.0), (0.0, 0.03), (0.0, -0.03)]  # m
-
-
-def world_yaw(found, T_frame_cam, T_world_cam) -> float:
-    """The detection's yaw (in the frame of ``T_frame_cam``) as a yaw in the world (rad)."""
-    axis = np.array([np.cos(found.grasp.yaw), np.sin(found.grasp.yaw), 0.0])
-    R = T_world_cam[:3, :3] @ T_frame_cam[:3, :3].T
-    v = R @ axis
-    return float(np.arctan2(v[1], v[0]))
 
 
 def judge(found, truth, scene: str) -> dict:
@@ -131,18 +128,9 @@ def in_world(rgb, depth, camera, T_table, T_world, mask, scene, table_found) -> 
             except PerceptionError as exc:
                 found = exc
             r = {"area": area, "label": label, **judge(found, truth, scene)}
-            r["same_as_table_frame"] = same(table_found[label], found, T_table, T_world)
+            r["same_as_table_frame"] = same_answer(table_found[label], found, T_table, T_world)
             out.append(r)
     return out
-
-
-def same(in_table, in_world, T_table, T_world) -> bool:
-    """The same answer both ways: both refused, or both measured within 1 cm and 3 deg."""
-    if isinstance(in_table, PerceptionError) or isinstance(in_world, PerceptionError):
-        return isinstance(in_table, PerceptionError) and isinstance(in_world, PerceptionError)
-    dyaw = np.degrees(world_yaw(in_table, T_table, T_world) - in_world.grasp.yaw)
-    return bool(abs(in_table.length - in_world.length) <= 0.01
-                and abs((dyaw + 90) % 180 - 90) <= 3.0)  # fmt: skip
 
 
 def main() -> None:

@@ -53,11 +53,13 @@ def main() -> None:
         print(frame.mode, frame.parameter, judged, flush=True)
     by_mode = {m: {o: c[o] for o in OUTCOMES} for m, c in counts.items()}
     total = Counter(r["outcome"] for r in rows)
+    differ = sum(not v for r in rows for v in r["same_in_table_frame"].values())
     result = {
         "seed": args.seed,
         "quick": args.quick,
         "frames": len(rows),
         "total": {o: total[o] for o in OUTCOMES},
+        "differing_in_table_frame": differ,
         "by_mode": by_mode,
         "wrong_bounds": {
             "length_rel": rf.WRONG_LENGTH,

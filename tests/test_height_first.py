@@ -129,3 +129,20 @@ def test_the_clear_rectangle_leaves_out_what_reaches_into_the_view():
     assert x1 == pytest.approx(half_w - 0.02, abs=0.012)
     assert y0 == pytest.approx(arm_edge_y + 0.02, abs=0.012)
     assert y1 == pytest.approx(half_h - 0.02, abs=0.012)
+
+
+@pytest.mark.parametrize("noise", [0.0, 0.004])
+def test_the_table_is_found_above_a_floor_the_camera_sees_more_of(noise):
+    """A camera 1.25 m above a 0.8 x 0.5 m table whose floor, 0.75 m below it, fills the
+    rest of the view (70 % of the pixels): the fitted plane is the table's (the camera
+    1.25 m above it), not the floor's, and the pick area lies within the table; the same
+    under 4 mm of white depth noise, which the plane's inlier band follows."""
+    camera = PinholeCamera(fx=600.0, fy=600.0, cx=319.5, cy=239.5, width=640, height=480)
+    v, u = np.mgrid[0:480, 0:640]
+    on_table = (np.abs(u - 319.5) < 0.4 * 600 / 1.25) & (np.abs(v - 239.5) < 0.25 * 600 / 1.25)
+    depth = np.where(on_table, 1.25, 2.0)
+    depth = depth + np.random.default_rng(4).normal(0.0, noise, depth.shape)
+    T_table_cam, (x0, x1, y0, y1) = fit_table_plane(depth, camera)
+    assert abs(T_table_cam[2, 3] - 1.25) < 0.005
+    assert -0.4 < x0 < x1 < 0.4 and -0.25 < y0 < y1 < 0.25
+    assert x1 - x0 > 0.65 and y1 - y0 > 0.38

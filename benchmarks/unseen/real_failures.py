@@ -33,8 +33,9 @@ import cv2
 import numpy as np
 
 from comgrasp_pin.config import DepthNoiseConfig
-from comgrasp_pin.errors import PerceptionError
+from comgrasp_pin.errors import ObjectNotFoundError, PerceptionError
 from comgrasp_pin.perception import detect_rod_top_down
+from comgrasp_pin.perception.table_plane import fit_table_plane
 from comgrasp_pin.simulation.depth_noise import DepthNoise
 
 from .families import BLACK, BROWN, GREEN, _at, judge
@@ -229,11 +230,41 @@ def run_frame(frame: Frame, renders, noise_seed: int = 0) -> dict:
         depth = DepthNoise(STRUCTURED_LIGHT, noise_seed).apply(depth)
         if frame.depth.endswith("shadow"):
             depth = projector_shadow(depth, camera.fx)
-    judged = {}
+    judged, same = {}, {}
+    try:
+        in_table = fit_table_plane(depth, camera)
+    except PerceptionError:
+        in_table = None
     for label, colour in (("", rgb), ("depth_alone", None)):
-        try:
-            found = detect_rod_top_down(colour, depth, camera, T_world_cam)
-        except PerceptionError as exc:
-            found = exc
+        found = _detect(colour, depth, camera, T_world_cam, None)
         judged[label] = outcome(found, frame.truth)
-    return {**judged[""], "depth_alone": judged["depth_alone"]}
+        # issue 44: the same answer in the fitted table's frame (no camera pose)
+        other = _detect(colour, depth, camera, *in_table) if in_table else ObjectNotFoundError()
+        same[label or "with_colour"] = same_answer(other, found, in_table[0], T_world_cam) \
+            if in_table else isinstance(found, PerceptionError)  # fmt: skip
+    return {**judged[""], "depth_alone": judged["depth_alone"], "same_in_table_frame": same}
+
+
+def _detect(colour, depth, camera, T, area):
+    try:
+        if area is None:
+            return detect_rod_top_down(colour, depth, camera, T)
+        return detect_rod_top_down(colour, depth, camera, T, area)
+    except PerceptionError as exc:
+        return exc
+
+
+def world_yaw(found, T_frame_cam, T_world_cam) -> float:
+    """The detection's yaw (in the frame of ``T_frame_cam``) as a yaw in the world (rad)."""
+    axis = np.array([np.cos(found.grasp.yaw), np.sin(found.grasp.yaw), 0.0])
+    v = T_world_cam[:3, :3] @ T_frame_cam[:3, :3].T @ axis
+    return float(np.arctan2(v[1], v[0]))
+
+
+def same_answer(in_table, in_world, T_table_cam, T_world_cam) -> bool:
+    """The same answer both ways: both refused, or both measured within 1 cm and 3 deg."""
+    if isinstance(in_table, PerceptionError) or isinstance(in_world, PerceptionError):
+        return isinstance(in_table, PerceptionError) and isinstance(in_world, PerceptionError)
+    dyaw = np.degrees(world_yaw(in_table, T_table_cam, T_world_cam) - in_world.grasp.yaw)
+    return bool(abs(in_table.length - in_world.length) <= 0.01
+                and abs((dyaw + 90) % 180 - 90) <= 3.0)  # fmt: skip

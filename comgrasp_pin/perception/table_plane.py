@@ -2,7 +2,9 @@
 
 The top view measures a rod in a frame whose z is the table's normal (``T_world_cam``).
 A user who has not calibrated the camera's pose may take the table itself: the plane
-that most of the image sees (RANSAC, then a least-squares fit to its inliers), with the
+that most of the image sees, or a parallel one nearer the camera that holds MIN_SHARE of it
+too (RANSAC, then a least-squares fit to its inliers; a camera high above a table may see
+more of the floor), with the
 frame ``table``: z along its normal towards the camera, origin below the camera's centre,
 x the camera's x laid on the plane. Lengths, widths, heights and yaw differences are then
 metric; positions are in that frame.
@@ -20,11 +22,16 @@ import numpy as np
 
 from comgrasp_pin.camera import PinholeCamera
 from comgrasp_pin.errors import ObjectNotFoundError
-from comgrasp_pin.perception._points import points_in
+from comgrasp_pin.perception._points import noise_level, points_in
 
-INLIER_DISTANCE = 0.005  # a point this close to the plane is on it (m)
+INLIER_DISTANCE = 0.005  # a point this close to the plane is on it (m), or NOISE_SIGMAS
+NOISE_SIGMAS = 3.0  # ... of the depth's own noise where it is noisier (a structured light's)
+NOISE_WINDOW = 15  # px: the depth's noise is measured about the mean of this window
 MIN_SHARE = 0.3  # the table must be at least this share of the valid pixels
 SAMPLES = 300  # RANSAC's draws of three points
+SEPARATION = 0.05  # a plane this much nearer the camera than the best-held one is another
+PARALLEL_DEG = 5.0  # ... surface (the table above the floor) when parallel within this
+NEAR_SHARE = 0.15  # ... and holding this share of the valid pixels
 MAX_POINTS = 20_000  # points the plane is fitted to (an even subsample of the image)
 GRID = 0.005  # the table's cells when its clear rectangle is sought (m)
 EDGE_MARGIN = 0.02  # the clear rectangle less this on each side (m): a board's edge may be
@@ -50,22 +57,24 @@ def fit_table_plane(
     step = max(1, len(points) // MAX_POINTS)
     sample = points[::step]
     rng = np.random.default_rng(seed)
-    best = None
+    band = _inlier_band(depth)
+    planes = []  # (inliers, normal, a point) of each plane holding NEAR_SHARE
     for a, b, c in rng.integers(0, len(sample), size=(SAMPLES, 3)):
         normal = np.cross(sample[b] - sample[a], sample[c] - sample[a])
         if np.linalg.norm(normal) < 1e-12:
             continue
         normal /= np.linalg.norm(normal)
-        count = np.count_nonzero(np.abs((sample - sample[a]) @ normal) < INLIER_DISTANCE)
-        if best is None or count > best[0]:
-            best = (count, normal, sample[a])
-    if best is None or best[0] < MIN_SHARE * len(sample):
+        count = np.count_nonzero(np.abs((sample - sample[a]) @ normal) < band)
+        if count >= NEAR_SHARE * len(sample):
+            planes.append((count, normal, sample[a]))
+    best = _nearest_surface(planes, MIN_SHARE * len(sample))
+    if best is None:
         raise ObjectNotFoundError(
             f"no plane holds {100 * MIN_SHARE:.0f} % of the depth image's points: the table is "
             "not in view; give the camera's pose instead"
         )
     _, normal, origin = best
-    inliers = points[np.abs((points - origin) @ normal) < INLIER_DISTANCE]
+    inliers = points[np.abs((points - origin) @ normal) < band]
     centre = inliers.mean(axis=0)
     normal = np.linalg.svd(inliers - centre, full_matrices=False)[2][2]  # least squares
     if normal @ -centre < 0:  # towards the camera (at the origin)
@@ -77,21 +86,56 @@ def fit_table_plane(
     T_cam_table[:3, :3] = np.column_stack([x, np.cross(normal, x), normal])
     T_cam_table[:3, 3] = foot
     T_table_cam = np.linalg.inv(T_cam_table)
-    return T_table_cam, clear_rectangle(image_points, T_table_cam)
+    return T_table_cam, clear_rectangle(image_points, T_table_cam, band)
 
 
-def clear_rectangle(points_cam: np.ndarray, T_table_cam: np.ndarray):
+def _nearest_surface(planes: list, least: float) -> tuple | None:
+    """The table among ``planes`` ((inliers, normal, point)); None if none holds ``least``.
+
+    The best-held of those parallel to the best-held one and nearer the camera by
+    SEPARATION at least (a table above the floor that a camera high above it sees more of),
+    else the best-held one.
+    """
+    first = max(planes, key=lambda p: p[0], default=None)
+    if first is None or first[0] < least:
+        return None
+
+    def distance(p) -> float:  # of the camera's centre (the origin) from the plane
+        return abs(float(p[1] @ p[2]))
+
+    nearer = [p for p in planes if abs(float(p[1] @ first[1])) > np.cos(np.radians(PARALLEL_DEG))
+              and distance(p) < distance(first) - SEPARATION]  # fmt: skip
+    return max(nearer, key=lambda p: p[0]) if nearer else first
+
+
+def _inlier_band(depth: np.ndarray) -> float:
+    """How close to the plane a point is on it (m).
+
+    INLIER_DISTANCE, or NOISE_SIGMAS of the depth's noise where that is larger: its robust
+    std about the mean of the NOISE_WINDOW around each pixel (a structured-light camera's
+    noise comes in patches a few pixels wide, which a smaller window follows).
+    """
+    valid = np.isfinite(depth) & (depth > 0)
+    d = np.where(valid, depth, 0.0).astype(np.float32)
+    window = (NOISE_WINDOW, NOISE_WINDOW)
+    count = cv2.blur(valid.astype(np.float32), window)
+    mean = cv2.blur(d, window) / np.maximum(count, 1e-6)
+    return max(INLIER_DISTANCE, NOISE_SIGMAS * noise_level((d - mean)[valid & (count > 0.5)]))
+
+
+def clear_rectangle(points_cam: np.ndarray, T_table_cam: np.ndarray,
+                    band: float = INLIER_DISTANCE):  # fmt: skip
     """The largest axis-aligned rectangle (x_min, x_max, y_min, y_max) of the table seen whole.
 
     ``points_cam``: (H, W, 3) every pixel's point in the camera (NaN where no depth). The
-    table's pixels (within INLIER_DISTANCE of its plane z = 0), their largest connected
+    table's pixels (within ``band`` of its plane z = 0, m), their largest connected
     region with the holes in it filled (what lies on the table), are laid on the plane in
     GRID cells; the rectangle is the largest that holds only such cells, less EDGE_MARGIN
     (m, table frame).
     """
     points = points_cam @ T_table_cam[:3, :3].T + T_table_cam[:3, 3]
     z = points[..., 2]
-    on = (np.abs(np.nan_to_num(z, nan=np.inf)) < INLIER_DISTANCE).astype(np.uint8)
+    on = (np.abs(np.nan_to_num(z, nan=np.inf)) < band).astype(np.uint8)
     count, labels, stats, _ = cv2.connectedComponentsWithStats(on, connectivity=8)
     table = labels == 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
     outline, _ = cv2.findContours(table.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
