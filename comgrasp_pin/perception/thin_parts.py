@@ -19,14 +19,16 @@ import numpy as np
 
 from comgrasp_pin.errors import UntrustedImageError
 from comgrasp_pin.perception._points import noise_level
+from comgrasp_pin.perception.rod_shape import reaching_border
+from comgrasp_pin.perception.standing import MAX_HEIGHT
 
 GAP = 0.01  # rays are followed from this far beyond the outline (m): its fringe and smear
 STEP = 0.01  # a part is followed along a ray in windows this long (m) up to the first
 BARE_SIGMAS = 1.0  # ... whose mean is less than this many of its noise stds above the
 # table: bare table, the part joined to the object ends there
 BARE_NOISE = 0.001  # (windows 2 or 4 STEP long where a STEP's mean is noisier than this, m)
-LENGTHS = (0.08, 0.16)  # a stretch this long beyond the fringe, its joined part's heights
-SIGMAS = 4.0  # ... averaged (the rest as table), this many of its noise stds above the table
+LENGTHS = (0.08, 0.16)  # a stretch of a ray this long beyond the fringe whose mean height
+SIGMAS = 4.0  # ... stands this many of its noise stds above the table
 MIN_MEAN = 0.003  # ... and at least this high (m): the top view's least height of an object
 # (a cord or a cable lower than that is no part of a rod's extent in any image)
 MIN_EXTENT = 0.02  # or a joined part at least this long (m) ...
@@ -114,9 +116,6 @@ def robot_parts(height: np.ndarray, threshold: float, pixel: float) -> np.ndarra
     object, nor their fringes. Other objects on the table are counted as such
     (``rod_shape.check_one_object``).
     """
-    from comgrasp_pin.perception.rod_shape import reaching_border
-    from comgrasp_pin.perception.standing import MAX_HEIGHT
-
     tall = np.isfinite(height) & (height > threshold)
     robot = reaching_border(tall) | (np.isfinite(height) & (height > MAX_HEIGHT))
     gap_px = max(2, int(round(GAP / pixel)))
