@@ -220,3 +220,43 @@ def test_another_arms_motion_is_refused(tmp_path, motion_file):
     no_traceback(res)
     assert res.returncode == 2 and "not of this arm's" in res.stderr
     assert not (tmp_path / "live_log.csv").exists()
+
+
+def test_an_arm_model_stands_for_the_empty_run(tmp_path, motion_file):
+    """identify-arm on an empty run of the motion (the simulated FR3's own log), then a
+    live run that attaches the payload first and plays the motion once: identified, within
+    its intervals, the offline command (with --arm-model) gives the same numbers."""
+    from comgrasp_pin._paths import fr3_urdf
+
+    empty = live(tmp_path / "first", "--sim", "--yes", "--motion", str(motion_file),
+                 "--sim-payload", "0.5,0,0,0.05")  # fmt: skip
+    assert empty.returncode == 0, empty.stderr
+    info = json.loads((tmp_path / "first" / "live.json").read_text())
+    empty_window = info["offline"].split("--empty-window ")[1].split()[0]
+    cmd = [sys.executable, "-m", "comgrasp_pin.cli", "identify-arm", "--urdf", str(fr3_urdf()),
+           "--ee-frame", "fr3_link8", "--csv", str(tmp_path / "first" / "live_log.csv"),
+           "--window", empty_window, "--out", str(tmp_path / "ARM.json")]  # fmt: skip
+    res = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+    spec = ",".join(f"{v:g}" for v in (MASS, *COM, *MOMENTS))
+    res = live(tmp_path / "second", "--sim", "--yes", "--motion", str(motion_file),
+               "--arm-model", str(tmp_path / "ARM.json"), "--sim-payload", spec)  # fmt: skip
+    assert res.returncode == 0, res.stderr
+    assert "the arm's own from --arm-model" in res.stdout
+    r = json.loads((tmp_path / "second" / "RESULT.json").read_text())
+    mass, com = r["mass_kg"], np.array(r["com_m"])
+    std = np.array([r["std"]["mass_kg"], *r["std"]["com_m"]])
+    assert abs(mass - MASS) < 0.1 * MASS
+    assert np.all(np.abs(np.r_[mass, com] - np.r_[MASS, COM]) < 4.5 * std)
+    info = json.loads((tmp_path / "second" / "live.json").read_text())
+    assert "--arm-model" in info["offline"] and "--empty-csv" not in info["offline"]
+    cmd = [sys.executable, "-m", "comgrasp_pin.cli", *info["offline"].split()[1:]]
+    off = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+    assert off.returncode == 0, off.stderr
+    assert json.loads((tmp_path / "second" / "RESULT_offline.json").read_text()) == r
+
+
+def test_an_arm_model_without_a_motion_is_refused(tmp_path):
+    res = live(tmp_path, "--sim", "--yes", "--arm-model", "ARM.json", timeout=60)
+    no_traceback(res)
+    assert res.returncode == 2 and "give --motion too" in res.stderr

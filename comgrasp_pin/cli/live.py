@@ -61,6 +61,10 @@ def add_subcommand(sub: argparse._SubParsersAction) -> None:
                    help="measure along this motion of comgrasp plan-motion instead of at rest "
                    "(the inertia too; played slower where it would exceed the dynamics "
                    "factor)")  # fmt: skip
+    p.add_argument("--arm-model", default=None, metavar="ARM.json",
+                   help="with --motion: the arm's own dynamics (comgrasp identify-arm of an "
+                   "empty run of any motion) stand for the empty run: the payload is "
+                   "attached first and the motion played once")  # fmt: skip
     p.add_argument("--dynamics-factor", type=float, default=d.dynamics_factor,
                    help=f"share of the arm's speed limits each move uses, at most "
                    f"{d.max_dynamics_factor:g} (default %(default)s)")  # fmt: skip
@@ -102,6 +106,13 @@ def run_live(args: argparse.Namespace) -> int:
         raise InvalidInputError("--sim-payload, --sim-fault and --sim-lose-after are for --sim")
     if args.motion is not None and args.poses is not None:
         raise InvalidInputError("give --poses (at rest) or --motion (along a motion), not both")
+    if args.arm_model is not None:
+        if args.motion is None:
+            raise InvalidInputError("--arm-model stands for the empty run along a motion: "
+                                    "give --motion too")  # fmt: skip
+        from comgrasp_pin.robot_io.from_motion.arm_model import load_arm_model
+
+        load_arm_model(args.arm_model)  # a clear error before anything moves
     urdf = args.urdf or str(fr3_urdf())
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -138,7 +149,7 @@ def _session(args, config: LiveConfig, urdf: str, out: Path, host: str, attach) 
         lp.show_poses(robot, plan, config)
     else:
         plan = lp.motion(args, robot, arm.limits(), config)
-        lp.show_motion(robot, plan, q_now, config)
+        lp.show_motion(args, robot, plan, q_now, config)
     if args.dry_run:
         print("dry run: nothing moved")
         return 0
@@ -146,7 +157,7 @@ def _session(args, config: LiveConfig, urdf: str, out: Path, host: str, attach) 
     arm.configure()
     names = tuple(robot.joint_names)
     if isinstance(plan, Waypoints):
-        rec = measure_motion(arm, names, plan, attach, config)
+        rec = measure_motion(arm, names, plan, attach, config, empty_run=args.arm_model is None)
     else:
         rec = measure(arm, names, plan, attach, config)
     if len(rec.log.time):
@@ -168,6 +179,7 @@ def _estimate_and_set(args, robot, arm, rec, out: Path, info: dict, config: Live
     from comgrasp_pin.live.protocol import load_read_back, load_to_send
     from comgrasp_pin.robot_io import estimate_from_log
     from comgrasp_pin.robot_io.at_rest import parse_windows
+    from comgrasp_pin.robot_io.from_motion.arm_model import load_arm_model
     from comgrasp_pin.robot_io.from_motion.dynamic import estimate_payload_dynamic
     from comgrasp_pin.robot_io.log_files import read_csv
     from comgrasp_pin.robot_io.payload_files.exports import franka_load
@@ -178,8 +190,14 @@ def _estimate_and_set(args, robot, arm, rec, out: Path, info: dict, config: Live
     log = read_csv(out / "live_log.csv", robot.joint_names)
     try:
         if rec.motion_windows is not None:
-            (e0, e1), (l0, l1) = (parse_windows(text, "window")[0] for text in rec.motion_windows)
-            est = estimate_payload_dynamic(robot, log, log, (l0, l1), (e0, e1))
+            empty_text, loaded_text = rec.motion_windows
+            l0, l1 = parse_windows(loaded_text, "--window")[0]
+            if empty_text is None:  # the arm model stands for the empty run
+                arm_model = load_arm_model(args.arm_model)
+                est = estimate_payload_dynamic(robot, log, None, (l0, l1), arm_model=arm_model)
+            else:
+                e0, e1 = parse_windows(empty_text, "--empty-window")[0]
+                est = estimate_payload_dynamic(robot, log, log, (l0, l1), (e0, e1))
         else:
             before = parse_windows(rec.before, "--before", joined=True)
             after = parse_windows(rec.after, "--after", joined=True)

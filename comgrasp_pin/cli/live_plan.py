@@ -62,10 +62,15 @@ def show_poses(robot, Q: np.ndarray, config: LiveConfig) -> None:
         print(f"  pose {i}: " + " ".join(f"{v:7.1f}" for v in np.degrees(q)) + "  deg")
 
 
-def show_motion(robot, w, q_now: np.ndarray, config: LiveConfig) -> None:
+def show_motion(args, robot, w, q_now: np.ndarray, config: LiveConfig) -> None:
     slower = f" at {1 / w.slow_down:.2f} of its planned speed" if w.slow_down > 1 else ""
     reach = np.degrees(np.abs(np.vstack([w.q, w.start]) - w.start).max(axis=0))
-    print(f"a planned motion for {robot.ee_frame}, played empty first, then with the payload: "
+    runs = (
+        "with the payload (the arm's own from --arm-model)"
+        if args.arm_model
+        else ("empty first, then with the payload")
+    )
+    print(f"a planned motion for {robot.ee_frame}, played {runs}: "
           f"through {len(w.t)} waypoints{slower}, as fast as dynamics factor "
           f"{config.dynamics_factor:g} allows (about {w.duration_s:.0f} s)")  # fmt: skip
     print("  start:  " + " ".join(f"{v:7.1f}" for v in np.degrees(w.start)) + "  deg "
@@ -106,10 +111,12 @@ def sim_payload(text: str | None):
     return SimPayload(v[0], (v[1], v[2], v[3]), tuple(map(tuple, np.diag(moments))))
 
 
-def offline_args(rec) -> str:
+def offline_args(rec, arm_model: str | None = None) -> str:
     """The `comgrasp estimate` options that estimate the recording's log as live did."""
     if rec.motion_windows is not None:
         empty, loaded = rec.motion_windows
+        if empty is None:
+            return f"--dynamic --window {loaded} --arm-model {arm_model}"
         return f"--dynamic --window {loaded} --empty-csv {{log}} --empty-window {empty}"
     return f"--before {rec.before} --after {rec.after} --pose-errors"
 
@@ -119,7 +126,7 @@ def live_info(args, config, urdf, out, host, plan, rec, wall_s: float) -> dict:
     log = out / "live_log.csv"
     offline = (
         f"comgrasp estimate --urdf {urdf} --ee-frame {args.ee_frame} --csv {log} "
-        + offline_args(rec).format(log=log)
+        + offline_args(rec, args.arm_model).format(log=log)
         + f" --out {out / 'RESULT_offline.json'}"
     )
     along = {"poses_rad": plan.tolist()} if isinstance(plan, np.ndarray) else {

@@ -56,17 +56,21 @@ class Recording:
 
     def _paired(self):
         """The poses with both sides in both runs."""
-        pairs = [(b, a) for b, a in zip(self.spans[EMPTY], self.spans[LOADED])
+        pairs = [(b, a) for b, a in zip(self.spans.get(EMPTY, []), self.spans[LOADED])
                  if len(b) == 2 and len(a) == 2]  # fmt: skip
         return [b for b, _ in pairs], [a for _, a in pairs]
 
     @property
-    def motion_windows(self) -> tuple[str, str] | None:
-        """Along a motion: the ``--empty-window`` and ``--window`` texts (or None)."""
-        empty, loaded = self.spans[EMPTY][0], self.spans[LOADED][0]
-        if len(empty) != 1 or len(loaded) != 1:
+    def motion_windows(self) -> tuple[str | None, str] | None:
+        """Along a motion: the ``--empty-window`` and ``--window`` texts.
+
+        The first is None without an empty run (an arm model stands for it); None where
+        the loaded run is missing.
+        """
+        empty, loaded = self.spans.get(EMPTY, [[]])[0], self.spans[LOADED][0]
+        if len(loaded) != 1:
             return None
-        return windows_text([empty]), windows_text([loaded])
+        return (windows_text([empty]) if len(empty) == 1 else None), windows_text([loaded])
 
     @property
     def n_pairs(self) -> int:
@@ -115,12 +119,15 @@ def measure_motion(
     attach: Callable[[], None],
     config: LiveConfig,
     show_progress: bool = True,
+    empty_run: bool = True,
 ) -> Recording:
     """Play a planned motion empty and then loaded; failures as ``measure``'s.
 
     Each run's window holds the motion and ``config.motion_hold_s`` still before and after.
+    ``empty_run`` False: the loaded run alone (an arm model stands for the empty arm).
     """
-    spans: dict = {EMPTY: [[]], LOADED: [[]]}
+    runs = (EMPTY, LOADED) if empty_run else (LOADED,)
+    spans: dict = {run: [[]] for run in runs}
 
     def one_run(run: str, bar) -> None:
         bar.set_postfix_str(f"{run}: to the start")
@@ -132,16 +139,16 @@ def measure_motion(
         spans[run][0].append((t0, t1))
         bar.update()
 
-    return _both_runs(arm, joint_names, attach, spans, one_run, 1, show_progress)
+    return _both_runs(arm, joint_names, attach, spans, one_run, 1, show_progress, runs)
 
 
 def _both_runs(arm: FrankaArm, joint_names, attach, spans: dict, one_run, moves: int,
-               show_progress: bool) -> Recording:  # fmt: skip
+               show_progress: bool, runs=(EMPTY, LOADED)) -> Recording:  # fmt: skip
     """``one_run(run, bar)`` empty, ``attach()``, then loaded; what was recorded."""
     stopped_by = ""
-    bar = tqdm(total=2 * moves, desc="live", unit="move", disable=not show_progress)
+    bar = tqdm(total=len(runs) * moves, desc="live", unit="move", disable=not show_progress)
     try:
-        for run in (EMPTY, LOADED):
+        for run in runs:
             if run == LOADED:
                 attach()  # a prompt: Ctrl-C there is Python's own
                 arm.check_ready()
