@@ -12,6 +12,7 @@ import pytest
 from comgrasp_pin.camera import PinholeCamera
 from comgrasp_pin.errors import ColourDepthMismatchError, UntrustedImageError
 from comgrasp_pin.perception.registration import check_registered, cover_by_shift
+from comgrasp_pin.perception.rod_pieces import join_pieces
 from comgrasp_pin.perception.table_plane import fit_table_plane
 from comgrasp_pin.perception.thin_parts import check_no_thin_part, robot_parts
 
@@ -146,3 +147,27 @@ def test_the_table_is_found_above_a_floor_the_camera_sees_more_of(noise):
     assert abs(T_table_cam[2, 3] - 1.25) < 0.005
     assert -0.4 < x0 < x1 < 0.4 and -0.25 < y0 < y1 < 0.25
     assert x1 - x0 > 0.65 and y1 - y0 > 0.38
+
+
+def _broken_rod(gap_height: float):
+    """(points (H, W, 3) on a 2 mm grid, standing (above 11 mm), the first piece): a rod
+    20 mm high along x, broken at x = 0.2 m by a 2 cm gap ``gap_height`` high."""
+    v, u = np.mgrid[0:H, 0:W]
+    points = np.dstack([u * 0.002, v * 0.002, np.zeros((H, W))])
+    rod = (np.abs(v - 150) <= 4) & (u >= 40) & (u < 300)
+    points[..., 2] = np.where(rod, 0.02, 0.0)
+    points[..., 2][rod & (u >= 100) & (u < 110)] = gap_height
+    standing = points[..., 2] > 0.011
+    return points, standing, standing & (u < 100)
+
+
+def test_a_rod_broken_by_the_noise_is_joined_and_two_rods_end_to_end_are_not():
+    """The depth's threshold lost a rod's pixels over 2 cm where they stand 10.5 mm (the
+    rod's 20 mm in noise): one rod, joined through the gap (half the rod's height or more).
+    The same two pieces with bare table between them: two objects, not joined."""
+    points, standing, first = _broken_rod(0.0105)
+    joined, bridge = join_pieces(points, standing, first, 0.0)
+    assert joined[150, 200] and joined[150, 105] and bridge[150, 105]
+    points, standing, first = _broken_rod(0.0)
+    apart, bridge = join_pieces(points, standing, first, 0.0)
+    assert not apart[150, 200] and not bridge.any()

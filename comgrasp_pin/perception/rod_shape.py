@@ -16,7 +16,8 @@ from comgrasp_pin.errors import AmbiguousObjectError, ClutterError
 SECOND_OBJECT = 0.05  # another blob of this share of the rod's pixels is another object
 CLUTTER_OBJECTS = 3  # this many objects (or piles) in the pick area are clutter
 END_REACH, END_BAND = 0.05, 0.003  # pixels this far beyond an end, on the axis (m) ...
-END_PIXELS = 3  # ... this many: the rod may go on
+END_PIXELS = 3  # ... this many: the rod may go on, unless each blob they are of is no
+NOISE_BUMPS = 5  # larger than one of this many or more off the axis (the table's own noise)
 SLICE = 0.01  # slices across the rod (m)
 ACROSS_BIN = 0.002  # the across profile's resolution (m): about one pixel on the table
 GAP_BINS = 2  # this many empty bins in a row between two pieces split a slice
@@ -105,11 +106,18 @@ def check_ends_seen(
         return
     normal = np.array([-direction[1], direction[0]])
     half_width = np.percentile(np.abs((p[:, :2] - centroid) @ normal), 95) + END_BAND
-    rel = points[others][:, :2] - centroid
+    rel = np.nan_to_num(points[..., :2] - centroid, nan=np.inf)
     along, across = rel @ direction, np.abs(rel @ normal)
     lo, hi = ends
     beyond = ((along < lo) & (along > lo - END_REACH)) | ((along > hi) & (along < hi + END_REACH))
-    count = int(np.count_nonzero(beyond & (across < half_width)))
+    corridor = beyond & (across < half_width)
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(others.astype(np.uint8))
+    on_axis = np.unique(labels[corridor & others])
+    elsewhere = np.setdiff1d(np.arange(1, count), on_axis)
+    # a blob no larger than the table's own noise makes elsewhere is no part of the rod
+    bump = int(stats[elsewhere, cv2.CC_STAT_AREA].max()) if len(elsewhere) >= NOISE_BUMPS else 0
+    count = int(sum(np.count_nonzero(corridor & (labels == k)) for k in on_axis
+                    if k > 0 and stats[k, cv2.CC_STAT_AREA] > bump))  # fmt: skip
     if count >= END_PIXELS:
         raise AmbiguousObjectError(
             f"{count} px stand on the table on the rod's axis beyond the end seen: the rod "

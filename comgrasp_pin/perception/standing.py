@@ -15,6 +15,7 @@ import numpy as np
 from comgrasp_pin.errors import ObjectCutByBorderError, ObjectNotFoundError
 from comgrasp_pin.perception._points import border_pixels, largest_component
 from comgrasp_pin.perception.registration import check_registered
+from comgrasp_pin.perception.rod_pieces import join_pieces
 from comgrasp_pin.perception.rod_shape import check_one_object, reaching_border
 from comgrasp_pin.perception.table_view import TableView, differs_in_colour, in_area, over_the_edge
 
@@ -59,6 +60,9 @@ def segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, np
     if view.cleaned:
         standing = closed(standing)
     mask = largest_component(inside & standing, MIN_PIXELS, "top-down image")
+    if view.cleaned:  # a rod broken apart by the noise, joined again
+        mask, bridge = join_pieces(view.points, inside & standing, mask, view.table_z)
+        standing = standing | bridge
     check_one_object(inside & standing, mask, at_edge=reaching_border(standing))  # other
     # objects are the reason to refuse first
     if border_pixels(mask).any():

@@ -1,0 +1,81 @@
+"""Pieces of one rod that a noisy depth image broke apart, joined again (top view).
+
+A structured-light camera's depth at 1.25 m loses a rod's pixels in patches (its noise, the
+projector's shadow beside a tall head): one hammer stands as two blobs on one line, which
+the count of objects would take for two objects. A piece is joined to the rod when it lies
+on the rod's axis (its centroid within MAX_OFFSET of it), beyond one of its ends by at most
+MAX_GAP, and the gap between them stands above the table: its pixels' mean height at least
+BRIDGE_SHARE of the lower piece's median height. Table seen between them is another object,
+left to be counted as such (``rod_shape.check_one_object``).
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+MAX_OFFSET = 0.015  # m: a piece's centroid this near the rod's axis lies on it ...
+MAX_GAP = 0.05  # ... and one this far at most beyond the rod's end (m) may be part of it
+BRIDGE_SHARE = 0.5  # ... when the gap's mean height is this share of the lower piece's
+MIN_BRIDGE_HALF_WIDTH = 0.004  # m: the gap is looked at this far either side of the axis
+MIN_PIECE = 10  # px: a smaller blob is noise
+_KERNEL3 = np.ones((3, 3), np.uint8)
+
+
+def join_pieces(points: np.ndarray, standing: np.ndarray, mask: np.ndarray,
+                table_z: float) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """(the rod's mask with the pieces joined, the gaps' pixels joined with them).
+
+    ``points``: (H, W, 3) every pixel in the world (m, NaN where none); ``standing``: (H, W)
+    bool, what stands on the table in the pick area; ``mask``: the rod's largest blob;
+    ``table_z``: the table's height (m). Blobs of MIN_PIECE pixels or more are looked at.
+    """
+    opened = cv2.morphologyEx(standing.astype(np.uint8), cv2.MORPH_OPEN, _KERNEL3)
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(opened, connectivity=8)
+    mask, bridge = mask.copy(), np.zeros_like(mask)
+    pieces = [k for k in range(1, count) if stats[k, cv2.CC_STAT_AREA] >= MIN_PIECE
+              and not np.any(mask[labels == k])]  # fmt: skip
+    joined = True
+    while joined and pieces:
+        joined = False
+        for k in pieces:
+            gap = _gap_if_on_axis(points, mask, labels == k, table_z)
+            if gap is not None:
+                mask |= (labels == k) | gap
+                bridge |= gap & ~standing
+                pieces.remove(k)
+                joined = True
+                break
+    return mask, bridge
+
+
+def _gap_if_on_axis(points, mask, piece, table_z) -> np.ndarray | None:
+    """The gap's pixels between ``mask`` and ``piece`` if the piece continues the rod."""
+    p_rod, p_piece = points[mask], points[piece]
+    p_rod, p_piece = p_rod[np.isfinite(p_rod[:, 2])], p_piece[np.isfinite(p_piece[:, 2])]
+    if len(p_rod) < 3 or len(p_piece) < 3:
+        return None
+    centre = p_rod[:, :2].mean(axis=0)
+    axis = np.linalg.svd(p_rod[:, :2] - centre, full_matrices=False)[2][0]
+    normal = np.array([-axis[1], axis[0]])
+    if abs(float((p_piece[:, :2].mean(axis=0) - centre) @ normal)) > MAX_OFFSET:
+        return None
+    rod_along, piece_along = (p_rod[:, :2] - centre) @ axis, (p_piece[:, :2] - centre) @ axis
+    lo, hi = float(rod_along.min()), float(rod_along.max())
+    if piece_along.min() >= hi:
+        start, end = hi, float(piece_along.min())
+    elif piece_along.max() <= lo:
+        start, end = float(piece_along.max()), lo
+    else:
+        return None  # beside the rod, not beyond an end
+    if end - start > MAX_GAP:
+        return None
+    widths = np.percentile((p_rod[:, :2] - centre) @ normal, [10, 90])
+    half = max(MIN_BRIDGE_HALF_WIDTH, 0.5 * float(widths[1] - widths[0]))
+    xy = points[..., :2] - centre
+    along, across = xy @ axis, xy @ normal
+    gap = np.isfinite(points[..., 2]) & (along > start) & (along < end) & (np.abs(across) < half)
+    lower = min(float(np.median(p_rod[:, 2])), float(np.median(p_piece[:, 2]))) - table_z
+    if gap.any() and float(np.mean(points[gap][:, 2])) - table_z < BRIDGE_SHARE * lower:
+        return None
+    return gap
