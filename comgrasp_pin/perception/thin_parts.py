@@ -100,6 +100,8 @@ def check_no_thin_part(heights: np.ndarray, mask: np.ndarray, table: np.ndarray,
         extent = extent_px[k] / px_per_m
         if extent < MIN_EXTENT:
             return
+        if not joined[k].any():  # the ray's part is not seen (beyond the area, the robot)
+            continue
         part_noise = _stretch_noise(heights, table, int(extent_px[k]))
         mean = float(h[k, joined[k]].mean())
         if np.isfinite(part_noise) and mean > max(JOINED_SIGMAS * part_noise, MIN_JOINED):
