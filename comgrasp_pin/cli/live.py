@@ -70,7 +70,8 @@ def add_subcommand(sub: argparse._SubParsersAction) -> None:
                    f"{d.max_dynamics_factor:g} (default %(default)s)")  # fmt: skip
     p.add_argument("--yes", action="store_true",
                    help="do not ask before moving nor wait for the payload (scripts; the "
-                   "payload must be attached when the empty run ends)")  # fmt: skip
+                   "payload must be attached when the empty run ends, or at the start with "
+                   "--arm-model)")  # fmt: skip
     p.add_argument("--dry-run", action="store_true",
                    help="plan and show the poses or the motion; move nothing")  # fmt: skip
     p.add_argument("--set-load", action="store_true",
@@ -106,18 +107,20 @@ def run_live(args: argparse.Namespace) -> int:
         raise InvalidInputError("--sim-payload, --sim-fault and --sim-lose-after are for --sim")
     if args.motion is not None and args.poses is not None:
         raise InvalidInputError("give --poses (at rest) or --motion (along a motion), not both")
+    arm_model = None
     if args.arm_model is not None:
         if args.motion is None:
             raise InvalidInputError("--arm-model stands for the empty run along a motion: "
                                     "give --motion too")  # fmt: skip
         from comgrasp_pin.robot_io.from_motion.arm_model import load_arm_model
 
-        load_arm_model(args.arm_model)  # a clear error before anything moves
+        arm_model = load_arm_model(args.arm_model)  # a clear error before anything moves
     urdf = args.urdf or str(fr3_urdf())
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     if not args.sim:
-        return _session(args, config, urdf, out, args.host, lambda: prompt_attach(args))
+        return _session(args, config, urdf, out, args.host, lambda: prompt_attach(args),
+                        arm_model)  # fmt: skip
     from comgrasp_pin.simulation.franka_sim import FrankaSim  # the simulated FR3: MuJoCo
 
     payload = sim_payload(args.sim_payload)
@@ -127,11 +130,15 @@ def run_live(args: argparse.Namespace) -> int:
             prompt_attach(args)
             sim.attach()
 
-        return _session(args, config, urdf, out, LOOPBACK, attach)
+        return _session(args, config, urdf, out, LOOPBACK, attach, arm_model)
 
 
-def _session(args, config: LiveConfig, urdf: str, out: Path, host: str, attach) -> int:
-    """Connect, plan, ask, measure, write, estimate, maybe set the load."""
+def _session(args, config: LiveConfig, urdf: str, out: Path, host: str, attach,
+             arm_model=None) -> int:  # fmt: skip
+    """Connect, plan, ask, measure, write, estimate, maybe set the load.
+
+    ``arm_model``: --arm-model's ``ArmModel``, standing for the empty run, or None.
+    """
     from comgrasp_pin.cli import live_plan as lp
     from comgrasp_pin.live import FrankaArm, measure, measure_motion
     from comgrasp_pin.live.protocol import Waypoints
@@ -157,7 +164,7 @@ def _session(args, config: LiveConfig, urdf: str, out: Path, host: str, attach) 
     arm.configure()
     names = tuple(robot.joint_names)
     if isinstance(plan, Waypoints):
-        rec = measure_motion(arm, names, plan, attach, config, empty_run=args.arm_model is None)
+        rec = measure_motion(arm, names, plan, attach, config, empty_run=arm_model is None)
     else:
         rec = measure(arm, names, plan, attach, config)
     if len(rec.log.time):
@@ -170,16 +177,16 @@ def _session(args, config: LiveConfig, urdf: str, out: Path, host: str, attach) 
     if not rec.complete:
         raise RobotError(f"the measurement ended early: {rec.stopped_by}. Kept {len(rec.log.time)} "
                          f"readings in {out / 'live_log.csv'} ({out / 'live.json'})")  # fmt: skip
-    return _estimate_and_set(args, robot, arm, rec, out, info, config)
+    return _estimate_and_set(args, robot, arm, rec, out, info, config, arm_model)
 
 
-def _estimate_and_set(args, robot, arm, rec, out: Path, info: dict, config: LiveConfig) -> int:
+def _estimate_and_set(args, robot, arm, rec, out: Path, info: dict, config: LiveConfig,
+                      arm_model=None) -> int:  # fmt: skip
     """The estimate of the log as written (offline's computation, on the same file and the
     same windows' text), then ``--set-load``."""
     from comgrasp_pin.live.protocol import load_read_back, load_to_send
     from comgrasp_pin.robot_io import estimate_from_log
     from comgrasp_pin.robot_io.at_rest import parse_windows
-    from comgrasp_pin.robot_io.from_motion.arm_model import load_arm_model
     from comgrasp_pin.robot_io.from_motion.dynamic import estimate_payload_dynamic
     from comgrasp_pin.robot_io.log_files import read_csv
     from comgrasp_pin.robot_io.payload_files.exports import franka_load
@@ -193,7 +200,6 @@ def _estimate_and_set(args, robot, arm, rec, out: Path, info: dict, config: Live
             empty_text, loaded_text = rec.motion_windows
             l0, l1 = parse_windows(loaded_text, "--window")[0]
             if empty_text is None:  # the arm model stands for the empty run
-                arm_model = load_arm_model(args.arm_model)
                 est = estimate_payload_dynamic(robot, log, None, (l0, l1), arm_model=arm_model)
             else:
                 e0, e1 = parse_windows(empty_text, "--empty-window")[0]

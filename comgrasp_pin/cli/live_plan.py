@@ -65,11 +65,9 @@ def show_poses(robot, Q: np.ndarray, config: LiveConfig) -> None:
 def show_motion(args, robot, w, q_now: np.ndarray, config: LiveConfig) -> None:
     slower = f" at {1 / w.slow_down:.2f} of its planned speed" if w.slow_down > 1 else ""
     reach = np.degrees(np.abs(np.vstack([w.q, w.start]) - w.start).max(axis=0))
-    runs = (
-        "with the payload (the arm's own from --arm-model)"
-        if args.arm_model
-        else ("empty first, then with the payload")
-    )
+    runs = "empty first, then with the payload"
+    if args.arm_model:
+        runs = "with the payload (the arm's own from --arm-model)"
     print(f"a planned motion for {robot.ee_frame}, played {runs}: "
           f"through {len(w.t)} waypoints{slower}, as fast as dynamics factor "
           f"{config.dynamics_factor:g} allows (about {w.duration_s:.0f} s)")  # fmt: skip
@@ -92,7 +90,8 @@ def confirm(args, what: str) -> None:
 def prompt_attach(args) -> None:
     if args.yes or not sys.stdin.isatty():
         return
-    input("Empty run done. Attach the payload, keep clear of the arm, and press Enter ")
+    done = "" if getattr(args, "arm_model", None) else "Empty run done. "
+    input(f"{done}Attach the payload, keep clear of the arm, and press Enter ")
 
 
 def sim_payload(text: str | None):

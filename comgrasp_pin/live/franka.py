@@ -165,8 +165,9 @@ class FrankaArm:
     def limits(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The robot's joint (velocity, acceleration, jerk) limits (rad/s, /s^2, /s^3)."""
         r = self.robot
-        return tuple(np.array(lim.max, dtype=float) for lim in
-                     (r.joint_velocity_limit, r.joint_acceleration_limit, r.joint_jerk_limit))  # type: ignore[return-value]  # fmt: skip
+        limits = (r.joint_velocity_limit, r.joint_acceleration_limit, r.joint_jerk_limit)
+        v, a, j = (np.array(lim.max, dtype=float) for lim in limits)
+        return v, a, j
 
     def _run(self, motion, what: str, timeout_s: float) -> None:
         """Run a franky motion, reading the state meanwhile; Ctrl-C stops the arm."""

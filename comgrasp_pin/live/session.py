@@ -126,8 +126,7 @@ def measure_motion(
     Each run's window holds the motion and ``config.motion_hold_s`` still before and after.
     ``empty_run`` False: the loaded run alone (an arm model stands for the empty arm).
     """
-    runs = (EMPTY, LOADED) if empty_run else (LOADED,)
-    spans: dict = {run: [[]] for run in runs}
+    spans: dict = {run: [[]] for run in ((EMPTY, LOADED) if empty_run else (LOADED,))}
 
     def one_run(run: str, bar) -> None:
         bar.set_postfix_str(f"{run}: to the start")
@@ -139,16 +138,19 @@ def measure_motion(
         spans[run][0].append((t0, t1))
         bar.update()
 
-    return _both_runs(arm, joint_names, attach, spans, one_run, 1, show_progress, runs)
+    return _both_runs(arm, joint_names, attach, spans, one_run, 1, show_progress)
 
 
 def _both_runs(arm: FrankaArm, joint_names, attach, spans: dict, one_run, moves: int,
-               show_progress: bool, runs=(EMPTY, LOADED)) -> Recording:  # fmt: skip
-    """``one_run(run, bar)`` empty, ``attach()``, then loaded; what was recorded."""
+               show_progress: bool) -> Recording:  # fmt: skip
+    """What was recorded by ``one_run(run, bar)`` for each run of ``spans`` in turn.
+
+    The runs are ``spans``' keys (empty, loaded); ``attach()`` comes before the loaded one.
+    """
     stopped_by = ""
-    bar = tqdm(total=len(runs) * moves, desc="live", unit="move", disable=not show_progress)
+    bar = tqdm(total=len(spans) * moves, desc="live", unit="move", disable=not show_progress)
     try:
-        for run in runs:
+        for run in spans:
             if run == LOADED:
                 attach()  # a prompt: Ctrl-C there is Python's own
                 arm.check_ready()

@@ -116,8 +116,8 @@ def check_ends_seen(
     elsewhere = np.setdiff1d(np.arange(1, count), on_axis)
     # a blob no larger than the table's own noise makes elsewhere is no part of the rod
     bump = int(stats[elsewhere, cv2.CC_STAT_AREA].max()) if len(elsewhere) >= NOISE_BUMPS else 0
-    count = int(sum(np.count_nonzero(corridor & (labels == k)) for k in on_axis
-                    if k > 0 and stats[k, cv2.CC_STAT_AREA] > bump))  # fmt: skip
+    in_corridor = np.bincount(labels[corridor & others], minlength=count)
+    count = int(sum(in_corridor[k] for k in on_axis if stats[k, cv2.CC_STAT_AREA] > bump))
     if count >= END_PIXELS:
         raise AmbiguousObjectError(
             f"{count} px stand on the table on the rod's axis beyond the end seen: the rod "

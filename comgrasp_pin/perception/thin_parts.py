@@ -96,13 +96,17 @@ def check_no_thin_part(heights: np.ndarray, mask: np.ndarray, table: np.ndarray,
         stretch_noise = _stretch_noise(heights, table, length_px)
         if np.isfinite(stretch_noise) and means[k] > max(SIGMAS * stretch_noise, MIN_MEAN):
             _refuse(k, float(means[k]), length, stretch_noise)
+    part_noises: dict[int, float] = {}  # per length (px): rays share their lengths
     for k in np.argsort(extent_px)[::-1][: ANGLES // 8]:
         extent = extent_px[k] / px_per_m
         if extent < MIN_EXTENT:
             return
         if not joined[k].any():  # the ray's part is not seen (beyond the area, the robot)
             continue
-        part_noise = _stretch_noise(heights, table, int(extent_px[k]))
+        n = int(extent_px[k])
+        if n not in part_noises:
+            part_noises[n] = _stretch_noise(heights, table, n)
+        part_noise = part_noises[n]
         mean = float(h[k, joined[k]].mean())
         if np.isfinite(part_noise) and mean > max(JOINED_SIGMAS * part_noise, MIN_JOINED):
             _refuse(k, mean, extent, part_noise)
