@@ -21,9 +21,9 @@ from pathlib import Path
 
 import numpy as np
 
+from comgrasp_pin.estimation import trust
 from comgrasp_pin.planning.excitation import ExcitationSettings, plan_excitation
 from comgrasp_pin.robot_io.from_motion.dynamic import estimate_payload_dynamic
-from comgrasp_pin.robot_io.results import trust
 from comgrasp_pin.simulation.arm_worlds import arm_robot
 from comgrasp_pin.simulation.payload_motion import simulate_motion
 from comgrasp_pin.simulation.payloads import reference_payloads

@@ -46,7 +46,7 @@ class EmptyGripperError(ComGraspError, ValueError):
 
 class NotIdentifiedError(ComGraspError, ValueError):
     """A payload file was asked for an estimate whose verdict is not ``identified``
-    (``robot_io.results.trust``): the message gives the verdict and its reasons."""
+    (``estimation.trust``): the message gives the verdict and its reasons."""
 
 
 class SolverError(ComGraspError, ValueError):

@@ -79,15 +79,21 @@ def regular_file(path: str | Path, what: str, max_bytes: int,
     return path
 
 
-def read_bytes(path: str | Path, what: str, max_bytes: int,
-               error: type[ComGraspError] = InvalidInputError) -> bytes:  # fmt: skip
-    """The bytes of a regular file of at most ``max_bytes`` (see ``regular_file``)."""
+def _read_start(path, what: str, max_bytes: int, error: type[ComGraspError], limit: int,
+                line: bool) -> tuple[Path, bytes]:  # fmt: skip
+    """(the checked path, its first ``limit`` + 1 bytes, or its first line up to that)."""
     path = regular_file(path, what, max_bytes, error)
     try:
         with path.open("rb") as f:
-            data = f.read(max_bytes + 1)
+            return path, f.readline(limit + 1) if line else f.read(limit + 1)
     except OSError as exc:
         raise error(f"cannot read {what} {path}: {exc.strerror or exc}") from None
+
+
+def read_bytes(path: str | Path, what: str, max_bytes: int,
+               error: type[ComGraspError] = InvalidInputError) -> bytes:  # fmt: skip
+    """The bytes of a regular file of at most ``max_bytes`` (see ``regular_file``)."""
+    path, data = _read_start(path, what, max_bytes, error, max_bytes, line=False)
     if len(data) > max_bytes:
         raise error(f"{what} {path} grew past {max_bytes} bytes while it was read")
     return data
@@ -231,12 +237,7 @@ def first_line(path: str | Path, what: str, max_bytes: int, max_line_bytes: int,
     Raises:
         error: see ``regular_file``; a first line too long, or not UTF-8.
     """
-    path = regular_file(path, what, max_bytes, error)
-    try:
-        with path.open("rb") as f:
-            line = f.readline(max_line_bytes + 1)
-    except OSError as exc:
-        raise error(f"cannot read {what} {path}: {exc.strerror or exc}") from None
+    path, line = _read_start(path, what, max_bytes, error, max_line_bytes, line=True)
     if len(line) > max_line_bytes:
         raise error(f"{what} {path}: its first line is longer than {max_line_bytes} bytes, "
                     "not a header")  # fmt: skip

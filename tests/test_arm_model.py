@@ -16,6 +16,7 @@ import pytest
 
 from comgrasp_pin.cli import main
 from comgrasp_pin.errors import InvalidInputError, LogError
+from comgrasp_pin.estimation.trust import Checks, judge, motion_reasons
 from comgrasp_pin.planning.excitation import ExcitationSettings, plan_excitation
 from comgrasp_pin.robot_io import write_csv
 from comgrasp_pin.robot_io.from_motion.arm_model import (
@@ -26,7 +27,6 @@ from comgrasp_pin.robot_io.from_motion.arm_model import (
 )
 from comgrasp_pin.robot_io.from_motion.dynamic import check_on_log, estimate_payload_dynamic
 from comgrasp_pin.robot_io.from_motion.gain_calibration import calibrate_gains
-from comgrasp_pin.robot_io.results.trust import Checks, judge, motion_reasons
 from comgrasp_pin.simulation.arm_worlds import arm_robot, arm_urdf
 from comgrasp_pin.simulation.payload_motion import simulate_motion
 from comgrasp_pin.simulation.payloads import box

@@ -12,7 +12,7 @@ from scipy import stats
 
 from comgrasp_pin.estimation import block_sandwich as bs
 from comgrasp_pin.estimation import dynamic_uncertainty as du
-from comgrasp_pin.robot_io.results.trust import Z95, t95
+from comgrasp_pin.estimation.trust import Z95, t95
 
 
 def design(seed=0, k=60, n=3, p=5):

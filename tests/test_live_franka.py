@@ -15,7 +15,7 @@ import time
 import numpy as np
 import pytest
 
-from comgrasp_pin.robot_io.results.trust import t_quantile
+from comgrasp_pin.estimation.trust import t_quantile
 
 pytest.importorskip("franky", reason='the franka extra is missing: pip install ".[franka]"')
 pytest.importorskip("franky_sim", reason='the franka extra is missing: pip install ".[franka]"')
@@ -192,9 +192,10 @@ def test_a_payload_is_identified_along_a_planned_motion(tmp_path, motion_file):
     r = json.loads((tmp_path / "RESULT.json").read_text())
     assert r["verdict"] == "identified" and r["mode"] == "a motion's joint torques"
     mass, com = r["mass_kg"], np.array(r["com_m"])
-    # 20 payloads (benchmarks/live_franka.py --motion): see benchmarks/README.md
+    # 20 payloads (benchmarks/live_franka.py --motion): mass within 2.4 %, CoM within 23 mm
+    # (benchmarks/README.md); the intervals below are the sharp check
     assert abs(mass - MASS) < 0.05 * MASS
-    assert np.linalg.norm(com - COM) < 20e-3
+    assert np.linalg.norm(com - COM) < 30e-3
     std = np.array([r["std"]["mass_kg"], *r["std"]["com_m"]])
     assert np.all(np.abs(np.r_[mass, com] - np.r_[MASS, COM]) < 4.5 * std)
     info = json.loads((tmp_path / "live.json").read_text())

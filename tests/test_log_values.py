@@ -39,8 +39,7 @@ from comgrasp_pin.robot_io.log_files.record import (
     write_wrench_bag,
     write_wrench_csv,
 )
-from comgrasp_pin.robot_io.log_files.wrench_bag import read_wrench_bag
-from comgrasp_pin.robot_io.log_files.wrench_csv import read_wrench_csv
+from comgrasp_pin.robot_io.log_files.wrench_files import read_wrench_bag, read_wrench_csv
 from comgrasp_pin.robot_io.log_files.wrench_sources import read_rtde_wrench
 
 NAMES = ("j0", "j1", "j2", "j3", "j4", "j5")

@@ -23,6 +23,7 @@ from test_wrench_static import G, _hanging, _log
 from comgrasp_pin._paths import urdf_path
 from comgrasp_pin.cli import main
 from comgrasp_pin.errors import InvalidInputError, NotIdentifiedError
+from comgrasp_pin.estimation.trust import inertia_verdict
 from comgrasp_pin.estimation.wrench_com import tool_beyond
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io import (
@@ -36,7 +37,6 @@ from comgrasp_pin.robot_io import (
 )
 from comgrasp_pin.robot_io.log_files import write_wrench_csv
 from comgrasp_pin.robot_io.payload_files import urscript
-from comgrasp_pin.robot_io.results.trust import inertia_verdict
 
 URDF = str(urdf_path("ur5_gripper.urdf"))
 SENSOR = "ft_sensor"

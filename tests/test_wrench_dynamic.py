@@ -19,14 +19,10 @@ from test_dynamic_estimate import normal_score
 from comgrasp_pin.errors import InvalidInputError, LogError, MotionLogError, UnobservableError
 from comgrasp_pin.estimation.inertial_fit import pseudo_inertia
 from comgrasp_pin.robot import RobotModel
-from comgrasp_pin.robot_io.from_motion.wrench_dynamic import (
-    TOOL_EMPTY_RUN,
-    TOOL_GIVEN,
-    TOOL_NOMINAL,
-    estimate_wrench_dynamic,
-)
+from comgrasp_pin.robot_io.from_motion.wrench_dynamic import estimate_wrench_dynamic
 from comgrasp_pin.robot_io.from_motion.wrench_system import nominal_tool, params_map
 from comgrasp_pin.robot_io.log_files.log_types import WrenchLog
+from comgrasp_pin.robot_io.results.estimate_result import TOOL_EMPTY_RUN, TOOL_GIVEN, TOOL_NOMINAL
 from comgrasp_pin.robot_io.results.result_file import result_dict
 
 RATE = 250.0

@@ -21,7 +21,7 @@ from comgrasp_pin.robot_io.log_files import (
     write_wrench_bag,
     write_wrench_csv,
 )
-from comgrasp_pin.robot_io.log_files.wrench_bag import MAX_JOINT_GAP_S
+from comgrasp_pin.robot_io.log_files.wrench_files import MAX_JOINT_GAP_S
 
 Q0 = np.array([0.0, -1.2, 1.5, -1.9, -1.57, 0.0])
 RATE_Q = np.array([0.3, -0.2, 0.1, 0.4, -0.5, 0.6])  # rad/s: positions linear in time

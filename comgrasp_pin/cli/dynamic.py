@@ -53,7 +53,7 @@ def run_dynamic(args: argparse.Namespace, robot) -> int:
     from comgrasp_pin.cli.gains_args import gains_from_args
     from comgrasp_pin.robot_io.from_motion.arm_model import load_arm_model
     from comgrasp_pin.robot_io.from_motion.dynamic import check_on_log, estimate_payload_dynamic
-    from comgrasp_pin.robot_io.from_motion.dynamic_plot import plot_validation
+    from comgrasp_pin.robot_io.results.report import plot_validation
 
     if args.before or args.after or args.auto:
         raise InvalidInputError("--dynamic uses the whole motion (or --window): leave out "

@@ -36,27 +36,26 @@ EXPORTS: tuple[tuple[str, str], ...] = (
 def _render(option: str, robot, p, path: Path, urdf: Path) -> str:
     """The text of ``option``'s file (robot_io imported here: ``--help`` stays fast)."""
     from comgrasp_pin.file_checks import parse_xml, read_description
-    from comgrasp_pin.robot_io.payload_files import exports as ex
+    from comgrasp_pin.robot_io.payload_files import controller_files as cf
     from comgrasp_pin.robot_io.payload_files import model_exports as me
-    from comgrasp_pin.robot_io.payload_files import vendor_exports as ve
     from comgrasp_pin.robot_io.payload_files.payload import T_flange_ee
 
     if option == "--export-moveit":
         text = read_description(urdf, "URDF", robot.package_dirs)
         link, T = me.urdf_link_of(robot, p.flange_frame, parse_xml(text, str(urdf), "URDF"))
-        return ve.moveit_yaml(p, link, T)
+        return cf.moveit_yaml(p, link, T)
     if option == "--export-urdf":
         return me.urdf_with_payload(robot, p, urdf, out_dir=path.parent)
     if option == "--export-mjcf":
         return me.mjcf_payload_body(p, robot)
     if option == "--export-franka-desk":
-        desk = ve.franka_desk(p, T_flange_ee(robot, p.flange_frame))
+        desk = cf.franka_desk(p, T_flange_ee(robot, p.flange_frame))
         return json.dumps(desk, indent=2) + "\n"
     if option == "--export-franka":
-        return json.dumps(ex.franka_load(p), indent=2) + "\n"
-    texts = {"--export-ur": ex.urscript, "--export-ros2": ex.ros2_yaml, "--export-kuka":
-             ve.krl_load, "--export-kuka-sunrise": ve.sunrise_load_data,
-             "--export-abb": ve.rapid_loaddata}  # fmt: skip
+        return json.dumps(cf.franka_load(p), indent=2) + "\n"
+    texts = {"--export-ur": cf.urscript, "--export-ros2": cf.ros2_yaml, "--export-kuka":
+             cf.krl_load, "--export-kuka-sunrise": cf.sunrise_load_data,
+             "--export-abb": cf.rapid_loaddata}  # fmt: skip
     return texts[option](p)
 
 
@@ -162,8 +161,8 @@ def finish_estimate(args: argparse.Namespace, robot, est, extra=None) -> int:
     """
     from comgrasp_pin.errors import NotIdentifiedError
     from comgrasp_pin.robot_io.payload_files.payload import payload_in_flange
+    from comgrasp_pin.robot_io.results.report import summary
     from comgrasp_pin.robot_io.results.result_file import write_result
-    from comgrasp_pin.robot_io.results.text_summary import summary
 
     rendered, refused, payload = [], None, None
     if wants_exports(args):

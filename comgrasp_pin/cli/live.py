@@ -189,10 +189,10 @@ def _estimate_and_set(args, robot, arm, rec, out: Path, info: dict, config: Live
     from comgrasp_pin.robot_io.at_rest import parse_windows
     from comgrasp_pin.robot_io.from_motion.dynamic import estimate_payload_dynamic
     from comgrasp_pin.robot_io.log_files import read_csv
-    from comgrasp_pin.robot_io.payload_files.exports import franka_load
+    from comgrasp_pin.robot_io.payload_files.controller_files import franka_load
     from comgrasp_pin.robot_io.payload_files.payload import payload_in_flange
+    from comgrasp_pin.robot_io.results.report import summary
     from comgrasp_pin.robot_io.results.result_file import write_result
-    from comgrasp_pin.robot_io.results.text_summary import summary
 
     log = read_csv(out / "live_log.csv", robot.joint_names)
     try:

@@ -20,7 +20,7 @@ import numpy as np
 
 from comgrasp_pin.config import LiveConfig
 from comgrasp_pin.errors import InvalidInputError
-from comgrasp_pin.robot_io.results.trust import IDENTIFIED
+from comgrasp_pin.estimation.trust import IDENTIFIED
 
 EMPTY, LOADED = "empty", "loaded"
 SIDES = (1.0, -1.0)

@@ -55,7 +55,7 @@ from comgrasp_pin.robot_io.from_motion.wrench_dynamic import estimate_wrench_dyn
 from comgrasp_pin.robot_io.log_files.gains import Gains
 from comgrasp_pin.robot_io.log_files.joint_readers import DEFAULT_TOPIC, read_log
 from comgrasp_pin.robot_io.log_files.log_types import WRENCH_COLUMNS, JointLog, WrenchLog
-from comgrasp_pin.robot_io.log_files.wrench_bag import WRENCH_STAMPED
+from comgrasp_pin.robot_io.log_files.wrench_files import WRENCH_STAMPED
 from comgrasp_pin.robot_io.log_files.wrench_sources import BAG_SUFFIXES, read_wrench_log
 from comgrasp_pin.robot_io.results.estimate_result import PayloadEstimate
 

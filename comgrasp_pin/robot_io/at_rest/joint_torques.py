@@ -30,6 +30,14 @@ from comgrasp_pin.estimation.drift import difference_covariance
 from comgrasp_pin.estimation.dynamic_uncertainty import relative_gain_cov
 from comgrasp_pin.estimation.estimate import delta_method
 from comgrasp_pin.estimation.static_errors import pose_block_cov, residual_chi2
+from comgrasp_pin.estimation.trust import (
+    MIN_EXPLAINED,
+    arm_mass,
+    judge,
+    payload_seen,
+    t95,
+    unexplained_reason,
+)
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.at_rest.windows import MAX_SPEED, StaticReading, read_pairs
 from comgrasp_pin.robot_io.log_files.joint_readers import JointLog
@@ -39,14 +47,6 @@ from comgrasp_pin.robot_io.results.estimate_result import (
     JointTorques,
     PayloadEstimate,
     sole_source,
-)
-from comgrasp_pin.robot_io.results.trust import (
-    MIN_EXPLAINED,
-    arm_mass,
-    judge,
-    payload_seen,
-    t95,
-    unexplained_reason,
 )
 
 NOISE_FLOOR = 1e-6

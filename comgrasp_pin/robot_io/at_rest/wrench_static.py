@@ -40,6 +40,7 @@ import pinocchio as pin
 from comgrasp_pin.errors import InvalidInputError, LogError
 from comgrasp_pin.estimation.drift import difference_covariance
 from comgrasp_pin.estimation.regressor import stacked_regressor
+from comgrasp_pin.estimation.trust import Z95, arm_mass, judge, nominal_tool_reasons, t95
 from comgrasp_pin.estimation.wrench import StaticWrenchFit, fit_static_wrench
 from comgrasp_pin.estimation.wrench_com import (
     UNKNOWNS,
@@ -70,7 +71,6 @@ from comgrasp_pin.robot_io.results.estimate_result import (
     Wrench,
     sole_source,
 )
-from comgrasp_pin.robot_io.results.trust import Z95, arm_mass, judge, nominal_tool_reasons, t95
 
 MAX_CHI2_DOF = 25.0
 """Residuals above 5 times the windows' noise (chi-square per degree of freedom above

@@ -13,7 +13,7 @@ arm's torques are identified from an excitation run, as robot identification doe
   than FIGAROH: the library already holds Pinocchio's model and the weighting, filtering and
   uncertainty machinery, and FIGAROH brings a YAML configuration and plotting we would not use.
 - Friction per joint, viscous and Coulomb; offsets and their drift per run, and the
-  efforts' delay behind the positions (``parallel_filter.delay_column``), none of them kept:
+  efforts' delay behind the positions (``motion_system.delay_column``), none of them kept:
   they change between runs and are identified again with the payload.
 - A weak prior pulls each base parameter towards the URDF's value (its std is the value
   itself, or a floor): directions the run does not excite stay at the vendor's figure, and
@@ -24,7 +24,7 @@ block sandwich replicates (``dynamic_uncertainty``), each pushed through the pay
 that the arm model's noise and model error reach the payload's parameters replicate by
 replicate (a per-parameter widening of the 40-odd correlated base parameters' covariance
 overstated the payload's std five times on the Panda). The model's terms are filtered like
-the torques (``parallel_filter``).
+the torques (``motion_system``).
 """
 
 from __future__ import annotations
@@ -48,12 +48,14 @@ from comgrasp_pin.robot_io.from_motion.motion_signals import (
 )
 from comgrasp_pin.robot_io.from_motion.motion_system import (
     COULOMB_SPEED,
+    delay_column,
+    fast_signals,
     friction_columns,
     joint_columns,
+    lowpassed,
     offset_columns,
     row_noise,
 )
-from comgrasp_pin.robot_io.from_motion.parallel_filter import delay_column, fast_signals, lowpassed
 from comgrasp_pin.robot_io.log_files.joint_readers import JointLog
 
 PRIOR_FLOOR = {"mass": 0.5, "first": 0.05, "inertia": 0.01}

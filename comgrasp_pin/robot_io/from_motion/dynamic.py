@@ -36,6 +36,7 @@ from comgrasp_pin.estimation.payload_regressor import (
     condition_number,
     parameter_scale,
 )
+from comgrasp_pin.estimation.trust import MIN_EXPLAINED, UNRELIABLE, motion_reasons
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.from_motion.arm_model import ArmModel
 from comgrasp_pin.robot_io.from_motion.dynamic_fit import (
@@ -62,7 +63,6 @@ from comgrasp_pin.robot_io.results.estimate_result import (
     PayloadEstimate,
     sole_source,
 )
-from comgrasp_pin.robot_io.results.trust import MIN_EXPLAINED, UNRELIABLE, motion_reasons
 
 
 def estimate_payload_dynamic(

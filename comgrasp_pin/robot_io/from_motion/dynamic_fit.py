@@ -24,12 +24,12 @@ import numpy as np
 
 from comgrasp_pin.estimation import block_sandwich as bs
 from comgrasp_pin.estimation import dynamic_uncertainty as du
+from comgrasp_pin.estimation import trust
 from comgrasp_pin.estimation.inertial_fit import fit_inertial
+from comgrasp_pin.estimation.trust import Checks
 from comgrasp_pin.robot_io.from_motion.arm_model import ArmModel
 from comgrasp_pin.robot_io.from_motion.motion_system import about_com, derived_jacobian
-from comgrasp_pin.robot_io.results import trust
 from comgrasp_pin.robot_io.results.estimate_result import Inertia, Motion, PayloadEstimate
-from comgrasp_pin.robot_io.results.trust import Checks
 
 
 @dataclass(frozen=True)

@@ -33,8 +33,13 @@ from comgrasp_pin.estimation.payload_regressor import regressor_rows
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.from_motion.alignment import align_empty
 from comgrasp_pin.robot_io.from_motion.motion_signals import CUTOFF_HZ, motion_samples
-from comgrasp_pin.robot_io.from_motion.motion_system import joint_columns, offset_columns, row_noise
-from comgrasp_pin.robot_io.from_motion.parallel_filter import fast_signals, lowpassed
+from comgrasp_pin.robot_io.from_motion.motion_system import (
+    fast_signals,
+    joint_columns,
+    lowpassed,
+    offset_columns,
+    row_noise,
+)
 from comgrasp_pin.robot_io.from_motion.payload_system import rnea
 from comgrasp_pin.robot_io.log_files.joint_readers import JointLog
 

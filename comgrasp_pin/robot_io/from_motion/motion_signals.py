@@ -28,8 +28,8 @@ import numpy as np
 
 from comgrasp_pin.errors import MotionLogError
 from comgrasp_pin.robot import RobotModel
-from comgrasp_pin.robot_io.from_motion.log_grid import on_grid, uniform_rate
 from comgrasp_pin.robot_io.log_files.joint_readers import JointLog
+from comgrasp_pin.robot_io.log_files.log_values import on_grid, uniform_rate
 
 CUTOFF_HZ = 4.0
 """Default low-pass cutoff (Hz): above an excitation motion's harmonics (<= 1-2 Hz)."""

@@ -5,7 +5,7 @@
 per kept sample and joint (rows sample-major), with the arm's own torques from an aligned
 empty run of the same motion, the arm's identified model, or the URDF's nominal model
 (``dynamic``'s three sources), the model's terms filtered like the torques
-(``parallel_filter``). x: per joint an offset and its drift (a cubic), viscous and Coulomb
+(``motion_system``). x: per joint an offset and its drift (a cubic), viscous and Coulomb
 friction with the nominal model, and the efforts' delay behind the positions (not with an
 empty run: the same delay in both runs cancels). Used by the payload's fit and to check a
 fitted payload on a second log. ``pipeline_bias``: what this pipeline does to a payload on
@@ -23,15 +23,17 @@ from comgrasp_pin.estimation.payload_regressor import regressor_rows
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.from_motion.alignment import align_empty
 from comgrasp_pin.robot_io.from_motion.arm_model import ArmModel, arm_columns, check_matches
-from comgrasp_pin.robot_io.from_motion.log_grid import on_grid
 from comgrasp_pin.robot_io.from_motion.motion_signals import MotionSamples, motion_samples
 from comgrasp_pin.robot_io.from_motion.motion_system import (
+    delay_column,
+    fast_signals,
     friction_columns,
     joint_columns,
+    lowpassed,
     offset_columns,
 )
-from comgrasp_pin.robot_io.from_motion.parallel_filter import delay_column, fast_signals, lowpassed
 from comgrasp_pin.robot_io.log_files.joint_readers import JointLog
+from comgrasp_pin.robot_io.log_files.log_values import on_grid
 
 EMPTY_RUN, ARM_MODEL, NOMINAL = "empty run", "identified arm model", "URDF model + friction"
 
@@ -136,7 +138,7 @@ def pipeline_bias(robot: RobotModel, log: JointLog, window, cutoff_hz: float,
     """(10,) what the pipeline adds to the payload ``pi`` on this log's motion.
 
     A parametric bootstrap: the payload's exact torques along the logged motion (positions
-    on a uniform grid, ``log_grid.on_grid``, smoothed at ``TRUTH_HZ``, a cubic spline's
+    on a uniform grid, ``log_values.on_grid``, smoothed at ``TRUTH_HZ``, a cubic spline's
     derivatives at the log's own times, ``regressor_rows``) go through the same filtering,
     differentiation, grid and least squares as the log (its offsets fitted, as with an empty
     run), and come back as pi + bias. The bias is what the filters' passbands and the

@@ -27,13 +27,13 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from comgrasp_pin.errors import UnobservableError
+from comgrasp_pin.estimation import trust
 from comgrasp_pin.estimation.block_sandwich import pooled_dof
 from comgrasp_pin.robot_io.from_motion.arm_model import ArmModel
 from comgrasp_pin.robot_io.from_motion.dynamic_fit import error_sources, satterthwaite
 from comgrasp_pin.robot_io.from_motion.motion_system import about_com, row_noise
 from comgrasp_pin.robot_io.from_motion.payload_system import PayloadSystem
 from comgrasp_pin.robot_io.from_motion.wrench_system import WrenchSystem
-from comgrasp_pin.robot_io.results import trust
 from comgrasp_pin.robot_io.results.estimate_result import JOINT_TORQUES, PRIOR, WRENCH
 
 DISAGREE_P = 0.0027

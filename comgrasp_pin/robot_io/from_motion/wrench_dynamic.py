@@ -29,50 +29,45 @@ sources alone must agree.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
-from comgrasp_pin import validate
-from comgrasp_pin.errors import InvalidInputError, MotionLogError, UnobservableError
+from comgrasp_pin.errors import MotionLogError
 from comgrasp_pin.estimation import ComEstimate
+from comgrasp_pin.estimation import block_sandwich as bs
+from comgrasp_pin.estimation import dynamic_uncertainty as du
 from comgrasp_pin.estimation.payload_regressor import condition_number, parameter_scale
+from comgrasp_pin.estimation.trust import motion_reasons, nominal_tool_reasons
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.from_motion import wrench_combined as wc
-from comgrasp_pin.robot_io.from_motion import wrench_findings as wf
 from comgrasp_pin.robot_io.from_motion.arm_model import ArmModel
 from comgrasp_pin.robot_io.from_motion.dynamic_fit import (
+    DATA_PART,
     MotionRows,
-    error_sources,
     fit_motion,
     motion_estimate,
 )
-from comgrasp_pin.robot_io.from_motion.motion_signals import CUTOFF_HZ, MIN_PEAK_SPEED
-from comgrasp_pin.robot_io.from_motion.motion_system import prior_of, row_noise
-from comgrasp_pin.robot_io.from_motion.payload_system import ARM_MODEL, EMPTY_RUN, payload_system
+from comgrasp_pin.robot_io.from_motion.motion_signals import CUTOFF_HZ
+from comgrasp_pin.robot_io.from_motion.motion_system import DRIFT_DEGREE, prior_of
+from comgrasp_pin.robot_io.from_motion.payload_system import (
+    ARM_MODEL,
+    EMPTY_RUN,
+    NOMINAL,
+    payload_system,
+)
 from comgrasp_pin.robot_io.from_motion.wrench_system import (
     as_joint_log,
-    gravity_in_sensor,
-    nominal_tool,
+    observable,
+    tool_of,
     wrench_system,
 )
 from comgrasp_pin.robot_io.log_files.log_types import WrenchLog
 from comgrasp_pin.robot_io.results.estimate_result import (
-    TOOL_EMPTY_RUN,
-    TOOL_GIVEN,
     TOOL_NOMINAL,
+    JointTorques,
     Motion,
     PayloadEstimate,
     Wrench,
 )
-from comgrasp_pin.robot_io.results.trust import motion_reasons
-
-
-@dataclass(frozen=True)
-class _Tool:
-    params: np.ndarray  # (10,) ee frame
-    cov: np.ndarray  # (10, 10)
-    source: str
 
 
 def estimate_wrench_dynamic(
@@ -114,7 +109,7 @@ def estimate_wrench_dynamic(
             the joints that barely move and how far gravity turns in the sensor frame).
         SolverError: IPOPT did not converge.
     """
-    tool = _tool(robot, log, empty_log, empty_window, cutoff_hz, tool_params, tool_cov)
+    tool = tool_of(robot, log, empty_log, empty_window, cutoff_hz, tool_params, tool_cov)
     J, note = None, None
     if combine_joint_torques and log.effort is not None:
         J, note = _joint_system(robot, log, empty_log, window, empty_window, cutoff_hz, arm_model)
@@ -124,14 +119,14 @@ def estimate_wrench_dynamic(
     A = np.column_stack([A_pi, A_x])
     m = fit_motion(MotionRows(A_pi, A_x, b, w, W.S.t, (k, r)), prior_of(prior), None,
                    arm_model=arm, arm_jac=st.arm_jac,
-                   extra_cov=lambda err: wf.tool_cov(err.sensitivity, st, tool.cov),
-                   observe=lambda solve: _observable(robot, W, solve))  # fmt: skip
+                   extra_cov=lambda err: _tool_cov(err.sensitivity, st, tool.cov),
+                   observe=lambda solve: observable(robot, W, solve))  # fmt: skip
     fit, err, validation = m.fit, m.err, m.validation
     cov_tool = m.extra_cov
     agree = wc.agreement(fits, tool.cov) if J is not None else None
-    findings = motion_reasons(m.checks) + wf.wrench_reasons(tool, agree, J and J.source)
+    findings = motion_reasons(m.checks) + _wrench_reasons(tool, agree, J and J.source)
     payload, predicted = (b - A_x @ fit.x).reshape(k, r), (A_pi @ fit.pi).reshape(k, r)
-    bias, bias_std, drift, delay = wf.sensor_bias(A, b, w, st, duration, fit.x, tool.cov)
+    bias, bias_std, drift, delay = _sensor_bias(A, b, w, st, duration, fit.x, tool.cov)
     motion = Motion(
         k, duration, W.S.cutoff_hz, W.S.velocity_from, fit.status,
         condition_number(A_pi * w[:, None], parameter_scale()), W.S.t, validation,
@@ -145,10 +140,10 @@ def estimate_wrench_dynamic(
         wrench_payload_fit=predicted[:, :6], agreement=agree,
         alone_refused={name: (f if isinstance(f, str) else None) for name, f in fits.items()},
     )  # fmt: skip
-    joints = wf.joint_part(J, fit.x, W.A_x.shape[1], st, predicted, payload, note)
+    joints = _joint_part(J, fit.x, W.A_x.shape[1], st, predicted, payload, note)
     return motion_estimate(robot, fit, m.params_cov, motion, findings,
                            wc.contributions(st, fit.pi, prior_of(prior)),
-                           wf.std_parts(fit.data_cov, cov_tool, tool, err.arm if arm else None),
+                           _std_parts(fit.data_cov, cov_tool, tool, err.arm if arm else None),
                            dof=m.dof, joint_torques=joints,
                            wrench=wrench)  # fmt: skip
 
@@ -168,37 +163,6 @@ def _stacked(robot, log, window, cutoff_hz, tool, J, arm_model):
     return W, arm, wc.reweighted(st, fits), fits, duration
 
 
-def _tool(robot, log, empty_log, empty_window, cutoff_hz, tool_params, tool_cov) -> _Tool:
-    """The tool's parameters beyond the sensor (ee frame) and their covariance."""
-    if empty_log is not None and tool_params is not None:
-        raise InvalidInputError("give an empty run or the tool's parameters, not both")
-    if tool_params is not None:
-        p = validate.real_array(tool_params, "tool_params")
-        c = np.zeros((10, 10)) if tool_cov is None else validate.real_array(tool_cov, "tool_cov")
-        if p.shape != (10,) or c.shape != (10, 10) or not np.all(np.isfinite(c)):
-            raise InvalidInputError(
-                f"tool_params must be (10,) (m, m c, I at the ee origin) and tool_cov (10, 10), "
-                f"finite; got shapes {p.shape} and {c.shape}"
-            )
-        return _Tool(p, 0.5 * (c + c.T), TOOL_GIVEN)
-    if empty_log is None:
-        return _Tool(nominal_tool(robot, log.sensor_frame), np.zeros((10, 10)), TOOL_NOMINAL)
-    if empty_log.sensor_frame != log.sensor_frame:
-        raise InvalidInputError(
-            f"the empty run's sensor frame {empty_log.sensor_frame!r} is not the loaded run's "
-            f"{log.sensor_frame!r}: both must be the same sensor"
-        )
-    E = wrench_system(robot, empty_log, empty_window, cutoff_hz)
-    k = len(E.S.t)
-    A, b = np.column_stack([E.A_pi.reshape(-1, 10), E.A_x]), E.b.reshape(-1)
-    w = np.tile(1 / row_noise(A, b, k, 6), k)
-    err = _observable(robot, E, lambda: error_sources(
-        A, b, w, (k, 6), float(E.S.t[-1] - E.S.t[0]), None, None, None, None),
-        "the empty run")  # fmt: skip
-    return _Tool(err.sensitivity @ b, err.data_cov,
-                 TOOL_EMPTY_RUN)  # fmt: skip
-
-
 def _joint_system(robot, log, empty_log, window, empty_window, cutoff_hz, arm_model):
     """The joint torques' system and a note where the empty run could not serve it."""
     joints = as_joint_log(log, "effort")
@@ -213,22 +177,81 @@ def _joint_system(robot, log, empty_log, window, empty_window, cutoff_hz, arm_mo
     return payload_system(robot, joints, None, window, None, cutoff_hz, arm_model), None
 
 
-def _observable(robot, W, solve, what="the loaded run"):
-    """``solve()``, its UnobservableError said in the motion's terms: what to move."""
-    try:
-        return solve()
-    except UnobservableError as exc:
-        peak = np.max(np.abs(W.S.qd), axis=0)
-        still = [f"{n} ({p:.2f} rad/s)" for n, p in zip(robot.joint_names, peak)
-                 if p < MIN_PEAK_SPEED]  # fmt: skip
-        sid = robot.model.getFrameId(W.sensor_frame)
-        g = gravity_in_sensor(robot, sid, W.S.q)
-        g /= np.linalg.norm(g, axis=1, keepdims=True)
-        mean = g.mean(axis=0) / np.linalg.norm(g.mean(axis=0))
-        turn = float(np.degrees(np.arccos(np.clip(g @ mean, -1, 1)).max()))
-        raise UnobservableError(
-            f"{what}'s wrench: {exc}. Gravity turns by at most {turn:.0f} deg in the sensor "
-            f"frame (the mass, the CoM and the bias need it turned by tens of degrees about two "
-            f"axes); joints below {MIN_PEAK_SPEED} rad/s: {', '.join(still) or 'none'}. Move "
-            "every joint, tilt and spin the wrist (comgrasp plan-motion plans such a motion)"
-        ) from None
+def _tool_cov(P: np.ndarray, st: wc.Stacked, cov: np.ndarray) -> np.ndarray:
+    """The tool's (10, 10) covariance ``cov`` carried to the unknowns of ``P`` (d them / d b).
+
+    The tool's parameters enter the wrench's rows of ``st`` as A_pi (subtracted), so
+    d unknowns / d tool = -P A_pi over those rows.
+    """
+    rows = st.rows(wc.WRENCH)
+    D = -P[:, rows] @ st.A_pi.reshape(-1, 10)[rows]
+    return D @ cov @ D.T
+
+
+def _std_parts(data_cov, cov_tool, tool, cov_arm) -> dict:
+    """The mass's std (kg) by source: the data and the model, the tool, the arm model."""
+    parts = {DATA_PART: float(np.sqrt(data_cov[0, 0]))}
+    if tool.cov.any():
+        parts[f"tool ({tool.source})"] = float(np.sqrt(cov_tool[0, 0]))
+    if cov_arm is not None:
+        parts["arm model"] = float(np.sqrt(cov_arm[0, 0]))
+    return parts
+
+
+def _sensor_bias(A, b, w, st, duration, x, tool_params_cov):
+    """The sensor's bias (mean over the motion), its std, its drift and the wrench's delay.
+
+    ``x``: the fit's extra unknowns, the wrench's first (bias, drift, delay); the bias's std
+    from white noise widened by the block sandwich, plus the tool's (``tool_params_cov``).
+    """
+    k, r = st.b.shape
+    p = 16  # pi and the six biases
+    blocks = du.contiguous_blocks(k, du.block_count(duration))
+    white = du.white_cov(A, b, w, p)[10:, 10:]
+    block = bs.block_cov(A, b, w, k, r, blocks, p)[10:, 10:]
+    var = np.maximum(np.diag(white), np.diag(block))
+    var += np.diag(_tool_cov(du.sensitivity(A, w, p)[10:], st, tool_params_cov))
+    extras = x[: 6 * (1 + DRIFT_DEGREE)].reshape(1 + DRIFT_DEGREE, 6)
+    drift = 2 * extras[1 : 1 + DRIFT_DEGREE : 2].sum(axis=0)
+    return extras[0], np.sqrt(var), drift, float(x[6 * (1 + DRIFT_DEGREE)])
+
+
+def _wrench_reasons(tool, agree, joint_source) -> list[str]:
+    """The wrench path's own objections: the URDF's tool, the two sources' agreement.
+
+    ``trust.motion_reasons`` has the ones every motion shares.
+    """
+    reasons = nominal_tool_reasons(tool.source == TOOL_NOMINAL, float(tool.params[0]))
+    if agree is not None and agree["disagree"]:
+        m = agree["mass_kg"]
+        ratio = np.abs(agree["z"]) / np.array(agree["max_z"])
+        i = int(np.argmax(ratio))
+        reasons.append(
+            f"the wrench and the joint torques disagree ({['mass', 'm c_x', 'm c_y', 'm c_z'][i]}"
+            f" {abs(agree['z'][i]):.1f} std apart, at most {agree['max_z'][i]:.1f} for its "
+            f"{agree['cov_dof'][i]:.0f} degrees of freedom; masses {m['wrench']:.3f} "
+            f"and {m['joint_torques']:.3f} kg): "
+            + ("the URDF's model of the arm is the likely cause; give an empty run of the same "
+               "motion or an identified arm model, or leave the joint torques out"
+               if joint_source == NOMINAL else
+               "a sensor's scale, the tool, or the arm model is wrong")
+        )  # fmt: skip
+    return reasons
+
+
+def _joint_part(J, x, e_w, st, predicted, payload, note) -> JointTorques | None:
+    """The joint torques' own findings in the combined fit, or None without them."""
+    if J is None:
+        return None
+    cols = st.groups[wc.JOINT_TORQUES][0]
+    n = len(cols)
+    extras = x[e_w : e_w + J.per_joint * n].reshape(J.per_joint, n)
+    res = predicted[:, cols] - payload[:, cols]
+    return JointTorques(
+        st.noise[6:], "residuals", J.source, offsets=extras[0],
+        offset_drift=2 * extras[1 : 1 + DRIFT_DEGREE : 2].sum(axis=0),
+        friction=extras[1 + DRIFT_DEGREE :].T if J.source == NOMINAL else None,
+        residual_rms=np.sqrt(np.mean(res**2, axis=0)),
+        delay_s=None if J.alignment is not None else float(x[-1]), alignment=J.alignment,
+        tau_payload=payload[:, cols], tau_payload_fit=predicted[:, cols], note=note,
+    )  # fmt: skip

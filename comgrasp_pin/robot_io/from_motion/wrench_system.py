@@ -12,13 +12,15 @@ m, m c, Ixx, Ixy, Iyy, Ixz, Iyz, Izz). It applies the opposite to the sensor, wh
 with pi_ee the body's parameters in the ee frame (``params_map``: X = the parameters moved
 from the ee frame to the sensor's, which must be rigidly joined), per axis a bias and its
 drift over the motion (the joint path's Legendre polynomials, ``motion_system``), and one
-delay d (s) of the wrench behind the positions (``parallel_filter.delay_column``). The wrench
+delay d (s) of the wrench behind the positions (``motion_system.delay_column``). The wrench
 goes through the joint path's zero-phase filter (it rides as the efforts of a ``JointLog``),
 and Phi is computed on the differentiated signals and low-passed by the same filter
-(``parallel_filter``: parallel filtering, so filter(wrench) = filter(Phi) X pi holds exactly).
+(``motion_system``: parallel filtering, so filter(wrench) = filter(Phi) X pi holds exactly).
 
+The tool's part (``tool_of``): its parameters fitted from an empty run, given, or
 ``nominal_tool``: the URDF's links beyond the sensor frame, the last resort for the tool's
-own wrench.
+own wrench. ``observable``: a motion that does not determine the parameters, said in its
+own terms (which joints barely move, how far gravity turns in the sensor frame).
 """
 
 from __future__ import annotations
@@ -28,14 +30,27 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from comgrasp_pin.errors import InvalidInputError
+from comgrasp_pin import validate
+from comgrasp_pin.errors import InvalidInputError, UnobservableError
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.at_rest.wrench_static import tool_beyond
-from comgrasp_pin.robot_io.from_motion.motion_signals import MotionSamples, motion_samples
-from comgrasp_pin.robot_io.from_motion.motion_system import joint_columns, offset_columns
-from comgrasp_pin.robot_io.from_motion.parallel_filter import delay_column, fast_signals, lowpassed
+from comgrasp_pin.robot_io.from_motion.dynamic_fit import error_sources
+from comgrasp_pin.robot_io.from_motion.motion_signals import (
+    MIN_PEAK_SPEED,
+    MotionSamples,
+    motion_samples,
+)
+from comgrasp_pin.robot_io.from_motion.motion_system import (
+    delay_column,
+    fast_signals,
+    joint_columns,
+    lowpassed,
+    offset_columns,
+    row_noise,
+)
 from comgrasp_pin.robot_io.log_files.log_types import JointLog, WrenchLog
 from comgrasp_pin.robot_io.payload_files.payload import T_flange_ee
+from comgrasp_pin.robot_io.results.estimate_result import TOOL_EMPTY_RUN, TOOL_GIVEN, TOOL_NOMINAL
 
 AXES = ("force_x", "force_y", "force_z", "torque_x", "torque_y", "torque_z")
 """The wrench's six rows per sample, in ``WrenchLog.wrench``'s column order (N, N m)."""
@@ -161,3 +176,64 @@ def nominal_tool(robot: RobotModel, sensor_frame: str) -> np.ndarray:
     """
     _, T_sensor_ee = sensor_placement(robot, sensor_frame)
     return T_sensor_ee.actInv(tool_beyond(robot, sensor_frame)).toDynamicParameters()
+
+
+@dataclass(frozen=True)
+class Tool:
+    """The tool beyond the sensor: its parameters (ee frame), their covariance, their source."""
+
+    params: np.ndarray  # (10,) ee frame
+    cov: np.ndarray  # (10, 10)
+    source: str
+
+
+def tool_of(robot, log, empty_log, empty_window, cutoff_hz, tool_params, tool_cov) -> Tool:
+    """The tool's parameters beyond the sensor (ee frame) and their covariance."""
+    if empty_log is not None and tool_params is not None:
+        raise InvalidInputError("give an empty run or the tool's parameters, not both")
+    if tool_params is not None:
+        p = validate.real_array(tool_params, "tool_params")
+        c = np.zeros((10, 10)) if tool_cov is None else validate.real_array(tool_cov, "tool_cov")
+        if p.shape != (10,) or c.shape != (10, 10) or not np.all(np.isfinite(c)):
+            raise InvalidInputError(
+                f"tool_params must be (10,) (m, m c, I at the ee origin) and tool_cov (10, 10), "
+                f"finite; got shapes {p.shape} and {c.shape}"
+            )
+        return Tool(p, 0.5 * (c + c.T), TOOL_GIVEN)
+    if empty_log is None:
+        return Tool(nominal_tool(robot, log.sensor_frame), np.zeros((10, 10)), TOOL_NOMINAL)
+    if empty_log.sensor_frame != log.sensor_frame:
+        raise InvalidInputError(
+            f"the empty run's sensor frame {empty_log.sensor_frame!r} is not the loaded run's "
+            f"{log.sensor_frame!r}: both must be the same sensor"
+        )
+    E = wrench_system(robot, empty_log, empty_window, cutoff_hz)
+    k = len(E.S.t)
+    A, b = np.column_stack([E.A_pi.reshape(-1, 10), E.A_x]), E.b.reshape(-1)
+    w = np.tile(1 / row_noise(A, b, k, 6), k)
+    err = observable(robot, E, lambda: error_sources(
+        A, b, w, (k, 6), float(E.S.t[-1] - E.S.t[0]), None, None, None, None),
+        "the empty run")  # fmt: skip
+    return Tool(err.sensitivity @ b, err.data_cov,
+                 TOOL_EMPTY_RUN)  # fmt: skip
+
+
+def observable(robot, W, solve, what="the loaded run"):
+    """``solve()``, its UnobservableError said in the motion's terms: what to move."""
+    try:
+        return solve()
+    except UnobservableError as exc:
+        peak = np.max(np.abs(W.S.qd), axis=0)
+        still = [f"{n} ({p:.2f} rad/s)" for n, p in zip(robot.joint_names, peak)
+                 if p < MIN_PEAK_SPEED]  # fmt: skip
+        sid = robot.model.getFrameId(W.sensor_frame)
+        g = gravity_in_sensor(robot, sid, W.S.q)
+        g /= np.linalg.norm(g, axis=1, keepdims=True)
+        mean = g.mean(axis=0) / np.linalg.norm(g.mean(axis=0))
+        turn = float(np.degrees(np.arccos(np.clip(g @ mean, -1, 1)).max()))
+        raise UnobservableError(
+            f"{what}'s wrench: {exc}. Gravity turns by at most {turn:.0f} deg in the sensor "
+            f"frame (the mass, the CoM and the bias need it turned by tens of degrees about two "
+            f"axes); joints below {MIN_PEAK_SPEED} rad/s: {', '.join(still) or 'none'}. Move "
+            "every joint, tilt and spin the wrist (comgrasp plan-motion plans such a motion)"
+        ) from None

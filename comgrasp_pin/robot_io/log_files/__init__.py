@@ -15,8 +15,7 @@ from comgrasp_pin.robot_io.log_files.record import (
     write_wrench_csv,
 )
 from comgrasp_pin.robot_io.log_files.rtde import read_rtde
-from comgrasp_pin.robot_io.log_files.wrench_bag import read_wrench_bag
-from comgrasp_pin.robot_io.log_files.wrench_csv import read_wrench_csv
+from comgrasp_pin.robot_io.log_files.wrench_files import read_wrench_bag, read_wrench_csv
 from comgrasp_pin.robot_io.log_files.wrench_sources import read_rtde_wrench, read_wrench_log
 
 __all__ = [

@@ -1,9 +1,10 @@
 """The two kinds of log every reader returns: ``JointLog`` and ``WrenchLog``.
 
 ``JointLog``: the joint readings (positions, efforts, velocities where logged), and their
-common assembly (``assemble_log``), so that each reader (``joint_readers``: bags and the
-project's CSV; ``rtde``: Universal Robots recordings) builds one the same way without
-importing the others.
+common assembly (``assemble_log``; ``assemble_wrench_log`` for a ``WrenchLog``), so that
+each reader (``joint_readers``: bags and the project's CSV; ``rtde``: Universal Robots
+recordings; ``wrench_files``, ``wrench_sources``) builds one the same way without importing
+the others.
 
 ``WrenchLog``: a wrist force/torque sensor's readings with the arm's joint positions. Every
 wrench source (a ROS 2 bag's ``geometry_msgs/msg/WrenchStamped``, a CSV with
@@ -26,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from comgrasp_pin import validate
-from comgrasp_pin.errors import LogError
+from comgrasp_pin.errors import InvalidInputError, LogError
 
 WRENCH_COLUMNS = ("force_x", "force_y", "force_z", "torque_x", "torque_y", "torque_z")
 """The CSV columns of a wrench, in the sensor frame (N, N m)."""
@@ -168,3 +169,51 @@ def assemble_log(
         if a is not None:
             a.flags.writeable = False
     return JointLog(t, names, position, effort, source, velocity, current_gains)
+
+
+def sensor_frame_name(sensor_frame: object) -> str:
+    """``sensor_frame`` when it is a non-empty string.
+
+    Raises:
+        InvalidInputError: anything else (None, an empty string, not a string).
+    """
+    if not isinstance(sensor_frame, str) or not sensor_frame:
+        raise InvalidInputError(
+            f"the sensor frame must be named (a frame of the URDF, the one the wrench is "
+            f"measured in: sensor_frame=..., --sensor-frame), got {sensor_frame!r}"
+        )
+    return sensor_frame
+
+
+def assemble_wrench_log(
+    t: np.ndarray,
+    position: np.ndarray,
+    wrench: np.ndarray,
+    names: tuple[str, ...],
+    sensor_frame: str,
+    source: str,
+    velocity: np.ndarray | None = None,
+    effort: np.ndarray | None = None,
+) -> WrenchLog:
+    """The read-only WrenchLog of a log's (N,) times (s) and (N, k) columns.
+
+    Sorted by time (stable: samples with the same time keep the file's order), time from the
+    first sample.
+
+    Raises:
+        LogError: fewer than two samples (WrenchLog refuses NaN, inf and wrong shapes).
+    """
+    if len(t) < 2:
+        raise LogError(f"{source} has {len(t)} usable sample(s); a wrench log needs at least two")
+    t = np.asarray(t, dtype=float)
+    order = np.argsort(t, kind="stable")
+    v, e = (None if a is None else _sorted(a, order) for a in (velocity, effort))
+    return WrenchLog(_sorted(t - t[order[0]], order), names, _sorted(position, order),
+                     _sorted(wrench, order), sensor_frame, source, v, e)  # fmt: skip
+
+
+def _sorted(a: np.ndarray, order: np.ndarray) -> np.ndarray:
+    """A read-only float copy of ``a``'s rows in ``order``."""
+    out = np.asarray(a, dtype=float)[order]
+    out.flags.writeable = False
+    return out

@@ -8,7 +8,7 @@ JointLog or WrenchLog the readers return, written back as a file.
 - ``write_wrench_bag`` / ``write_wrench_csv``: a WrenchLog as JointState plus
   ``geometry_msgs/msg/WrenchStamped`` messages (frame_id the sensor frame), or as ``time``,
   ``J.position`` (``J.velocity``, ``J.effort``) and ``force_x`` ... ``torque_z`` columns
-  (``wrench_bag``, ``wrench_csv``).
+  (``wrench_files``).
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ import numpy as np
 from comgrasp_pin.errors import InvalidInputError, OutputError
 from comgrasp_pin.robot_io.log_files.joint_readers import DEFAULT_TOPIC, JOINT_STATE, JointLog
 from comgrasp_pin.robot_io.log_files.log_types import WRENCH_COLUMNS, WrenchLog
-from comgrasp_pin.robot_io.log_files.wrench_bag import WRENCH_STAMPED
+from comgrasp_pin.robot_io.log_files.wrench_files import WRENCH_STAMPED
 
 STORAGES = ("sqlite3", "mcap")
 DEFAULT_WRENCH_TOPIC = "/wrench"
@@ -52,7 +52,7 @@ def write_csv(log: JointLog, path: str | Path) -> Path:
 
 
 def write_wrench_csv(path: str | Path, wrench_log: WrenchLog) -> Path:
-    """Write ``wrench_log`` as the CSV ``wrench_csv.read_wrench_csv`` reads.
+    """Write ``wrench_log`` as the CSV ``wrench_files.read_wrench_csv`` reads.
 
     Columns ``time`` (s), ``J.position`` per joint J, ``J.velocity`` and ``J.effort`` where
     the log has them, then ``force_x`` ... ``torque_z`` (N, N m) in its sensor frame, which

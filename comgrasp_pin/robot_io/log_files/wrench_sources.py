@@ -8,11 +8,11 @@
 Each source becomes a ``WrenchLog``: the wrench the tool side applies to the sensor, in the
 sensor frame, with the arm's joint positions at the wrench's times:
 
-- a ROS 2 bag (a folder, a .db3 or .mcap file): ``wrench_bag.read_wrench_bag``;
+- a ROS 2 bag (a folder, a .db3 or .mcap file): ``wrench_files.read_wrench_bag``;
 - a CSV with ``time``, ``J.position`` and ``force_x`` ... ``torque_z``:
-  ``wrench_csv.read_wrench_csv``;
+  ``wrench_files.read_wrench_csv``;
 - a Universal Robots recording (recognised by its header, ``timestamp`` and ``actual_q_0``,
-  as ``rtde`` does): its ``actual_TCP_force`` by ``wrench_rtde.read_rtde_wrench``, which
+  as ``rtde`` does): its ``actual_TCP_force`` by ``wrench_sources.read_rtde_wrench``, which
   needs the robot model to move it into the sensor frame.
 
 ``record.write_wrench_bag`` and ``record.write_wrench_csv`` write the first two.
@@ -75,14 +75,13 @@ from comgrasp_pin.errors import LogError
 from comgrasp_pin.robot import RobotModel, check_frame
 from comgrasp_pin.robot_io.log_files import joint_readers as logs
 from comgrasp_pin.robot_io.log_files import rtde
-from comgrasp_pin.robot_io.log_files.log_types import WrenchLog
-from comgrasp_pin.robot_io.log_files.log_values import check_table
-from comgrasp_pin.robot_io.log_files.wrench_bag import read_wrench_bag
-from comgrasp_pin.robot_io.log_files.wrench_csv import (
+from comgrasp_pin.robot_io.log_files.log_types import (
+    WrenchLog,
     assemble_wrench_log,
-    read_wrench_csv,
     sensor_frame_name,
 )
+from comgrasp_pin.robot_io.log_files.log_values import check_table
+from comgrasp_pin.robot_io.log_files.wrench_files import read_wrench_bag, read_wrench_csv
 
 BAG_SUFFIXES = (".db3", ".mcap")
 

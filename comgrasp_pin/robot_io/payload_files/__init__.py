@@ -4,9 +4,15 @@ Robot controllers (UR, Franka, ROS 2, KUKA, ABB, MoveIt) and robot models (URDF,
 MJCF).
 """
 
-from comgrasp_pin.robot_io.payload_files.exports import (
+from comgrasp_pin.robot_io.payload_files.controller_files import (
+    franka_desk,
     franka_load,
+    krl_load,
+    moveit_yaml,
+    principal_axes,
+    rapid_loaddata,
     ros2_yaml,
+    sunrise_load_data,
     urscript,
     write_franka,
     write_ros2,
@@ -18,14 +24,6 @@ from comgrasp_pin.robot_io.payload_files.model_exports import (
     urdf_with_payload,
 )
 from comgrasp_pin.robot_io.payload_files.payload import Payload, T_flange_ee, payload_in_flange
-from comgrasp_pin.robot_io.payload_files.vendor_exports import (
-    franka_desk,
-    krl_load,
-    moveit_yaml,
-    principal_axes,
-    rapid_loaddata,
-    sunrise_load_data,
-)
 
 __all__ = [
     "Payload",

@@ -27,8 +27,8 @@ import pinocchio as pin
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.file_checks import read_description
 from comgrasp_pin.robot import RobotModel
+from comgrasp_pin.robot_io.payload_files.controller_files import principal_axes
 from comgrasp_pin.robot_io.payload_files.payload import Payload, T_flange_ee, header_lines
-from comgrasp_pin.robot_io.payload_files.vendor_exports import principal_axes
 
 PAYLOAD_LINK, PAYLOAD_JOINT = "payload", "payload_joint"
 

@@ -26,7 +26,7 @@ from comgrasp_pin.errors import InvalidInputError, OutputError
 from comgrasp_pin.estimation.payload_regressor import PARAMETER_NAMES
 from comgrasp_pin.planning.excitation import ExcitationMotion
 from comgrasp_pin.planning.measurement_poses import UR_JOINTS
-from comgrasp_pin.robot_io.payload_files.exports import write_text
+from comgrasp_pin.robot_io.payload_files.controller_files import write_text
 
 SERIES = "q(t) = q0 + sum_l a_l/(w l) sin(w l t) - b_l/(w l) (cos(w l t) - 1), w = 2 pi/period"
 

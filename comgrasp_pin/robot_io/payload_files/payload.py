@@ -21,9 +21,9 @@ import pinocchio as pin
 
 from comgrasp_pin import validate
 from comgrasp_pin.errors import InvalidInputError
+from comgrasp_pin.estimation.trust import IDENTIFIED, require_identified
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.results.estimate_result import PayloadEstimate
-from comgrasp_pin.robot_io.results.trust import IDENTIFIED, require_identified
 
 _AXES = {"x": 0, "y": 1, "z": 2}
 INERTIA_HELP = (

@@ -4,6 +4,7 @@ The payload-estimate result type, RESULT.json and the summary lines, the verdict
 rules and the gate for payload files. It imports no estimator: every path uses it.
 """
 
+from comgrasp_pin.estimation.trust import inertia_verdict, judge, require_identified
 from comgrasp_pin.robot_io.results.estimate_result import (
     AtRest,
     Inertia,
@@ -12,9 +13,8 @@ from comgrasp_pin.robot_io.results.estimate_result import (
     PayloadEstimate,
     Wrench,
 )
+from comgrasp_pin.robot_io.results.report import summary
 from comgrasp_pin.robot_io.results.result_file import read_result, result_dict, write_result
-from comgrasp_pin.robot_io.results.text_summary import summary
-from comgrasp_pin.robot_io.results.trust import inertia_verdict, judge, require_identified
 
 __all__ = [
     "PayloadEstimate",

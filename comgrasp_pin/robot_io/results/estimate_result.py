@@ -23,8 +23,8 @@ import numpy as np
 
 from comgrasp_pin.estimation import ComEstimate
 from comgrasp_pin.estimation.dynamic_uncertainty import Validation
+from comgrasp_pin.estimation.trust import t95
 from comgrasp_pin.estimation.wrench import StaticWrenchFit
-from comgrasp_pin.robot_io.results.trust import t95
 
 JOINT_TORQUES, WRENCH, PRIOR = "joint_torques", "wrench", "prior"
 """The sources' names, as ``PayloadEstimate.sources`` keys them."""

@@ -1,4 +1,6 @@
-"""A wrist sensor's wrench from a ROS 2 bag: WrenchStamped messages, joints from JointState.
+"""A wrist sensor's wrench from a ROS 2 bag or a wide CSV (``record`` writes both).
+
+ROS 2 bags (``read_wrench_bag``): WrenchStamped messages, joints from JointState.
 
 - The wrench: ``geometry_msgs/msg/WrenchStamped`` on one topic, found by its type where the
   bag has exactly one such topic (else it must be named). The messages' ``header.frame_id``
@@ -15,6 +17,13 @@
 - A wrench sample is kept where joint states bracket it within ``MAX_JOINT_GAP_S``: samples
   before the first or after the last joint state (a sensor's topic often starts or ends
   a little apart from the arm's), or in a gap of the joint states, are left out.
+
+The CSV (``read_wrench_csv``; ``record.write_wrench_csv`` writes it): a header row with
+``time`` (s), ``J.position`` (rad or m) per arm joint J, and ``force_x, force_y, force_z`` (N),
+``torque_x, torque_y, torque_z`` (N m): the wrench the tool side applies to the sensor
+(``log_types.WrenchLog``), in the sensor frame, which the file does not name (the caller
+does). ``J.velocity`` (rad/s) and ``J.effort`` (N m) are read where every arm joint has them.
+Other columns are ignored.
 """
 
 from __future__ import annotations
@@ -26,11 +35,18 @@ import numpy as np
 from comgrasp_pin import file_checks
 from comgrasp_pin.errors import LogError
 from comgrasp_pin.robot_io.log_files import joint_readers as logs
-from comgrasp_pin.robot_io.log_files.log_types import WRENCH_COLUMNS, WrenchLog
-from comgrasp_pin.robot_io.log_files.log_values import check_joint_rows, check_messages
-from comgrasp_pin.robot_io.log_files.wrench_csv import assemble_wrench_log, sensor_frame_name
+from comgrasp_pin.robot_io.log_files import rtde
+from comgrasp_pin.robot_io.log_files.log_types import (
+    WRENCH_COLUMNS,
+    WrenchLog,
+    assemble_wrench_log,
+    sensor_frame_name,
+)
+from comgrasp_pin.robot_io.log_files.log_values import check_joint_rows, check_messages, check_table
 
 WRENCH_STAMPED = "geometry_msgs/msg/WrenchStamped"
+OPTIONAL_FIELDS = ("velocity", "effort")
+"""Per-joint CSV fields read where every arm joint has them (rad/s, N m)."""
 MAX_JOINT_GAP_S = 0.1
 """Longest time between two joint states that a wrench sample is interpolated across (s).
 
@@ -191,3 +207,54 @@ def _bracketed(t_w: np.ndarray, t_j: np.ndarray) -> np.ndarray:
     hi = np.clip(np.searchsorted(t_j, t_w, side="left"), 1, len(t_j) - 1)
     gap = t_j[hi] - t_j[hi - 1]
     return (t_w >= t_j[0]) & (t_w <= t_j[-1]) & (gap <= MAX_JOINT_GAP_S)
+
+
+def read_wrench_csv(
+    path: str | Path, joint_names: list[str] | tuple[str, ...], sensor_frame: str
+) -> WrenchLog:
+    """Read a wide CSV of joint positions and a wrench measured in ``sensor_frame``.
+
+    Args:
+        path: the CSV (comma-separated, a header row; see the module docstring).
+        joint_names: the arm's joints, as the ``J`` of the ``J.position`` columns.
+        sensor_frame: the URDF frame the ``force_*``, ``torque_*`` columns are in.
+
+    Raises:
+        InvalidInputError: no sensor frame named.
+        LogError: the file fails ``file_checks.first_line`` (missing, a FIFO, larger than
+            ``file_checks.MAX_CSV_BYTES``, not UTF-8); it is a UR recording (read by
+            ``wrench_sources.read_rtde_wrench``, which needs the robot); a column is missing
+            (named, with what a wrench log needs); a value is not a number, NaN, inf or past
+            any sensor's range (``log_values.check_table``: its line and column named);
+            fewer than two rows.
+    """
+    path = Path(path)
+    frame = sensor_frame_name(sensor_frame)
+    line = file_checks.first_line(path, "CSV wrench log", file_checks.MAX_CSV_BYTES,
+                                  file_checks.MAX_CSV_HEADER_BYTES, LogError)  # fmt: skip
+    if rtde.is_rtde_header(line):
+        raise LogError(
+            f"{path} is a UR recording (timestamp, actual_q_0, ...): its actual_TCP_force is "
+            "at the TCP in base axes; read it with read_rtde_wrench (or read_wrench_log with "
+            "the robot model), which moves it into the sensor frame by the URDF's kinematics"
+        )
+    header = rtde.header_columns(line)
+    names = tuple(joint_names)
+    wanted = ["time", *(f"{n}.position" for n in names), *WRENCH_COLUMNS]
+    missing = [w for w in wanted if w not in header]
+    if missing:
+        raise LogError(
+            f"CSV {path} lacks the columns {missing}; a wrench log needs 'time' (s), "
+            f"'J.position' per arm joint J of the URDF ({list(names)}) and "
+            f"{list(WRENCH_COLUMNS)} (N, N m, in the sensor frame); 'J.velocity' and "
+            "'J.effort' are read where every joint has them"
+        )
+    fields = [f for f in OPTIONAL_FIELDS if all(f"{n}.{f}" in header for n in names)]
+    wanted += [f"{n}.{f}" for f in fields for n in names]
+    data = rtde.load_columns(path, ",", [header.index(w) for w in wanted], "CSV wrench log")
+    check_table(data, wanted, path, f"CSV {path}")
+    n = len(names)
+    extra = {f: data[:, 7 + n * (i + 1) : 7 + n * (i + 2)] for i, f in enumerate(fields)}
+    q, wrench = data[:, 1 : 1 + n], data[:, 1 + n : 7 + n]
+    return assemble_wrench_log(data[:, 0], q, wrench, names, frame, str(path),
+                               extra.get("velocity"), extra.get("effort"))  # fmt: skip
