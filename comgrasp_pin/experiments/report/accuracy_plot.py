@@ -16,17 +16,17 @@ from comgrasp_pin.experiments.report.common import (
     NOT_RECORDED,
     PAPER_RANGE_DEG,
     PUBLISHED_MARKER,
-    _abs_theta,
-    _column,
-    _compress,
-    _expand,
-    _ok,
-    _select,
+    abs_tilts,
+    column_values,
+    compress_tilt,
     describe,
     estimator_label,
+    expand_tilt,
     load_pyplot,
     object_groups,
     recorded,
+    rows_of,
+    without_errors,
 )
 from comgrasp_pin.experiments.stats import (
     THETA_BINS_DEG,
@@ -37,8 +37,8 @@ from comgrasp_pin.experiments.stats import (
 def accuracy_series(rows: Sequence[dict], column: str = "accuracy", edges=THETA_BINS_DEG):
     """Per-|θ|-bin mean of ``column`` (%) with its 95 % t interval (capped at 100 %), nan in
     empty bins: the curve of the accuracy figure (``stats.BinSeries``)."""
-    rows = _ok(rows)
-    series = bin_series(_abs_theta(rows), 100.0 * _column(rows, column), edges)
+    rows = without_errors(rows)
+    series = bin_series(abs_tilts(rows), 100.0 * column_values(rows, column), edges)
     np.minimum(series.ci_hi, 100.0, out=series.ci_hi)  # accuracy cannot exceed 100 %
     return series
 
@@ -71,7 +71,7 @@ def _plot_curve(ax, series, colour, style, marker, filled, dodge):
 def _accuracy_plot(rows: Sequence[dict]):
     """The accuracy figure and its curves: (fig, {object: {"ours": Line2D, "line": ...}})."""
     plt = load_pyplot()
-    ok = _ok(rows)
+    ok = without_errors(rows)
     paper_objs, extra = object_groups(rows)  # an object whose grasps all failed keeps a panel
     has_line = recorded(ok, "accuracy_line")
     groups = [(g, objs) for g, objs in (("paper", paper_objs), ("extra", extra)) if objs]
@@ -84,10 +84,10 @@ def _accuracy_plot(rows: Sequence[dict]):
     heights = [math.ceil(len(objs) / ncols) for _, objs in groups] or [1]
     fig = plt.figure(figsize=(4.1 * ncols, 3.1 * sum(heights) + 1.6), layout="constrained")
     subfigs = fig.subfigures(len(heights), 1, height_ratios=heights, squeeze=False)[:, 0]
-    series = {o: {"ours": accuracy_series(_select(ok, [o]))} for o in paper_objs + extra}
+    series = {o: {"ours": accuracy_series(rows_of(ok, [o]))} for o in paper_objs + extra}
     if has_line:
         for o in series:
-            series[o]["line"] = accuracy_series(_select(ok, [o]), "accuracy_line")
+            series[o]["line"] = accuracy_series(rows_of(ok, [o]), "accuracy_line")
     curves: dict[str, dict] = {}
     for sub, (group, objs) in zip(subfigs, groups):
         low = _lowest(group, [series[o] for o in objs])
@@ -135,8 +135,8 @@ def _group_axes(sub, group: str, nrows: int, ncols: int):
 def _object_panel(ax, obj: str, rows: Sequence[dict], series: dict, low: float, group: str):
     """One object's panel: its grasps, its curves (``series``: "ours" and, if recorded,
     "line"), the paper's published values for a paper object; its curves as Line2Ds."""
-    sel = _select(_ok(rows), [obj])  # the grasps that gave an estimate
-    failed = len(_select(rows, [obj])) - len(sel)
+    sel = rows_of(without_errors(rows), [obj])  # the grasps that gave an estimate
+    failed = len(rows_of(rows, [obj])) - len(sel)
     if not sel:
         ax.text(
             0.5,
@@ -149,7 +149,7 @@ def _object_panel(ax, obj: str, rows: Sequence[dict], series: dict, low: float, 
             zorder=6,
             bbox={"facecolor": "white", "edgecolor": "0.6"},
         )
-    ax.set_xscale("function", functions=(_compress, _expand))
+    ax.set_xscale("function", functions=(compress_tilt, expand_tilt))
     ax.axvspan(PAPER_RANGE_DEG, 90.0, color="0.93", zorder=0, lw=0)
     _grasp_dots(ax, sel, low, "line" in series)
     curves = {"ours": _plot_curve(ax, series["ours"], C_OURS, "-", "o", True, -0.12)}
@@ -188,14 +188,14 @@ def _object_panel(ax, obj: str, rows: Sequence[dict], series: dict, low: float, 
 def _grasp_dots(ax, sel: Sequence[dict], low: float, has_line: bool) -> None:
     """Every grasp faint, ours and (``has_line``) the paper's method's; a grasp below the
     axis' bottom ``low`` (%) as a small arrow at that edge."""
-    theta = _abs_theta(sel)
+    theta = abs_tilts(sel)
     for column, colour, marker in (
         ("accuracy", C_OURS, "o"),
         ("accuracy_line", C_LINE, "s"),
     ):
         if column == "accuracy_line" and not has_line:
             continue
-        y = 100.0 * _column(sel, column)
+        y = 100.0 * column_values(sel, column)
         below = y < low + 0.5
         ax.scatter(
             theta[~below],

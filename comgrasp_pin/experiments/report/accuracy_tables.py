@@ -10,17 +10,17 @@ from comgrasp_pin.experiments import paper
 from comgrasp_pin.experiments.report.common import (
     NOT_RECORDED,
     TIE_POINTS,
-    _abs_theta,
-    _bin_name,
-    _column,
-    _group,
-    _ok,
-    _select,
+    abs_tilts,
+    bin_label,
+    column_values,
     com_off_axis_m,
     estimator_label,
     object_groups,
+    objects_in,
     paper_objects,
     recorded,
+    rows_of,
+    without_errors,
 )
 from comgrasp_pin.experiments.stats import (
     COMPARISON_RANGES_DEG,
@@ -52,8 +52,8 @@ def accuracy_table(
 def _accuracy_table(rows: Sequence[dict], objects: Sequence[str], edges) -> str:
     if not objects:
         return "No accuracy grasps in these rows."
-    rows = _ok(rows)
-    sel_all = _select(rows, objects)
+    rows = without_errors(rows)
+    sel_all = rows_of(rows, objects)
     if not sel_all:
         return f"No grasp of {', '.join(objects)} gave an estimate."
     has_line = recorded(sel_all, "accuracy_line")
@@ -72,9 +72,9 @@ def _accuracy_table(rows: Sequence[dict], objects: Sequence[str], edges) -> str:
     ]
     per_object = {}
     for obj in objects:
-        sel = _select(rows, [obj])
-        masks = bin_masks(_abs_theta(sel), edges)
-        ours, line = 100 * _column(sel, "accuracy"), 100 * _column(sel, "accuracy_line")
+        sel = rows_of(rows, [obj])
+        masks = bin_masks(abs_tilts(sel), edges)
+        ours, line = 100 * column_values(sel, "accuracy"), 100 * column_values(sel, "accuracy_line")
         per_object[obj] = (masks, ours, line, paper.paper_accuracy_bins(obj, edges))
     for k, (lo, hi) in enumerate(zip(edges[:-1], edges[1:])):
         cells = []
@@ -90,7 +90,7 @@ def _accuracy_table(rows: Sequence[dict], objects: Sequence[str], edges) -> str:
             cells.append(
                 f"{np.nanmean(ours[inside]):.1f} / {line_cell}{ref_cell} ({int(inside.sum())})"
             )
-        lines.append(f"| {_bin_name(lo, hi)} | " + " | ".join(cells) + " |")
+        lines.append(f"| {bin_label(lo, hi)} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
 
@@ -100,15 +100,15 @@ def method_comparison(
     """Markdown: ours against the paper's method measured in our world on the same grasps,
     per |θ| range: both means, the paired difference with its 95 % t interval, how many
     grasps each does better; then why, from how each one's miss grows with tan |θ|."""
-    ok = _ok(rows)
-    objects = _group(ok, objects)
-    sel = _select(ok, objects)
+    ok = without_errors(rows)
+    objects = objects_in(ok, objects)
+    sel = rows_of(ok, objects)
     if not sel:
         return "No grasps of these objects."
     if not recorded(sel, "accuracy_line"):
         return f"The paper's method in our world (`accuracy_line`): {NOT_RECORDED}; no comparison."
-    theta = _abs_theta(sel)
-    ours, line = 100 * _column(sel, "accuracy"), 100 * _column(sel, "accuracy_line")
+    theta = abs_tilts(sel)
+    ours, line = 100 * column_values(sel, "accuracy"), 100 * column_values(sel, "accuracy_line")
     lines = [
         f"Objects {', '.join(objects)}; ours = {estimator_label(sel).removeprefix('ours: ')}; "
         f"the paper's method = {paper.METHOD}, from the same grasps. Difference: ours − "
@@ -124,7 +124,7 @@ def method_comparison(
     ranges.append((float(edges[0]), float(edges[-1]), np.isfinite(theta)))
     paired = np.isfinite(ours) & np.isfinite(line)  # both estimates of the same grasp
     for k, (lo, hi, inside) in enumerate(ranges):
-        name = "all tilts" if k == len(ranges) - 1 else _bin_name(lo, hi)
+        name = "all tilts" if k == len(ranges) - 1 else bin_label(lo, hi)
         inside = inside & paired
         if not inside.any():
             lines.append(f"| {name} | 0 | – | – | – | – | – | – |")
@@ -157,12 +157,12 @@ def method_comparison(
 def _miss_slopes(rows: Sequence[dict]) -> tuple[float, float, int]:
     """(k_ours, k_line, grasps used): the least-squares k of |miss| ≈ k·|tan θ| (m) over the
     grasps at |θ| >= 10 deg (none below that: tan θ carries no information there)."""
-    theta = _abs_theta(rows)
+    theta = abs_tilts(rows)
     steep = (theta >= 10.0) & (theta < 89.0)
     t = np.abs(np.tan(np.radians(theta[steep])))
-    real = _column(rows, "pos_real_m")[steep]
-    miss_ours = np.abs(_column(rows, "pos_esti_m")[steep] - real)
-    miss_line = np.abs(_column(rows, "pos_esti_line_m")[steep] - real)
+    real = column_values(rows, "pos_real_m")[steep]
+    miss_ours = np.abs(column_values(rows, "pos_esti_m")[steep] - real)
+    miss_line = np.abs(column_values(rows, "pos_esti_line_m")[steep] - real)
     return slope_through_origin(t, miss_ours), slope_through_origin(t, miss_line), int(steep.sum())
 
 
@@ -183,7 +183,7 @@ def _why(rows: Sequence[dict], objects: Sequence[str]) -> str:
     ]
     matched = []
     for obj in objects:
-        sel = _select(rows, [obj])
+        sel = rows_of(rows, [obj])
         h = com_off_axis_m(obj)
         k_ours, k_line, n = (
             _miss_slopes(sel)

@@ -12,14 +12,14 @@ from comgrasp_pin.experiments.report.common import (
     TARGET_COV95_BIN,
     TARGET_COV95_OVERALL,
     TARGET_RMS_Z,
-    _abs_theta,
-    _bin_name,
-    _column,
-    _group,
-    _ok,
-    _pct,
-    _select,
+    abs_tilts,
+    bin_label,
+    column_values,
+    objects_in,
+    percent,
     recorded,
+    rows_of,
+    without_errors,
 )
 from comgrasp_pin.experiments.stats import (
     CALIBRATION_BINS_DEG,
@@ -33,7 +33,9 @@ from comgrasp_pin.experiments.stats import (
 def calibration_z(rows: Sequence[dict]) -> np.ndarray:
     """z = (pos_esti_m − pos_real_m) / pos_std_m per grasp (nan where no std is recorded)."""
     return z_scores(
-        _column(rows, "pos_esti_m"), _column(rows, "pos_real_m"), _column(rows, "pos_std_m")
+        column_values(rows, "pos_esti_m"),
+        column_values(rows, "pos_real_m"),
+        column_values(rows, "pos_std_m"),
     )
 
 
@@ -71,12 +73,12 @@ def calibration_table(
     """Markdown: z = (pos_esti − pos_real) / pos_std against N(0, 1) per |θ| bin and
     overall: n, the share inside ±1σ (68 %) and ±1.96σ (95 %) with Wilson intervals, rms
     and mean z, and the targets (95 %: 93–97 % overall and ≥ 90 % per bin; rms z 0.9–1.1)."""
-    ok = _ok(rows)
-    objects = _group(ok, objects)
-    sel = _select(ok, objects)
+    ok = without_errors(rows)
+    objects = objects_in(ok, objects)
+    sel = rows_of(ok, objects)
     if not recorded(sel, "pos_std_m"):
         return f"Calibration: `pos_std_m` {NOT_RECORDED} in these rows; no calibration."
-    z, theta = calibration_z(sel), _abs_theta(sel)
+    z, theta = calibration_z(sel), abs_tilts(sel)
     lines = [
         f"Objects {', '.join(objects)}. z = (pos_esti − pos_real) / pos_std; N(0, 1) has "
         f"{100 * N01_COV68:.1f} % inside ±1σ, 95 % inside ±1.96σ and rms 1. In brackets: "
@@ -89,17 +91,17 @@ def calibration_table(
     short = []
     for lo, hi, c in binned_calibration(theta, z, edges):
         if not c.n:
-            lines.append(f"| {_bin_name(lo, hi)} | 0 | – | – | – | – | – |")
+            lines.append(f"| {bin_label(lo, hi)} | 0 | – | – | – | – | – |")
             continue
         ok_bin = c.cov95 >= TARGET_COV95_BIN
         verdict = "met"
         if not ok_bin:
-            short.append(f"{_bin_name(lo, hi)}° ({_pct(c.cov95)}, n {c.n})")
+            short.append(f"{bin_label(lo, hi)}° ({percent(c.cov95)}, n {c.n})")
             # a bin whose Wilson interval still reaches the target may be short by chance
             reaches = wilson_interval(c.inside95, c.n)[1] >= TARGET_COV95_BIN
             verdict = "not met (interval reaches it)" if reaches else "not met"
         lines.append(
-            f"| {_bin_name(lo, hi)} | {c.n} | {_cov_cell(c.inside68, c.n)} | "
+            f"| {bin_label(lo, hi)} | {c.n} | {_cov_cell(c.inside68, c.n)} | "
             f"{_cov_cell(c.inside95, c.n)} | {c.rms:.2f} | {c.mean:+.2f} | "
             f"95 % ≥ {100 * TARGET_COV95_BIN:.0f} %: {verdict} |"
         )
@@ -117,7 +119,7 @@ def calibration_table(
     lines += [
         "",
         f"Targets: 95 % coverage {100 * lo95:.0f}–{100 * hi95:.0f} % overall "
-        f"({'met' if met95 else 'not met'}: {_pct(c.cov95)}) and ≥ "
+        f"({'met' if met95 else 'not met'}: {percent(c.cov95)}) and ≥ "
         f"{100 * TARGET_COV95_BIN:.0f} % in every bin "
         f"({'not met at ' + ', '.join(short) if short else 'met'}); rms z "
         f"{TARGET_RMS_Z[0]:g}–{TARGET_RMS_Z[1]:g} ({'met' if met_rms else 'not met'}: "

@@ -15,14 +15,14 @@ from comgrasp_pin.experiments.report.common import (
     TARGET_COV95_BIN,
     TARGET_COV95_OVERALL,
     TARGET_RMS_Z,
-    _abs_theta,
-    _bin_name,
-    _group,
-    _ok,
-    _select,
+    abs_tilts,
+    bin_label,
     load_pyplot,
     object_groups,
+    objects_in,
     recorded,
+    rows_of,
+    without_errors,
 )
 from comgrasp_pin.experiments.stats import (
     CALIBRATION_BINS_DEG,
@@ -39,13 +39,13 @@ def _calibration_row(axes, rows, objects, edges, colours, markers, extra: bool):
     """One row of the calibration figure: histogram of z, coverage per bin, rms z per bin."""
     ax_h, ax_c, ax_r = axes
     positions = np.arange(len(edges))  # the bins and "all"
-    labels = [_bin_name(lo, hi) for lo, hi in zip(edges[:-1], edges[1:])] + ["all"]
+    labels = [bin_label(lo, hi) for lo, hi in zip(edges[:-1], edges[1:])] + ["all"]
     n_tick = [[] for _ in positions]
     groups = [("paper's six", objects)] if not extra else [(o, [o]) for o in objects]
     total = 0
     for g, (name, objs) in enumerate(groups):
-        sel = _select(rows, objs)
-        z, theta = calibration_z(sel), _abs_theta(sel)
+        sel = rows_of(rows, objs)
+        z, theta = calibration_z(sel), abs_tilts(sel)
         good = np.isfinite(z)
         z, theta = z[good], theta[good]
         total += len(z)
@@ -204,12 +204,12 @@ def calibration_figure(rows: Sequence[dict], path: Path) -> Path:
     reference, coverage of the ±1σ and ±1.96σ intervals per |θ| bin with the targets, rms z
     per bin; the paper's six objects in the top row, extra objects in a row of their own."""
     plt = load_pyplot()
-    ok = _ok(rows)
+    ok = without_errors(rows)
     paper_objs, extra = object_groups(ok)
     groups = [
         (g, objs)
         for g, objs in (("paper", paper_objs), ("extra", extra))
-        if objs and recorded(_select(ok, objs), "pos_std_m")
+        if objs and recorded(rows_of(ok, objs), "pos_std_m")
     ]
     if not groups:
         fig, ax = plt.subplots(figsize=(6, 1.6))
@@ -257,8 +257,8 @@ def calibration_figure(rows: Sequence[dict], path: Path) -> Path:
 def calibration_section(rows: Sequence[dict], out: Path, objects=None) -> str:
     """The report's calibration text: the figure (written to ``out/calibration.png``) and
     the table, or "not recorded" when the rows carry no ``pos_std_m``."""
-    ok = _ok(rows)
-    objects = _group(ok, objects)
+    ok = without_errors(rows)
+    objects = objects_in(ok, objects)
     if not recorded(ok, "pos_std_m"):
         return (
             f"`pos_std_m` (the stated standard deviation of each estimate) is {NOT_RECORDED} "

@@ -1,7 +1,7 @@
 """What the report's parts share: object groups, labels, colours, small helpers.
 
 Rows of trials that ended in an internal error (``internal_errors.is_internal_error``: a bug, not
-the world's failure) are no outcome: ``_select``, through which every table, figure and
+the world's failure) are no outcome: ``rows_of``, through which every table, figure and
 verdict takes its rows, leaves them out, so they are in no count, rate or mean, and
 ``internal_error_note`` names them (the run summary says it).
 """
@@ -49,14 +49,14 @@ LINE_LABEL = f"paper's method ({paper.METHOD}), our world"
 # --- rows, columns and object groups ------------------------------------------------------
 
 
-def _float(value) -> float:
+def as_float(value) -> float:
     try:
         return float(value)
     except (TypeError, ValueError):
         return float("nan")
 
 
-def _ok(rows: Sequence[dict]) -> list[dict]:
+def without_errors(rows: Sequence[dict]) -> list[dict]:
     return [r for r in rows if not r.get("error")]
 
 
@@ -85,16 +85,16 @@ def internal_error_note(rows: Sequence[dict], shown: int = 10) -> str:
     )
 
 
-def _column(rows: Sequence[dict], name: str) -> np.ndarray:
-    return np.array([_float(r.get(name)) for r in rows], float)
+def column_values(rows: Sequence[dict], name: str) -> np.ndarray:
+    return np.array([as_float(r.get(name)) for r in rows], float)
 
 
 def recorded(rows: Sequence[dict], name: str) -> bool:
     """Whether any row carries a finite value in column ``name``."""
-    return bool(np.isfinite(_column(rows, name)).any()) if rows else False
+    return bool(np.isfinite(column_values(rows, name)).any()) if rows else False
 
 
-def _natural(name: str) -> tuple:
+def natural_key(name: str) -> tuple:
     return tuple(int(t) if t.isdigit() else t for t in re.split(r"(\d+)", name))
 
 
@@ -114,15 +114,15 @@ def object_groups(rows: Sequence[dict]) -> tuple[list[str], list[str]]:
     """(the paper's objects, extra objects) present in ``rows``, each in a stable order."""
     present = {str(r["object"]) for r in rows if r.get("object")}
     ours = paper_objects()
-    return [o for o in ours if o in present], sorted(present - set(ours), key=_natural)
+    return [o for o in ours if o in present], sorted(present - set(ours), key=natural_key)
 
 
-def _group(rows: Sequence[dict], objects: Sequence[str] | None) -> list[str]:
+def objects_in(rows: Sequence[dict], objects: Sequence[str] | None) -> list[str]:
     """``objects`` as given, or the paper's objects in ``rows``."""
     return list(objects) if objects is not None else object_groups(rows)[0]
 
 
-def _select(rows: Sequence[dict], objects: Sequence[str]) -> list[dict]:
+def rows_of(rows: Sequence[dict], objects: Sequence[str]) -> list[dict]:
     """The rows of ``objects`` that are outcomes (no internal error's: see the docstring)."""
     keep = set(objects)
     return [r for r in rows if r.get("object") in keep and not is_internal_error(r)]
@@ -166,8 +166,8 @@ def estimator_label(rows: Sequence[dict]) -> str:
     return "ours: " + ", ".join(f"{ESTIMATOR_NAMES.get(k, k)} × {n}" for k, n in names.items())
 
 
-def _abs_theta(rows: Sequence[dict]) -> np.ndarray:
-    return np.abs(_column(rows, "theta_deg"))
+def abs_tilts(rows: Sequence[dict]) -> np.ndarray:
+    return np.abs(column_values(rows, "theta_deg"))
 
 
 def load_pyplot():
@@ -185,23 +185,23 @@ def load_pyplot():
     return plt
 
 
-def _bin_name(lo: float, hi: float) -> str:
+def bin_label(lo: float, hi: float) -> str:
     return f"{lo:g}–{hi:g}"
 
 
-def _pct(x: float, digits: int = 1) -> str:
+def percent(x: float, digits: int = 1) -> str:
     return f"{100 * x:.{digits}f} %" if np.isfinite(x) else "–"
 
 
 # --- experiment 1: accuracy ------------------------------------------------------------------
 
 
-def _compress(x):
+def compress_tilt(x):
     """The accuracy figure's x axis: linear to 30 deg, a third as wide beyond."""
     x = np.asarray(x, float)
     return np.where(x <= PAPER_RANGE_DEG, x, PAPER_RANGE_DEG + (x - PAPER_RANGE_DEG) / 3.0)
 
 
-def _expand(u):
+def expand_tilt(u):
     u = np.asarray(u, float)
     return np.where(u <= PAPER_RANGE_DEG, u, PAPER_RANGE_DEG + (u - PAPER_RANGE_DEG) * 3.0)

@@ -10,14 +10,14 @@ from comgrasp_pin.experiments.report.common import (
     C_BASELINE,
     C_REGRASP,
     NOT_RECORDED,
-    _column,
-    _float,
-    _group,
-    _select,
+    as_float,
+    column_values,
     load_pyplot,
     object_groups,
+    objects_in,
     outcomes,
     recorded,
+    rows_of,
 )
 from comgrasp_pin.experiments.stats import (
     mean_ci,
@@ -38,7 +38,7 @@ def success_rates(rows: Sequence[dict]) -> dict[tuple[str, str], tuple[int, int]
 
 
 def _succeeded(row: dict) -> bool:
-    return not row.get("error") and int(_float(row.get("success")) == 1)
+    return not row.get("error") and int(as_float(row.get("success")) == 1)
 
 
 def regrasp_figure(rows: Sequence[dict], path: Path) -> Path:
@@ -205,8 +205,8 @@ def extra_pose_summary(
     (default: for the paper's group only) adds a row and a sentence over all ``objects``;
     otherwise every object gets its own."""
     pooled = objects is None if pooled is None else pooled
-    objects = _group(rows, objects)
-    reg = [r for r in _select(rows, objects) if r.get("method") == "regrasp"]
+    objects = objects_in(rows, objects)
+    reg = [r for r in rows_of(rows, objects) if r.get("method") == "regrasp"]
     if not reg:
         return "No regrasp trials of these objects."
     if not recorded(reg, "extra_pose"):
@@ -234,7 +234,7 @@ def extra_pose_summary(
 
 
 def _split_extra_pose(trials: list[dict]) -> tuple[list[dict], list[dict], int]:
-    flag = _column(trials, "extra_pose")
+    flag = column_values(trials, "extra_pose")
     with_it = [r for r, f in zip(trials, flag) if f == 1]
     without = [r for r, f in zip(trials, flag) if f == 0]
     return with_it, without, len(trials) - len(with_it) - len(without)
@@ -278,8 +278,8 @@ def _extra_pose_sentence(prefix: str, trials: list[dict], base: dict) -> str:
             text += f", where the baseline on the same scenes succeeded {sum(seen)}/{len(seen)}"
     if without:
         text += f"; without it {s_wo}/{len(without)}"
-    acc_w = mean_ci(100 * _column(with_it, "accuracy"))
-    acc_wo = mean_ci(100 * _column(without, "accuracy"))
+    acc_w = mean_ci(100 * column_values(with_it, "accuracy"))
+    acc_wo = mean_ci(100 * column_values(without, "accuracy"))
     if acc_w.n and acc_wo.n:
         text += (
             f"; mean CoM accuracy with it {acc_w.mean:.1f} % (n {acc_w.n}), without "

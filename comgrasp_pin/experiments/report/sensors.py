@@ -14,12 +14,12 @@ import numpy as np
 
 from comgrasp_pin.experiments.report.calibration import calibration_z
 from comgrasp_pin.experiments.report.common import (
-    _abs_theta,
-    _column,
-    _ok,
-    _select,
+    abs_tilts,
+    column_values,
     paper_objects,
     recorded,
+    rows_of,
+    without_errors,
 )
 from comgrasp_pin.experiments.report.regrasp import success_rates
 from comgrasp_pin.experiments.stats import calibration, mean_ci, wilson_interval
@@ -45,20 +45,24 @@ def _rate_cell(successes: int, n: int) -> str:
 
 
 def _accuracy_measures(acc: Sequence[dict]) -> dict[str, str]:
-    acc = _select(acc, paper_objects())
-    ok = _ok(acc)
-    low = _abs_theta(ok) < UP_TO_DEG
+    acc = rows_of(acc, paper_objects())
+    ok = without_errors(acc)
+    low = abs_tilts(ok) < UP_TO_DEG
     cal = calibration(calibration_z(ok))
     return {
-        f"mean accuracy below {UP_TO_DEG:g}°, ours (%)": _mean_cell(_column(ok, "accuracy")[low]),
+        f"mean accuracy below {UP_TO_DEG:g}°, ours (%)": _mean_cell(
+            column_values(ok, "accuracy")[low]
+        ),
         f"mean accuracy below {UP_TO_DEG:g}°, the paper's method (%)": _mean_cell(
-            _column(ok, "accuracy_line")[low]
+            column_values(ok, "accuracy_line")[low]
         ),
         f"mean accuracy below {UP_TO_DEG:g}°, wrist sensor's wrench (%)": _mean_cell(
-            _column(ok, "accuracy_wrench")[low] if recorded(ok, "accuracy_wrench") else low[:0]
+            column_values(ok, "accuracy_wrench")[low]
+            if recorded(ok, "accuracy_wrench")
+            else low[:0]
         ),
         "worst grasp below 30°, ours (%)": (
-            f"{100 * np.nanmin(_column(ok, 'accuracy')[low]):.1f}" if low.any() else "–"
+            f"{100 * np.nanmin(column_values(ok, 'accuracy')[low]):.1f}" if low.any() else "–"
         ),
         "95 % interval covers the truth (%)": _rate_cell(cal.inside95, cal.n),
         "rms z (1 when the error bars are right)": f"{cal.rms:.2f}" if cal.n else "–",
@@ -68,7 +72,7 @@ def _accuracy_measures(acc: Sequence[dict]) -> dict[str, str]:
 
 def _measures(acc: Sequence[dict], reg: Sequence[dict]) -> dict[str, str]:
     objects = paper_objects()
-    rates = success_rates(_select(reg, objects))
+    rates = success_rates(rows_of(reg, objects))
 
     def total(method: str) -> tuple[int, int]:
         return tuple(sum(rates.get((o, method), (0, 0))[i] for o in objects) for i in (0, 1))
@@ -120,15 +124,15 @@ def sources_figure(runs: dict[str, Sequence[dict]], path) -> None:
 
     plt = load_pyplot()
     names = list(runs)
-    selected = {name: _select(runs[name], paper_objects()) for name in names}
+    selected = {name: rows_of(runs[name], paper_objects()) for name in names}
     fig, ax = plt.subplots(figsize=(8.5, 4.2), layout="constrained")
     for k, (column, colour, label) in enumerate(
         (("accuracy", C_OURS, "ours"), ("accuracy_line", C_LINE, "the paper's method"))
     ):
         stats = []
         for name in names:
-            ok = _ok(selected[name])
-            values = 100 * _column(ok, column)[_abs_theta(ok) < UP_TO_DEG]
+            ok = without_errors(selected[name])
+            values = 100 * column_values(ok, column)[abs_tilts(ok) < UP_TO_DEG]
             stats.append(mean_ci(values[np.isfinite(values)]))
         x = np.arange(len(names)) + (k - 0.5) * 0.38
         means = np.array([c.mean for c in stats])
@@ -137,7 +141,7 @@ def sources_figure(runs: dict[str, Sequence[dict]], path) -> None:
                yerr=np.nan_to_num(np.clip(err, 0, None)), capsize=3)  # fmt: skip
     for i, name in enumerate(names):
         rows = selected[name]
-        failed = len(rows) - len(_ok(rows))
+        failed = len(rows) - len(without_errors(rows))
         ax.text(i, 80.5, f"{failed}/{len(rows)}\nrefused", ha="center", fontsize=8)
     ax.set_xticks(np.arange(len(names)), [n.replace("ideal+", "+") for n in names],
                   rotation=25, ha="right")  # fmt: skip

@@ -13,17 +13,17 @@ from comgrasp_pin.experiments.report.calibration import calibration_table
 from comgrasp_pin.experiments.report.common import (
     NOT_RECORDED,
     PAPER_RANGE_DEG,
-    _abs_theta,
-    _column,
-    _float,
-    _group,
-    _natural,
-    _ok,
-    _select,
+    abs_tilts,
+    as_float,
+    column_values,
     describe,
     internal_error_note,
+    natural_key,
     object_groups,
+    objects_in,
     outcomes,
+    rows_of,
+    without_errors,
 )
 from comgrasp_pin.experiments.report.regrasp import (
     TARGET_BELOW_10,
@@ -62,9 +62,9 @@ def error_source(row: dict) -> str:
 def accuracy_verdict(rows: Sequence[dict], objects: Sequence[str] | None = None) -> str:
     """Markdown: every object against the paper's obj1 curve (the better of its two) and
     the project's aims, the failed grasps, and the error behind each poor grasp."""
-    objects = _group(rows, objects)
-    rows = _select(rows, objects)
-    ok = _ok(rows)
+    objects = objects_in(rows, objects)
+    rows = rows_of(rows, objects)
+    ok = without_errors(rows)
     lines = [
         "| object | grasps (failed) | mean, tilt < 10° | mean, 10–30° | worst bin vs paper obj1 "
         "(≤ 30°) | above paper in every bin |",
@@ -75,8 +75,8 @@ def accuracy_verdict(rows: Sequence[dict], objects: Sequence[str] | None = None)
         failed = sum(1 for r in rows if r["object"] == obj and r.get("error"))
         if not sel and not failed:
             continue
-        theta = _abs_theta(sel) if sel else np.zeros(0)
-        acc = 100 * _column(sel, "accuracy") if sel else np.zeros(0)
+        theta = abs_tilts(sel) if sel else np.zeros(0)
+        acc = 100 * column_values(sel, "accuracy") if sel else np.zeros(0)
         low, mid = acc[theta < 10.0], acc[(theta >= 10.0) & (theta <= PAPER_RANGE_DEG)]
         margins = []
         for lo, hi, mean, n in binned_mean(theta, acc):
@@ -117,8 +117,8 @@ def regrasp_verdict(
 ) -> str:
     """Markdown: the regrasp method against the paper and the project's aim, and why the
     failed trials failed (their recorded reason or error)."""
-    objects = _group(rows, objects)
-    rows = _select(rows, objects)
+    objects = objects_in(rows, objects)
+    rows = rows_of(rows, objects)
     if not rows:
         return "No pick-and-place trials of these objects."
     rates = success_rates(rows)
@@ -143,7 +143,7 @@ def regrasp_verdict(
         )
     reasons: dict[tuple[str, str], int] = {}
     for r in rows:
-        failed = r.get("error") or not int(_float(r.get("success")) == 1)
+        failed = r.get("error") or not int(as_float(r.get("success")) == 1)
         if not failed:
             continue
         why = str(r.get("error") or r.get("reason") or "?")
@@ -173,7 +173,7 @@ def run_summary(acc: Sequence[dict], reg: Sequence[dict], seed: int | None = Non
     acc, reg = outcomes(acc), outcomes(reg)
     rows = list(acc) + list(reg)
     seeds = sorted(
-        {int(_float(r["seed"])) // 100_000 for r in rows if np.isfinite(_float(r.get("seed")))}
+        {int(as_float(r["seed"])) // 100_000 for r in rows if np.isfinite(as_float(r.get("seed")))}
     )
     if not seeds and seed is not None:
         seeds = [int(seed)]
@@ -207,7 +207,7 @@ def extra_objects_section(acc: Sequence[dict], reg: Sequence[dict]) -> str:
     world, calibration, pick and place, the extra pose. Their accuracy and success rates are
     in the experiments' tables, apart from the paper's six."""
     extra = sorted(
-        set(object_groups(list(acc))[1]) | set(object_groups(list(reg))[1]), key=_natural
+        set(object_groups(list(acc))[1]) | set(object_groups(list(reg))[1]), key=natural_key
     )
     if not extra:
         return "No extra objects in this run."

@@ -16,12 +16,12 @@ import numpy as np
 from comgrasp_pin.experiments.report.common import (
     NOT_RECORDED,
     TIE_POINTS,
-    _abs_theta,
-    _column,
-    _ok,
-    _select,
+    abs_tilts,
+    column_values,
     object_groups,
     recorded,
+    rows_of,
+    without_errors,
 )
 from comgrasp_pin.experiments.report.sensors import UP_TO_DEG
 from comgrasp_pin.experiments.stats import calibration, mean_ci, paired_difference, z_scores
@@ -34,13 +34,16 @@ def _mean(values: np.ndarray) -> str:
 
 def _row(name: str, rows: Sequence[dict]) -> tuple[str, str]:
     """A table row of ``rows`` (one object, or the group) below 30°, and its verdict."""
-    low = _abs_theta(rows) < UP_TO_DEG
-    joints, wrench = _column(rows, "accuracy")[low], _column(rows, "accuracy_wrench")[low]
-    both = _column(rows, "accuracy_both")[low]
-    z = z_scores(*(_column(rows, c)[low] for c in ("pos_esti_wrench_m", "pos_real_m",
+    low = abs_tilts(rows) < UP_TO_DEG
+    joints, wrench = (
+        column_values(rows, "accuracy")[low],
+        column_values(rows, "accuracy_wrench")[low],
+    )
+    both = column_values(rows, "accuracy_both")[low]
+    z = z_scores(*(column_values(rows, c)[low] for c in ("pos_esti_wrench_m", "pos_real_m",
                                                      "pos_std_wrench_m")))  # fmt: skip
     cal = calibration(z)
-    share = _column(rows, "wrench_share_com")[low]
+    share = column_values(rows, "wrench_share_com")[low]
     share = share[np.isfinite(share)]
     pd = paired_difference(100 * wrench, 100 * joints, tie=TIE_POINTS)
     d = pd.diff
@@ -64,7 +67,7 @@ def wrist_sensor_table(rows: Sequence[dict], objects: Sequence[str] | None = Non
     both on the same grasps; the wrench minus the joint torques (paired, 95 % t interval);
     the wrench's interval's coverage and rms z; the wrench's share of the information on the
     CoM along the rod with both; and whether the wrench is at least as accurate."""
-    ok = _ok(rows)
+    ok = without_errors(rows)
     if not recorded(ok, "accuracy_wrench"):
         return f"The wrist sensor's estimate (`accuracy_wrench`): {NOT_RECORDED}."
     groups = [objects] if objects is not None else [g for g in object_groups(ok) if g]
@@ -83,10 +86,10 @@ def wrist_sensor_table(rows: Sequence[dict], objects: Sequence[str] | None = Non
     verdicts = []
     for group in groups:
         for obj in group:
-            line, verdict = _row(obj, _select(ok, [obj]))
+            line, verdict = _row(obj, rows_of(ok, [obj]))
             lines.append(line)
             verdicts.append((obj, verdict))
-        lines.append(_row(f"all of {', '.join(group)}", _select(ok, group))[0])
+        lines.append(_row(f"all of {', '.join(group)}", rows_of(ok, group))[0])
     judged = [(obj, v) for obj, v in verdicts if v != "–"]
     worse = [obj for obj, v in judged if v == "less"]
     lines += [
