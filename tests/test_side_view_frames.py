@@ -172,20 +172,32 @@ def test_a_flat_bar_is_measured_within_the_contract(ur5, flat_bar, seed):
         assert all(e[1] < 0.5 and e[2] < 1.5e-3 for e in errors), errors
 
 
-def test_a_handle_no_model_fits_is_still_refused(ur5):
-    """A round handle (obj2) whose noisy surface is rippled by 4 mm along the rod (what no
-    cylinder and no flat face is) is refused as untrusted, not measured wrong."""
+@pytest.mark.parametrize(("kind", "amplitude"), [("ripple", 4e-3), ("ripple", 1.5e-2),
+                                                  ("steps", 8e-3)])  # fmt: skip
+def test_a_handle_no_model_fits_is_refused_or_measured_within_the_contract(ur5, kind, amplitude):
+    """A round handle (obj2) whose noisy surface is rippled along the rod, or stepped in a
+    checkerboard, by millimetres (what no cylinder and no flat face is) is never measured
+    wrong: refused as untrusted, or within the contract (the cleaning and the fit's inliers
+    see through it: measured, 2.1 mm and 0.16 deg off at the 15 mm ripple)."""
     sim, rig, place = _held_rod_scene(ur5, "obj2")
     try:
-        place(15.0, 0.02)
+        T_ee_obj = place(15.0, 0.02)
         depth = rig.depth(sim.data, SIDE_CAMERA)
         T_ee_cam, rest = _inputs(ur5, sim, rig, "obj2")
         noise = realistic("side", 4)
-        cols = np.arange(depth.shape[1])
-        rippled = depth + 4e-3 * np.sin(2 * np.pi * cols / 12.0)[None, :]
-        with pytest.raises(UntrustedImageError):
-            observe_held_rod(None, noise.apply(rippled), rig.intrinsics(SIDE_CAMERA),
-                             T_ee_cam @ noise.T_cam_calibrated, *rest)  # fmt: skip
+        rows, cols = np.indices(depth.shape)
+        pattern = (np.sin(2 * np.pi * cols / 12.0) if kind == "ripple"
+                   else np.sign(np.sin(2 * np.pi * (rows + cols) / 16.0)))  # fmt: skip
+        near = np.isfinite(depth) & (depth < 0.36)  # the held rod and the fingers
+        corrupted = noise.apply(depth + np.where(near, amplitude * pattern, 0.0))
+        T_cam = T_ee_cam @ noise.T_cam_calibrated
+        try:
+            view = observe_held_rod(None, corrupted, rig.intrinsics(SIDE_CAMERA), T_cam, *rest)
+        except UntrustedImageError:
+            return
+        T_seen = T_cam @ np.linalg.inv(T_ee_cam) @ T_ee_obj
+        tilt_err, axis_err, _ = _side_view_errors(view, T_seen, 0.02)
+        assert np.degrees(tilt_err) < TILT_BOUND_DEG and axis_err < POSITION_BOUND
     finally:
         rig.close()
 
@@ -239,3 +251,17 @@ def test_the_simulated_frames_each_have_their_own_noise_and_the_episodes_calibra
         twin.close()
     finally:
         rig.close()
+
+
+def test_a_round_handle_its_noise_misfits_is_measured_within_its_interval():
+    """The torch (obj4, a 4 cm body), realistic accuracy trial 14 of seed 0: its handle's
+    points misfit the cylinder by 1.2 times the depth's noise in every side view (the fit
+    within 0.2 deg of the truth), which ``rod_axis.MISFIT_NOISE`` (1.5) allows: measured,
+    the CoM within its interval of the simulator's truth."""
+    from comgrasp_pin.experiments.trials import accuracy_trial, trial_seed
+
+    row = accuracy_trial({"object": "obj4", "trial": 14, "method": "trial",
+                          "seed": trial_seed(0, "obj4", 14), "sensors": "realistic"})  # fmt: skip
+    assert not row.get("error"), row.get("error")
+    z = (row["pos_esti_m"] - row["pos_real_m"]) / row["pos_std_m"]
+    assert abs(z) < 3.0 and row["accuracy"] > 0.9, (z, row["accuracy"])
