@@ -29,7 +29,7 @@ MIN_EXTENT = 0.05  # a held rod is at least this long in view (m)
 MAX_SLICE_BIAS_DEG = 1.0
 """Where no cylinder fits a noisy image, the slice line is taken for a handle whose slice
 centres' bias scale (``slice_bias``, which then joins the tilt's std: the slice line's
-measured rms error is 0.66-0.74 of it) is at most this: no more than the fitted cylinders
+measured rms error is 0.56-0.74 of it) is at most this: no more than the fitted cylinders
 err on thin handles (0.4-0.5 deg rms on 1 and 2 cm handles in the realistic preset).
 Thicker handles are refused there."""
 
@@ -184,7 +184,7 @@ def slice_bias(
     distance D from the camera to the axis. An empirical scale, measured against the
     simulator's truth on realistic side views (50 accuracy grasps each, D = 0.31 m): the
     slice line's tilt errs by 0.54, 1.07, 1.62 and 2.38 deg rms for r = 5, 10, 20 and
-    25 mm, 0.66-0.74 of (pi/4) r / D. Infinite without a radius.
+    25 mm, 0.56-0.74 of (pi/4) r / D. Infinite without a radius.
     """
     if not radius:
         return float("inf")
