@@ -25,8 +25,8 @@ MISFIT_NOISE = 1.5  # ... or, in a noisy image, this many times its depth noise 
 """Measured against the simulator's truth on realistic side views (50 grasps an object):
 round handles' cylinders that misfit by 1.0-1.35 times the noise (obj4, obj5, 4-5 cm) are
 within 0.2 deg of the truth; at about 2 times, other parts are among the handle's points
-(obj2's head: 3 deg off). At 1.0 (before), obj4 lost 3 of 50 grasps, obj5 2, to refused
-views; at 1.5, 1 and 1, with the same accuracy below 30 deg (paired: +0.03 +- 0.05 points)."""
+(obj2's head: 3 deg off). At 1.0 obj4 lost 3 of 50 grasps, obj5 2, to refused views;
+at 1.5, 1 and 1, with the same accuracy below 30 deg (paired: +0.03 +- 0.05 points)."""
 MAX_REFINE_TURN_DEG = 8.0  # a cylinder this far from the slice line locked on a wrong side
 MAX_REFINE_SHIFT = 0.01  # the same, for its offset (m)
 RADIUS_GIVE = np.arange(0.25, 2.01, 0.25) * 1e-3  # the handle's radius above the fingers' (m)
