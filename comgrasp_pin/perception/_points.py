@@ -89,6 +89,17 @@ def border_pixels(blob: np.ndarray) -> np.ndarray:
     return edge
 
 
+def opened_blobs(mask: np.ndarray) -> tuple[int, np.ndarray, np.ndarray]:
+    """(count, labels, stats) of ``mask``'s 8-connected blobs after a 3 x 3 opening.
+
+    As ``cv2.connectedComponentsWithStats`` gives them (label 0 the background): the
+    opening removes specks and one-pixel bridges before the blobs are counted.
+    """
+    opened = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(opened, connectivity=8)
+    return count, labels, stats
+
+
 def largest_component(mask: np.ndarray, min_pixels: int, what: str) -> np.ndarray:
     """The largest connected blob of ``mask`` after a small opening, and what it cut off.
 
@@ -98,15 +109,13 @@ def largest_component(mask: np.ndarray, min_pixels: int, what: str) -> np.ndarra
     ObjectNotFoundError if there is none. Whether it touches the image's border is the
     caller's to judge (the top view counts other objects first: ``standing.segment``).
     """
-    raw = mask.astype(np.uint8)
-    opened = cv2.morphologyEx(raw, cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(opened, connectivity=8)
+    count, labels, stats = opened_blobs(mask)
     if count <= 1 or stats[1:, cv2.CC_STAT_AREA].max() < min_pixels:
         raise ObjectNotFoundError(f"no object found in the {what} (fewer than {min_pixels} px)")
     best = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
-    _, raw_labels = cv2.connectedComponents(raw, connectivity=8)
+    _, raw_labels = cv2.connectedComponents(mask.astype(np.uint8), connectivity=8)
     seed = tuple(np.argwhere(labels == best)[0])  # a pixel of the largest opened blob
-    return (raw_labels == raw_labels[seed]) & (opened > 0)
+    return (raw_labels == raw_labels[seed]) & (labels > 0)
 
 
 def blobs(mask: np.ndarray, min_pixels: int, what: str, min_blob: int = 20) -> np.ndarray:
@@ -115,8 +124,7 @@ def blobs(mask: np.ndarray, min_pixels: int, what: str, min_blob: int = 20) -> n
     An object split by an occluder (e.g. the near finger) thus stays whole.
     ObjectNotFoundError if fewer than ``min_pixels`` remain.
     """
-    mask = cv2.morphologyEx(mask.astype(np.uint8), cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    _, labels, stats = opened_blobs(mask)
     big = 1 + np.flatnonzero(stats[1:, cv2.CC_STAT_AREA] >= min_blob)
     kept = np.isin(labels, big)
     if kept.sum() < min_pixels:

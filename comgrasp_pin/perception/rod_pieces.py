@@ -14,12 +14,13 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from comgrasp_pin.perception._points import opened_blobs
+
 MAX_OFFSET = 0.015  # m: a piece's centroid this near the rod's axis lies on it ...
 MAX_GAP = 0.05  # ... and one this far at most beyond the rod's end (m) may be part of it
 BRIDGE_SHARE = 0.5  # ... when the gap's mean height is this share of the lower piece's
 MIN_BRIDGE_HALF_WIDTH = 0.004  # m: the gap is looked at this far either side of the axis
 MIN_PIECE = 10  # px: a smaller blob is noise
-_KERNEL3 = np.ones((3, 3), np.uint8)
 
 
 def join_pieces(points: np.ndarray, standing: np.ndarray, mask: np.ndarray,
@@ -30,8 +31,7 @@ def join_pieces(points: np.ndarray, standing: np.ndarray, mask: np.ndarray,
     bool, what stands on the table in the pick area; ``mask``: the rod's largest blob;
     ``table_z``: the table's height (m). Blobs of MIN_PIECE pixels or more are looked at.
     """
-    opened = cv2.morphologyEx(standing.astype(np.uint8), cv2.MORPH_OPEN, _KERNEL3)
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(opened, connectivity=8)
+    count, labels, stats = opened_blobs(standing)
     mask, bridge = mask.copy(), np.zeros_like(mask)
     pieces = [k for k in range(1, count) if stats[k, cv2.CC_STAT_AREA] >= MIN_PIECE
               and not np.any(mask[labels == k])]  # fmt: skip

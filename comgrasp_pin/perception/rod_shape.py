@@ -12,6 +12,7 @@ import cv2
 import numpy as np
 
 from comgrasp_pin.errors import AmbiguousObjectError, ClutterError
+from comgrasp_pin.perception._points import opened_blobs
 
 SECOND_OBJECT = 0.05  # another blob of this share of the rod's pixels is another object
 CLUTTER_OBJECTS = 3  # this many objects (or piles) in the pick area are clutter
@@ -50,8 +51,7 @@ def check_one_object(standing: np.ndarray, blob: np.ndarray, min_pixels: int = 4
     CLUTTER_OBJECTS or more lie there. ``at_edge``: (H, W) bool, what stands and reaches the
     image's edge (``reaching_border``): blobs on it are named as the robot's own parts.
     """
-    mask = cv2.morphologyEx(standing.astype(np.uint8), cv2.MORPH_OPEN, np.ones((3, 3), np.uint8))
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    count, labels, stats = opened_blobs(standing)
     area = int(blob.sum())
     own = set(np.unique(labels[blob & (labels > 0)]).tolist())
     least = max(min_pixels, SECOND_OBJECT * area)

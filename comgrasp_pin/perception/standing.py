@@ -49,7 +49,7 @@ def segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, np
     """
     z = view.points[..., 2]
     inside = in_area(view.points, pick_area, EDGE_BAND) & np.isfinite(z)
-    min_height = max(MIN_HEIGHT, HEIGHT_SIGMAS * view.noise)
+    min_height = stands_at(view)
     standing = (z > view.table_z + min_height) & (z < view.table_z + MAX_HEIGHT)
     in_depth = standing
     if view.cleaned and rgb is not None:
@@ -79,6 +79,14 @@ def segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, np
             )
     mask, rod_standing = over_the_edge(view, mask, inside, standing, in_depth, min_height)
     return mask, rod_standing, standing & ~in_depth, bool(border_pixels(mask).any())
+
+
+def stands_at(view: TableView) -> float:
+    """The height above the table at which a pixel stands (m).
+
+    MIN_HEIGHT, or HEIGHT_SIGMAS of the camera's noise where that is higher.
+    """
+    return max(MIN_HEIGHT, HEIGHT_SIGMAS * view.noise)
 
 
 def closed(mask: np.ndarray) -> np.ndarray:

@@ -46,6 +46,7 @@ from comgrasp_pin.perception.standing import (  # noqa: F401 (the thresholds' na
     MIN_PIXELS,
     ColourNoHelp,
     segment,
+    stands_at,
 )
 from comgrasp_pin.perception.table_view import (
     TableView,
@@ -153,11 +154,11 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
     direction = vt[0]
     check_one_rod(view.points[mask], centroid, direction, view.table_z, view.points_noise,
                   measured)  # fmt: skip
+    threshold = stands_at(view)
     if view.cleaned:
         area = in_area(view.points, pick_area, EDGE_BAND)
         table = area & ~cv2.dilate(standing.astype(np.uint8), THIN_PART_CLEAR).astype(bool)
         height = view.points[..., 2] - view.table_z
-        threshold = max(MIN_HEIGHT, HEIGHT_SIGMAS * view.noise)
         # only what is too low to stand: what stands is the object or another one
         low = area & ~robot_parts(height, threshold, pixel) & ~(height > threshold)
         check_no_thin_part(np.where(low, height, np.nan), mask, table, 1.0 / pixel)
@@ -165,8 +166,7 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
     lo, hi = np.percentile(along, [0.02, 99.98])
     if view.cleaned:
         check_ends_seen(view.points, standing, mask, centroid, direction, (lo, hi), p)
-    check_no_dip(view, pick_area, centroid, direction, (lo, hi), p,
-                 max(MIN_HEIGHT, HEIGHT_SIGMAS * view.noise))  # fmt: skip
+    check_no_dip(view, pick_area, centroid, direction, (lo, hi), p, threshold)
     centre = centroid + 0.5 * (lo + hi) * direction
     near_centre = np.abs(along - 0.5 * (lo + hi)) < 0.01
     heights = p[near_centre, 2] - view.table_z if near_centre.any() else p[:, 2] - view.table_z
