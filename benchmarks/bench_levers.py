@@ -103,31 +103,39 @@ def compare(csv_path: Path, path: str, values, experiment: str) -> dict:
            "outcome": {str(v): _outcome(at[v], experiment) for v in values}}  # fmt: skip
     out["wall_ratio_current_over_lever"] = (out["speed"][str(base)]["wall_s_per_trial"]
                                             / out["speed"][str(lever)]["wall_s_per_trial"])  # fmt: skip
+    out["paired"] = paired(at[base], at[lever], experiment)
+    return out
+
+
+def paired(base: list[dict], lever: list[dict], experiment: str, below_deg: float = 90.0) -> dict:
+    """The paired differences of two runs of the same trials (matched by object, trial and
+    method): accuracy (lever - base, points, t interval; over the grasps both measured whose
+    base tilt is below ``below_deg``) and the tilt's moves, or pick-and-place's flips."""
     key = ("object", "trial", "method")
-    pairs = {}
-    for v in values:
-        for r in at[v]:
-            pairs.setdefault(tuple(r[k] for k in key), {})[v] = r
+    pairs: dict = {}
+    for name, rows in (("base", base), ("lever", lever)):
+        for r in rows:
+            pairs.setdefault(tuple(r[k] for k in key), {})[name] = r
     both = [p for p in pairs.values() if len(p) == 2]
     if experiment == "accuracy":
-        a = np.array([_f(p[lever], "accuracy") for p in both])
-        b = np.array([_f(p[base], "accuracy") for p in both])
+        both = [p for p in both if abs(_f(p["base"], "theta_deg")) < below_deg
+                or not np.isfinite(_f(p["base"], "theta_deg"))]  # fmt: skip
+        a = np.array([_f(p["lever"], "accuracy") for p in both])
+        b = np.array([_f(p["base"], "accuracy") for p in both])
         d = paired_difference(100 * a, 100 * b)
-        tilt = np.array([abs(_f(p[lever], "theta_true_deg") - _f(p[base], "theta_true_deg"))
+        tilt = np.array([abs(_f(p["lever"], "theta_true_deg") - _f(p["base"], "theta_true_deg"))
                          for p in both])  # fmt: skip
         tilt = tilt[np.isfinite(tilt)]
-        out["paired"] = {"accuracy_diff_pct": [d.diff.mean, d.diff.lo, d.diff.hi, d.diff.n],
-                         "lever_better": d.a_better, "current_better": d.b_better,
-                         "tilt_change_deg_median": float(np.median(tilt)) if len(tilt) else None,
-                         "tilt_changed_over_5deg": int(np.sum(tilt > 5.0))}  # fmt: skip
-    else:
-        flips = {m: [0, 0] for m in ("baseline", "regrasp")}
-        for p in both:
-            s0, s1 = _f(p[base], "success"), _f(p[lever], "success")
-            if s0 != s1:
-                flips[p[base]["method"]][int(s1 == 1)] += 1
-        out["paired"] = {"flipped_to_failure_and_to_success": flips}
-    return out
+        return {"accuracy_diff_pct": [d.diff.mean, d.diff.lo, d.diff.hi, d.diff.n],
+                "lever_better": d.a_better, "current_better": d.b_better,
+                "tilt_change_deg_median": float(np.median(tilt)) if len(tilt) else None,
+                "tilt_changed_over_5deg": int(np.sum(tilt > 5.0))}  # fmt: skip
+    flips = {m: [0, 0] for m in ("baseline", "regrasp")}
+    for p in both:
+        s0, s1 = _f(p["base"], "success"), _f(p["lever"], "success")
+        if s0 != s1:
+            flips[p["base"]["method"]][int(s1 == 1)] += 1
+    return {"flipped_to_failure_and_to_success": flips, "pairs": len(both)}
 
 
 def main() -> None:

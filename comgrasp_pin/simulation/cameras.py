@@ -7,6 +7,7 @@ converted to the optical frame used by all perception code (x right, y down, z f
 from __future__ import annotations
 
 import hashlib
+from contextlib import contextmanager
 
 import mujoco
 import numpy as np
@@ -127,7 +128,7 @@ class CameraRig:
         self.height = height
         self.noise = dict(noise or {})
         self.shadows = shadows
-        self._renderers: dict[bool, mujoco.Renderer] = {}  # by depth (True) or not
+        self._renderers: dict[tuple[bool, int], mujoco.Renderer] = {}  # by depth, stride
         self._closed = False
         self._digest: str | None = None  # assets_digest(model), when first needed
 
@@ -139,21 +140,23 @@ class CameraRig:
     def close(self) -> None:
         """Hand the renderers back for reuse; the rig must not render afterwards."""
         for renderer in self._renderers.values():
-            key = _assets_key(self.model, self.width, self.height, renderer.samples,
+            key = _assets_key(self.model, renderer.width, renderer.height, renderer.samples,
                               self._assets_digest())  # fmt: skip
             _IDLE_RENDERERS.setdefault(key, []).append(renderer)
         self._renderers.clear()
         self._closed = True
 
-    def _renderer(self, depth: bool) -> mujoco.Renderer:
-        """The rig's renderer for depth (no multisampling) or for colour and segmentation."""
+    def _renderer(self, depth: bool, stride: int = 1) -> mujoco.Renderer:
+        """The rig's renderer for depth (no multisampling) or for colour and segmentation,
+        of the image's size or, ``stride`` > 1, of its every stride-th pixel's."""
         if self._closed:
             raise ComGraspError("the camera rig was closed: it renders no more")
-        if depth not in self._renderers:
+        if (depth, stride) not in self._renderers:
             samples = DEPTH_SAMPLES if depth else None
-            self._renderers[depth] = _take_renderer(self.model, self.width, self.height, samples,
-                                                    self._assets_digest())  # fmt: skip
-        return self._renderers[depth]
+            width, height = -(-self.width // stride), -(-self.height // stride)
+            self._renderers[depth, stride] = _take_renderer(self.model, width, height, samples,
+                                                            self._assets_digest())  # fmt: skip
+        return self._renderers[depth, stride]
 
     def intrinsics(self, camera: str) -> PinholeCamera:
         """Pinhole intrinsics of ``camera`` at the rig's image size."""
@@ -168,15 +171,21 @@ class CameraRig:
         T[:3, 3] = data.cam_xpos[cam]
         return T
 
-    def _render(self, data: mujoco.MjData, camera: str, depth=False, segmentation=False):
-        r = self._renderer(depth)
+    def _render(
+        self, data: mujoco.MjData, camera: str, depth=False, segmentation=False, stride: int = 1
+    ):
+        r = self._renderer(depth, stride)
         r.disable_depth_rendering()
         r.disable_segmentation_rendering()
         if depth:
             r.enable_depth_rendering()
         if segmentation:
             r.enable_segmentation_rendering()
-        r.update_scene(data, camera)
+        if stride == 1:
+            r.update_scene(data, camera)
+        else:  # the scene's camera keeps the frustum update_scene gives it
+            with sampling_every(self.model, camera, self.intrinsics(camera), stride):
+                r.update_scene(data, camera)
         r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = self.shadows  # renderers are shared
         image = r.render()  # a new array each call
         r.disable_depth_rendering()
@@ -190,11 +199,11 @@ class CameraRig:
     def depth(self, data: mujoco.MjData, camera: str, stride: int = 1) -> np.ndarray:
         """(H, W) float z-depth along the optical axis (m); ``inf`` where nothing is seen,
         and, with the camera's ``noise``, 0 or inf where the sensor lost the pixel.
-        ``stride`` > 1: every stride-th pixel of each row and column of that image."""
-        rendered = self._render(data, camera, depth=True)  # float32 (H, W)
+        ``stride`` > 1: every stride-th pixel of each row and column of that image, and only
+        they are rendered (``sampling_every``) and given the camera's errors
+        (``DepthNoise.apply``)."""
+        rendered = self._render(data, camera, depth=True, stride=stride)  # float32
         noise = self.noise.get(camera)
-        if noise is None:  # only the pixels kept are converted
-            rendered = rendered[::stride, ::stride]
         depth = rendered.astype(float)
         depth[depth >= self.model.vis.map.zfar * self.model.stat.extent * 0.999] = np.inf
         return depth if noise is None else noise.apply(depth, stride)
@@ -211,3 +220,33 @@ class CameraRig:
         ids = seg[:, :, 0].astype(int)
         ids[seg[:, :, 1] != int(mujoco.mjtObj.mjOBJ_GEOM)] = -1
         return ids
+
+
+@contextmanager
+def sampling_every(model: mujoco.MjModel, camera: str, image: PinholeCamera, stride: int):
+    """``camera`` set up, inside the block, to image every ``stride``-th pixel of each row
+    and column of ``image`` (its intrinsics at the full size), each at that pixel's centre.
+
+    MuJoCo's intrinsic camera (``cam_sensorsize``, ``cam_intrinsic``: focal lengths and the
+    principal point's offset from the sensor's centre, here in the full image's pixels): the
+    sensor spans the sampled pixels' own pixels, ``stride`` full pixels each, its first one
+    centred on the full image's first. A render of ``-(-width // stride)`` by ``-(-height //
+    stride)`` pixels then holds ``full[::stride, ::stride]``, up to the float rounding of
+    another projection (tests/test_cameras.py measures it). The model's camera is restored
+    on leaving.
+    """
+    cam = model.camera(camera).id
+    kept = (model.cam_sensorsize[cam].copy(), model.cam_intrinsic[cam].copy(),
+            model.cam_resolution[cam].copy())  # fmt: skip
+    sampled = image.subsampled(stride)
+    # The sampled sensor's left (top) edge lies half a sampled pixel before the first centre.
+    left, top = 0.5 - stride / 2, 0.5 - stride / 2
+    shift_x = left + stride * sampled.width / 2 - image.width / 2
+    shift_y = top + stride * sampled.height / 2 - image.height / 2
+    try:
+        model.cam_sensorsize[cam] = [stride * sampled.width, stride * sampled.height]
+        model.cam_intrinsic[cam] = [image.fx, image.fy, shift_x, shift_y]
+        model.cam_resolution[cam] = [sampled.width, sampled.height]
+        yield
+    finally:
+        model.cam_sensorsize[cam], model.cam_intrinsic[cam], model.cam_resolution[cam] = kept

@@ -49,26 +49,33 @@ class DepthNoise:
 
     def apply(self, depth: np.ndarray, stride: int = 1) -> np.ndarray:
         """(H, W) corrupted copy of the rendered z-depth (m, inf = no return); lost pixels
-        are 0 or inf. ``stride`` > 1: only every stride-th pixel of each row and column,
-        ``apply(depth)[::stride, ::stride]`` to the bit (the edges, the correlated noise and
-        the random draws are made over the whole image; the per-pixel arithmetic only where
-        it is kept)."""
-        c, k = self.config, (slice(None, None, stride),) * 2
+        are 0 or inf.
+
+        ``stride`` > 1: ``depth`` holds every stride-th pixel of each row and column of the
+        camera's image (``CameraRig.depth`` renders only them), and the errors are drawn for
+        these pixels alone, at the camera's scales: the noise's correlation
+        (``noise_corr_px``) is ``stride`` times shorter in this image's pixels, and so is the
+        edge band, where a pixel beside a depth step lies in the band with probability
+        ``edge_band_px / stride`` when that is below 1 (the step can fall anywhere among the
+        ``stride`` camera pixels between two of these).
+        """
+        c = self.config
         finite = np.isfinite(depth) & (depth > 0)
         far = np.where(finite, depth, _FAR).astype(np.float32)
         near_side, far_side = cv2.erode(far, _KERNEL), cv2.dilate(far, _KERNEL)  # float32
         edge = np.subtract(far_side, near_side, dtype=float) > c.edge_jump
-        if c.edge_band_px > 1:
-            size = 2 * c.edge_band_px - 1
+        band = -(-c.edge_band_px // stride)  # in this image's pixels, rounded up
+        if band > 1:
+            size = 2 * band - 1
             edge = cv2.dilate(edge.astype(np.uint8), np.ones((size, size), np.uint8)) > 0
-        white = self._white(depth.shape)
-        u, mix = self._uniform(depth.shape, stride), self._uniform(depth.shape, stride)
-        dropped = ~edge[k] & (self._uniform(depth.shape, stride) < c.dropout_prob)
-        depth, finite, edge = depth[k], finite[k], edge[k]
-        near_side, far_side = near_side[k], far_side[k]
+        white = self._white(depth.shape, stride)
+        u, mix = self._rng.random(depth.shape), self._rng.random(depth.shape)
+        dropped = ~edge & (self._rng.random(depth.shape) < c.dropout_prob)
+        if c.edge_band_px < stride:  # a band narrower than this image's pixel
+            edge &= self._rng.random(depth.shape) < c.edge_band_px / stride
         out = np.where(finite, depth * self.scale, np.inf)
         if white is not None:
-            out += self._axial_noise(white[k], np.where(finite, depth, 0.0))
+            out += self._axial_noise(white, np.where(finite, depth, 0.0))
         lost = edge & (u < c.edge_hole_prob)
         flying = edge & ~lost & (u < c.edge_hole_prob + c.flying_prob) & (far_side < _FAR)
         near, span = near_side[flying].astype(float), far_side[flying].astype(float)
@@ -82,33 +89,31 @@ class DepthNoise:
             np.copyto(out, steps, where=valid)
         return out
 
-    def _uniform(self, shape: tuple[int, int], stride: int) -> np.ndarray:
-        """``rng.random(shape)[::stride, ::stride]``, the generator left in the same state.
+    def _white(self, shape: tuple[int, ...], stride: int) -> np.ndarray | None:
+        """(H, W) float32 unit noise, correlated over ``noise_corr_px`` camera pixels (a
+        Gaussian blur's sigma), on every ``stride``-th camera pixel of each row and column;
+        None without axial noise.
 
-        Each double takes one 64-bit draw of the PCG64 stream: the rows left out are
-        skipped by advancing the stream past them (tests/test_fast_paths.py).
+        On the sampled pixels the blurred field's neighbours are ``stride`` camera pixels
+        apart: a three-tap kernel (a, 1, a) along rows and columns gives them the camera's
+        correlation at that lag (``_lag_correlation``; 2a / (1 + 2a^2) = rho), and the next
+        ones about its value two lags away; above rho = 0.5 the blur's sigma divided by
+        ``stride`` does.
         """
-        if stride == 1:
-            return self._rng.random(shape)
-        h, w = shape
-        rows = np.empty(((h + stride - 1) // stride, w))
-        bits = self._rng.bit_generator
-        for i in range(len(rows)):
-            self._rng.random(out=rows[i])
-            bits.advance(min(stride - 1, h - 1 - i * stride) * w)
-        return rows[:, ::stride]
-
-    def _white(self, shape: tuple[int, ...]) -> np.ndarray | None:
-        """(H, W) float32 unit noise, correlated over ``noise_corr_px`` pixels; None
-        without axial noise."""
         c = self.config
         if c.focal_px <= 0 or c.baseline <= 0:
             return None
         white: np.ndarray = self._rng.standard_normal(shape).astype(np.float32)
-        if c.noise_corr_px > 0:
-            blurred = cv2.GaussianBlur(white, (0, 0), c.noise_corr_px)
-            white = blurred / max(float(blurred.std()), 1e-12)
-        return white
+        if c.noise_corr_px <= 0:
+            return white
+        rho = _lag_correlation(c.noise_corr_px, stride)
+        if stride == 1 or rho > 0.5:
+            blurred = cv2.GaussianBlur(white, (0, 0), c.noise_corr_px / stride)
+        else:
+            a = (1.0 - np.sqrt(1.0 - 2.0 * rho**2)) / (2.0 * rho) if rho > 0 else 0.0
+            taps = np.array([a, 1.0, a], np.float32)
+            blurred = cv2.sepFilter2D(white, -1, taps, taps, borderType=cv2.BORDER_REFLECT_101)
+        return blurred / max(float(blurred.std()), 1e-12)
 
     def _axial_noise(self, white: np.ndarray, depth: np.ndarray) -> np.ndarray:
         """(H, W) noise of RMS depth^2 * subpixel / (focal_px * baseline) (m), from the unit
@@ -118,3 +123,13 @@ class DepthNoise:
         noise *= depth
         noise *= depth
         return noise
+
+
+def _lag_correlation(sigma_px: float, lag: int) -> float:
+    """The correlation of white noise blurred by OpenCV's Gaussian of ``sigma_px`` between
+    pixels ``lag`` apart along a row (its kernel's autocorrelation)."""
+    size = int(round(sigma_px * 8 + 1)) | 1  # the kernel size GaussianBlur takes for float32
+    g = cv2.getGaussianKernel(size, sigma_px, cv2.CV_64F).ravel()
+    if lag >= size:
+        return 0.0
+    return float(g[lag:] @ g[: size - lag] / (g @ g))
