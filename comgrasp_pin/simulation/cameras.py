@@ -131,7 +131,7 @@ class CameraRig:
         self.height = height
         self.noise = dict(noise or {})
         self.shadows = shadows
-        self._renderers: dict[tuple[bool, int], mujoco.Renderer] = {}  # by depth, stride
+        self._renderers: dict[bool, mujoco.Renderer] = {}  # by depth (True) or not
         self._closed = False
         self._digest: str | None = None  # assets_digest(model), when first needed
 
@@ -143,23 +143,21 @@ class CameraRig:
     def close(self) -> None:
         """Hand the renderers back for reuse; the rig must not render afterwards."""
         for renderer in self._renderers.values():
-            key = _assets_key(self.model, renderer.width, renderer.height, renderer.samples,
+            key = _assets_key(self.model, self.width, self.height, renderer.samples,
                               self._assets_digest())  # fmt: skip
             _IDLE_RENDERERS.setdefault(key, []).append(renderer)
         self._renderers.clear()
         self._closed = True
 
-    def _renderer(self, depth: bool, stride: int = 1) -> mujoco.Renderer:
-        """The rig's renderer for depth (no multisampling) or for colour and segmentation,
-        of the image's size or, ``stride`` > 1, of its every stride-th pixel's."""
+    def _renderer(self, depth: bool) -> mujoco.Renderer:
+        """The rig's renderer for depth (no multisampling) or for colour and segmentation."""
         if self._closed:
             raise ComGraspError("the camera rig was closed: it renders no more")
-        if (depth, stride) not in self._renderers:
+        if depth not in self._renderers:
             samples = DEPTH_SAMPLES if depth else None
-            width, height = -(-self.width // stride), -(-self.height // stride)
-            self._renderers[depth, stride] = _take_renderer(self.model, width, height, samples,
-                                                            self._assets_digest())  # fmt: skip
-        return self._renderers[depth, stride]
+            self._renderers[depth] = _take_renderer(self.model, self.width, self.height, samples,
+                                                    self._assets_digest())  # fmt: skip
+        return self._renderers[depth]
 
     def intrinsics(self, camera: str) -> PinholeCamera:
         """Pinhole intrinsics of ``camera`` at the rig's image size."""
@@ -177,7 +175,7 @@ class CameraRig:
     def _render(
         self, data: mujoco.MjData, camera: str, depth=False, segmentation=False, stride: int = 1
     ):
-        r = self._renderer(depth, stride)
+        r = self._renderer(depth)
         r.disable_depth_rendering()
         r.disable_segmentation_rendering()
         if depth:
@@ -186,14 +184,20 @@ class CameraRig:
             r.enable_segmentation_rendering()
         if stride == 1:
             r.update_scene(data, camera)
+            image = self._draw(r)
         else:  # the scene's camera keeps the frustum update_scene gives it
             with sampling_every(self.model, camera, self.intrinsics(camera), stride):
                 r.update_scene(data, camera)
-        r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = self.shadows  # renderers are shared
-        image = r.render()  # a new array each call
+            sampled = self.intrinsics(camera).subsampled(stride)
+            with _viewport(r, sampled.width, sampled.height):
+                image = self._draw(r)
         r.disable_depth_rendering()
         r.disable_segmentation_rendering()
         return image
+
+    def _draw(self, r: mujoco.Renderer) -> np.ndarray:
+        r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = self.shadows  # renderers are shared
+        return r.render()  # a new array each call
 
     def rgb(self, data: mujoco.MjData, camera: str) -> np.ndarray:
         """(H, W, 3) uint8 RGB image."""
@@ -253,3 +257,18 @@ def sampling_every(model: mujoco.MjModel, camera: str, image: PinholeCamera, str
         yield
     finally:
         model.cam_sensorsize[cam], model.cam_intrinsic[cam], model.cam_resolution[cam] = kept
+
+
+@contextmanager
+def _viewport(renderer: mujoco.Renderer, width: int, height: int):
+    """``renderer`` drawing and reading, inside the block, the ``width`` by ``height``
+    corner of its framebuffer (a smaller image than it was made for; the attributes
+    ``mujoco.Renderer.render`` sizes its viewport and its array from). A renderer of its
+    own would hold another framebuffer, about 150 MB on a software OpenGL."""
+    kept = renderer._width, renderer._height, renderer._rect
+    try:
+        renderer._width, renderer._height = width, height
+        renderer._rect = mujoco.MjrRect(0, 0, width, height)
+        yield
+    finally:
+        renderer._width, renderer._height, renderer._rect = kept
