@@ -24,10 +24,9 @@ import os
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
-from bench_levers import OBJECTS, _outcome, _speed, paired
+from bench_levers import OBJECTS, _outcome, _speed, paired, write
 
 from comgrasp_pin.experiments.runner import read_rows
 
@@ -82,13 +81,9 @@ def main() -> None:
                 ),  # fmt: skip
             }
             print(case, json.dumps(results[case]["paired_after_minus_before"]), flush=True)
-    results["environment"] = {"before": args.before, "trials_per_object": args.trials,
-                              "objects": args.objects, "seed": args.seed,
-                              "workers": args.workers, "cpus": os.cpu_count(),
-                              "date": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())}  # fmt: skip
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(results, indent=2) + "\n")
-    print(f"wrote {args.out}")
+    write(results, {"before": args.before, "trials_per_object": args.trials,
+                    "objects": args.objects, "seed": args.seed, "workers": args.workers},
+          args.out)  # fmt: skip
 
 
 if __name__ == "__main__":

@@ -156,12 +156,18 @@ def main() -> None:
             case = compare(csv_path, path, values, experiment)
             results[name][f"{experiment}_{sensors}"] = case
             print(name, experiment, sensors, json.dumps(case["speed"]), flush=True)
-    results["environment"] = {"trials_per_object": args.trials, "objects": OBJECTS,
-                              "workers": args.workers, "cpus": os.cpu_count(),
+    write(results, {"trials_per_object": args.trials, "objects": OBJECTS,
+                    "workers": args.workers}, args.out)  # fmt: skip
+
+
+def write(results: dict, environment: dict, out: Path) -> None:
+    """``results`` with their ``environment`` (and the machine's cores and the date) as
+    JSON in ``out``."""
+    results["environment"] = {**environment, "cpus": os.cpu_count(),
                               "date": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime())}  # fmt: skip
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(results, indent=2) + "\n")
-    print(f"wrote {args.out}")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(results, indent=2) + "\n")
+    print(f"wrote {out}")
 
 
 if __name__ == "__main__":
