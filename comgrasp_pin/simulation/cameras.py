@@ -186,9 +186,8 @@ class CameraRig:
             r.update_scene(data, camera)
             image = self._draw(r)
         else:  # the scene's camera keeps the frustum update_scene gives it
-            with sampling_every(self.model, camera, self.intrinsics(camera), stride):
+            with sampling_every(self.model, camera, self.intrinsics(camera), stride) as sampled:
                 r.update_scene(data, camera)
-            sampled = self.intrinsics(camera).subsampled(stride)
             with _viewport(r, sampled.width, sampled.height):
                 image = self._draw(r)
         r.disable_depth_rendering()
@@ -232,7 +231,8 @@ class CameraRig:
 @contextmanager
 def sampling_every(model: mujoco.MjModel, camera: str, image: PinholeCamera, stride: int):
     """``camera`` set up, inside the block, to image every ``stride``-th pixel of each row
-    and column of ``image`` (its intrinsics at the full size), each at that pixel's centre.
+    and column of ``image`` (its intrinsics at the full size), each at that pixel's centre;
+    the block gets the sampled pixels' camera (``image.subsampled(stride)``).
 
     MuJoCo's intrinsic camera (``cam_sensorsize``, ``cam_intrinsic``: focal lengths and the
     principal point's offset from the sensor's centre, here in the full image's pixels): the
@@ -254,7 +254,7 @@ def sampling_every(model: mujoco.MjModel, camera: str, image: PinholeCamera, str
         model.cam_sensorsize[cam] = [stride * sampled.width, stride * sampled.height]
         model.cam_intrinsic[cam] = [image.fx, image.fy, shift_x, shift_y]
         model.cam_resolution[cam] = [sampled.width, sampled.height]
-        yield
+        yield sampled
     finally:
         model.cam_sensorsize[cam], model.cam_intrinsic[cam], model.cam_resolution[cam] = kept
 

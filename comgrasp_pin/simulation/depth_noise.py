@@ -106,8 +106,8 @@ class DepthNoise:
         white: np.ndarray = self._rng.standard_normal(shape).astype(np.float32)
         if c.noise_corr_px <= 0:
             return white
-        rho = _lag_correlation(c.noise_corr_px, stride)
-        if stride == 1 or rho > 0.5:
+        rho = _lag_correlation(c.noise_corr_px, stride) if stride > 1 else 1.0
+        if rho > 0.5:
             blurred = cv2.GaussianBlur(white, (0, 0), c.noise_corr_px / stride)
         else:
             a = (1.0 - np.sqrt(1.0 - 2.0 * rho**2)) / (2.0 * rho) if rho > 0 else 0.0
