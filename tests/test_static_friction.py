@@ -15,6 +15,8 @@ import pytest
 from _payload import panda, payload_torques
 
 from comgrasp_pin.errors import InvalidInputError
+from comgrasp_pin.estimation.regressor import stacked_regressor
+from comgrasp_pin.estimation.static_errors import side_friction_cov
 from comgrasp_pin.robot_io import JointLog, estimate_from_log
 from comgrasp_pin.robot_io.at_rest import parse_windows, read_window
 from comgrasp_pin.robot_io.at_rest.windows import read_joined
@@ -38,12 +40,13 @@ def robot():
     return panda()
 
 
-def friction_log(robot, seed=0, common=False):
+def friction_log(robot, seed=0, common=False, asymmetry=ASYMMETRY):
     """(log, joined before, joined after, one-sided before, one-sided after).
 
     Each run (empty, then loaded) visits each pose twice, approaching from +, then from -;
     each visit holds HOLD_S with the friction torque of that visit. ``common``: the two
     sides' asymmetry is one draw per visit for all joints (a pose's joints err together).
+    ``asymmetry``: the two sides' friction differ by up to this share.
     """
     rng = np.random.default_rng(seed)
     tb, ta = payload_torques(robot, Q, MASS, COM)
@@ -56,7 +59,7 @@ def friction_log(robot, seed=0, common=False):
             sides = []
             for sign in (1.0, -1.0):
                 u = rng.uniform(-1, 1, 1 if common else robot.nq)
-                f_side = f * (1 + 3 * ASYMMETRY * u) if common else f * (1 + ASYMMETRY * u)
+                f_side = f * (1 + 3 * asymmetry * u) if common else f * (1 + asymmetry * u)
                 n_move, n_hold = int(MOVE_S * RATE_HZ), int(HOLD_S * RATE_HZ)
                 ramp = q + sign * 0.05 * np.sin(np.linspace(0, np.pi, n_move))[:, None]
                 hold = np.tile(q, (n_hold, 1))
@@ -164,3 +167,77 @@ def test_pose_errors_need_two_poses(robot):
     log, before, after, _, _ = friction_log(robot)
     with pytest.raises(InvalidInputError, match="2 poses or more"):
         estimate_from_log(robot, log, before[:1], after[:1], pose_errors=True)
+
+
+def test_the_sides_measure_the_stuck_friction(robot):
+    """Each joint's side friction is the RMS of the stuck friction drawn: f ~ U(a, b) has
+    E[f^2] = (b^3 - a^3) / (3 (b - a)); 8 visits per joint, pooled over the 7 joints."""
+    a, b = FRICTION_NM
+    expected = (b**3 - a**3) / (3 * (b - a))
+    mean_sq = []
+    for seed in range(5):
+        log, before, after, _, _ = friction_log(robot, seed=500 + seed)
+        est = estimate_from_log(robot, log, before, after)
+        mean_sq.append(np.mean(est.joint_torques.side_friction**2))
+    assert abs(np.mean(mean_sq) / expected - 1) < 0.1  # 280 draws: relative sd about 3 %
+
+
+def test_the_share_left_and_its_intervals(robot):
+    """Sides whose friction differs by up to a share s (uniform): the pose's mean keeps
+    f s (u1 - u2) / 2 per run, a difference of two runs has the variance E[f^2] s^2 / 3,
+    so the share left of the sides' spread F (E[F^2] = E[f^2]) is kappa = s / sqrt(3).
+    Estimated from 24 degrees of freedom (relative sd about 15 %); the mass and CoM's
+    95 % intervals (Student's t of 24) cover the truth at about their level."""
+    share, kappas, inside, z = 0.3, [], 0, []
+    for seed in range(40):
+        log, before, after, _, _ = friction_log(robot, seed=700 + seed, asymmetry=share)
+        est = estimate_from_log(robot, log, before, after)
+        kappas.append(est.joint_torques.friction_left)
+        assert np.all(est.dof == len(Q) * robot.nq - 4)
+        x = np.r_[est.mass, est.com_ee] - np.r_[MASS, COM]
+        z.append(x / est.std)
+        inside += np.sum(np.abs(x) < est.t95 * est.std)
+    assert abs(np.median(kappas) / (share / np.sqrt(3)) - 1) < 0.15
+    assert 0.90 * 160 <= inside <= 0.99 * 160  # 95 % of 160 intervals: binomial sd 1.7 %
+    assert 0.8 < np.sqrt(np.mean(np.square(z))) < 1.25
+
+
+def test_the_share_sets_the_chi_square_to_one():
+    """Paule-Mandel's kappa: the generalised least squares' residuals at kappa have a
+    chi-square per degree of freedom of 1 (computed here by whitening by hand), above 1
+    just below it; pure noise within its level leaves kappa 0 and the covariance as given."""
+    rng = np.random.default_rng(3)
+    k, n = 6, 5
+    Y = rng.standard_normal((k * n, 4))
+    noise, friction = np.full(k * n, 0.02), rng.uniform(0.1, 1.0, n)
+    cov = np.diag(noise**2)
+    err = np.tile(0.4 * friction, k) * rng.standard_normal(k * n)
+    dtau = Y @ np.array([1.0, 0.1, -0.2, 0.05]) + err
+
+    def chi2_dof(kappa):
+        sd = np.sqrt(noise**2 + kappa**2 * np.tile(friction**2, k))
+        A, bb = Y / sd[:, None], dtau / sd
+        r = bb - A @ np.linalg.lstsq(A, bb, rcond=None)[0]
+        return r @ r / (k * n - 4)
+
+    kappa, cov_k = side_friction_cov(Y, dtau, cov, friction)
+    assert chi2_dof(kappa) == pytest.approx(1.0, abs=1e-4)
+    assert chi2_dof(0.99 * kappa) > 1.0
+    assert np.allclose(np.diag(cov_k), noise**2 + kappa**2 * np.tile(friction**2, k))
+    quiet = Y @ np.array([1.0, 0.1, -0.2, 0.05]) + 0.5 * noise * rng.standard_normal(k * n)
+    kappa0, cov0 = side_friction_cov(Y, quiet, cov, friction)
+    assert kappa0 == 0.0 and cov0 is cov
+
+
+def test_one_sided_windows_have_no_side_friction(robot):
+    log, _, _, before, after = friction_log(robot)
+    est = estimate_from_log(robot, log, before, after)
+    assert est.joint_torques.side_friction is None and est.joint_torques.friction_left is None
+
+
+def test_the_regressor_of_the_share_is_the_estimators(robot):
+    """The share is found on the stacked regressor of (m, m c): the payload's torques are
+    Y theta (checked against the independent RNEA model of tests/_payload)."""
+    tb, ta = payload_torques(robot, Q, MASS, COM)
+    Y, _ = stacked_regressor(robot, Q)
+    assert np.allclose(Y @ np.r_[MASS, MASS * COM], (ta - tb).ravel(), atol=1e-9)

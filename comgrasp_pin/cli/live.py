@@ -207,7 +207,7 @@ def _estimate_and_set(args, robot, arm, rec, out: Path, info: dict, config: Live
         else:
             before = parse_windows(rec.before, "--before", joined=True)
             after = parse_windows(rec.after, "--after", joined=True)
-            est = estimate_from_log(robot, log, before, after, pose_errors=True)
+            est = estimate_from_log(robot, log, before, after)
     except EmptyGripperError as exc:  # the estimator's own refusal: nothing held
         raise EmptyGripperError(f"{exc}. Nothing was sent to the robot") from None
     write_result(est, out / "RESULT.json")

@@ -117,7 +117,7 @@ def offline_args(rec, arm_model: str | None = None) -> str:
         if empty is None:
             return f"--dynamic --window {loaded} --arm-model {arm_model}"
         return f"--dynamic --window {loaded} --empty-csv {{log}} --empty-window {empty}"
-    return f"--before {rec.before} --after {rec.after} --pose-errors"
+    return f"--before {rec.before} --after {rec.after}"
 
 
 def live_info(args, config, urdf, out, host, plan, rec, wall_s: float) -> dict:

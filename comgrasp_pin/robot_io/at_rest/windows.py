@@ -18,10 +18,8 @@ from comgrasp_pin.errors import InvalidInputError, LogError, NotStaticError
 from comgrasp_pin.robot_io.log_files.joint_readers import JointLog
 from comgrasp_pin.robot_io.log_files.log_types import WrenchLog
 
-MAX_SPEED = 0.01
-"""Default static threshold on every joint's speed (rad/s): 0.6 deg/s."""
-SPEED_SPAN = 0.1
-"""Seconds over which the joint speed is measured."""
+MAX_SPEED = 0.01  # default static threshold on every joint's speed (rad/s): 0.6 deg/s
+SPEED_SPAN = 0.1  # seconds over which the joint speed is measured
 MIN_STATIC_S = 0.5
 """Automatic windows: the arm must stay static this long (s)."""
 MIN_SAMPLES = 3
@@ -38,6 +36,7 @@ class StaticReading:
         tau_std: (n,) standard deviation of one torque sample over the window (N m / N).
         n_samples: number of samples averaged.
         max_speed: the largest joint speed seen in the window (rad/s).
+        side_spread: (n,) the std of the sides' means (``read_joined``), or None.
     """
 
     t0: float
@@ -47,6 +46,7 @@ class StaticReading:
     tau_std: np.ndarray
     n_samples: int
     max_speed: float
+    side_spread: np.ndarray | None = None
 
     @property
     def tau_mean_std(self) -> np.ndarray:
@@ -171,9 +171,10 @@ def read_joined(
     """One reading of a window of one or several spans (``parse_windows``'s ``joined``).
 
     Several spans (a pose approached from both sides, whose stuck friction has opposite
-    signs) give the mean of their means, each span weighted alike: q, tau, and a
-    ``tau_std`` whose ``tau_mean_std`` is that mean's std, sqrt(sum s_i^2 / n_i) / k. One
-    span is ``read_window``'s reading.
+    signs) give the mean of their means, each span weighted alike: q, tau, a ``tau_std``
+    whose ``tau_mean_std`` is that mean's std, sqrt(sum s_i^2 / n_i) / k, and the std of the
+    spans' means (two sides: half their difference, the stuck friction). One span is
+    ``read_window``'s reading.
     """
     parts = [read_window(log, t0, t1, max_speed, label, readings) for t0, t1 in spans(window)]
     if len(parts) == 1:
@@ -188,6 +189,7 @@ def read_joined(
         tau_std=mean_std * np.sqrt(n),
         n_samples=n,
         max_speed=max(r.max_speed for r in parts),
+        side_spread=np.std([r.tau for r in parts], axis=0),
     )
 
 

@@ -11,8 +11,8 @@ information, and a part for what only some modes have:
 - ``joint_torques``: what the joint torques' side found (``JointTorques``);
 - ``wrench``: what the wrist sensor's side found (``Wrench``).
 
-A part is None where the mode does not have it. Frames: the CoM and the inertia are in the
-ee frame ``frame`` (the sensor's own numbers in its frame); SI units throughout.
+A part is None where the mode does not have it. Frames: the CoM and the inertia are in the ee
+frame ``frame`` (the sensor's own numbers in its frame); SI units throughout.
 """
 
 from __future__ import annotations
@@ -28,8 +28,7 @@ from comgrasp_pin.estimation.wrench import StaticWrenchFit
 
 JOINT_TORQUES, WRENCH, PRIOR = "joint_torques", "wrench", "prior"
 """The sources' names, as ``PayloadEstimate.sources`` keys them."""
-TOOL_EMPTY_RUN = "empty run (the tool's parameters fitted)"
-TOOL_GIVEN = "given"
+TOOL_EMPTY_RUN, TOOL_GIVEN = "empty run (the tool's parameters fitted)", "given"
 TOOL_NOMINAL = "URDF links beyond the sensor (nominal)"
 """Where the tool's own wrench came from (``Wrench.tool``), along a motion or at rest."""
 
@@ -149,6 +148,8 @@ class JointTorques:
         drift_std: the torque sensor's drift taken in (N m / sqrt(s); 0: none).
         tau_before, tau_after: (k, n) at rest: the empty arm's torques carried to the poses
             and the holding ones; None along a motion.
+        side_friction, friction_left: at rest, poses read from both sides: (n,) each joint's
+            stuck friction (N m) and the share their mean left (``static_errors``), or None.
         offsets, offset_drift: (n,) along a motion: the efforts' offsets (mean) and their
             change from start to end; friction: (n, 2) viscous (N m s/rad) and Coulomb
             (N m) with the URDF's model, else None.
@@ -167,6 +168,8 @@ class JointTorques:
     drift_std: float = 0.0
     tau_before: np.ndarray | None = None
     tau_after: np.ndarray | None = None
+    side_friction: np.ndarray | None = None
+    friction_left: float | None = None
     offsets: np.ndarray | None = None
     offset_drift: np.ndarray | None = None
     friction: np.ndarray | None = None
@@ -193,8 +196,8 @@ class Wrench:
         tool_params: (10,) the tool's parameters subtracted (ee frame) along a motion;
             tool_cov: (10, 10); at rest ``tool_mass`` (kg) and ``tool_com_sensor`` (m).
         noise_from: how each window's noise was set (at rest).
-        residual_rms: (6,) per axis, or (2,) force and torque RMS at rest (N, N m).
-        wrench_std: (6,) the noise per axis that weighs the rows along a motion.
+        residual_rms: (6,) per axis, or (2,) force and torque RMS at rest (N, N m);
+            wrench_std: (6,) the noise per axis that weighs the rows along a motion.
         delay_s: the wrench's delay behind the positions (s), or None.
         fit: the fit at rest in the sensor frame (``StaticWrenchFit``), or None.
         wrench_payload, wrench_payload_fit: (k, 6) the payload's wrench along a motion.
