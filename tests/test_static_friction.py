@@ -16,7 +16,7 @@ from _payload import panda, payload_torques
 
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.estimation.regressor import stacked_regressor
-from comgrasp_pin.estimation.static_errors import side_friction_cov
+from comgrasp_pin.estimation.side_friction import side_friction_cov
 from comgrasp_pin.robot_io import JointLog, estimate_from_log
 from comgrasp_pin.robot_io.at_rest import parse_windows, read_window
 from comgrasp_pin.robot_io.at_rest.windows import read_joined
@@ -170,69 +170,97 @@ def test_pose_errors_need_two_poses(robot):
 
 
 def test_the_sides_measure_the_stuck_friction(robot):
-    """Each joint's side friction is the RMS of the stuck friction drawn: f ~ U(a, b) has
-    E[f^2] = (b^3 - a^3) / (3 (b - a)); 8 visits per joint, pooled over the 7 joints."""
+    """Each pose's sides' spread is its stuck friction: f ~ U(a, b) per visit has
+    E[f^2] = (b^3 - a^3) / (3 (b - a)), and V_ij sums the empty and the loaded run's."""
     a, b = FRICTION_NM
-    expected = (b**3 - a**3) / (3 * (b - a))
+    expected = 2 * (b**3 - a**3) / (3 * (b - a))
     mean_sq = []
     for seed in range(5):
         log, before, after, _, _ = friction_log(robot, seed=500 + seed)
         est = estimate_from_log(robot, log, before, after)
-        mean_sq.append(np.mean(est.joint_torques.side_friction**2))
-    assert abs(np.mean(mean_sq) / expected - 1) < 0.1  # 280 draws: relative sd about 3 %
+        assert est.joint_torques.side_friction.spread.shape == (len(Q), robot.nq)
+        mean_sq.append(np.mean(est.joint_torques.side_friction.spread**2))
+    assert abs(np.mean(mean_sq) / expected - 1) < 0.1  # 140 draws of V: relative sd about 4 %
 
 
 def test_the_share_left_and_its_intervals(robot):
-    """Sides whose friction differs by up to a share s (uniform): the pose's mean keeps
-    f s (u1 - u2) / 2 per run, a difference of two runs has the variance E[f^2] s^2 / 3,
-    so the share left of the sides' spread F (E[F^2] = E[f^2]) is kappa = s / sqrt(3).
-    Estimated from 24 degrees of freedom (relative sd about 15 %); the mass and CoM's
-    95 % intervals (Student's t of 24) cover the truth at about their level."""
+    """Sides whose friction differs by up to a share s (uniform u): a run's mean at a
+    pose keeps f s (u1 - u2) / 2, of variance f^2 s^2 / 6, and the sides' spread is f, so
+    the difference of the two runs has the variance V_ij s^2 / 6 whatever the mix of a
+    pose's own V and the joint's mean: kappa = s / sqrt(6). Estimated from 24 degrees of
+    freedom (relative sd about 15 %); the mass and CoM's 95 % intervals (Student's t of 24)
+    cover the truth at about their level."""
     share, kappas, inside, z = 0.3, [], 0, []
     for seed in range(40):
         log, before, after, _, _ = friction_log(robot, seed=700 + seed, asymmetry=share)
         est = estimate_from_log(robot, log, before, after)
-        kappas.append(est.joint_torques.friction_left)
+        kappas.append(est.joint_torques.side_friction.share_left)
         assert np.all(est.dof == len(Q) * robot.nq - 4)
         x = np.r_[est.mass, est.com_ee] - np.r_[MASS, COM]
         z.append(x / est.std)
         inside += np.sum(np.abs(x) < est.t95 * est.std)
-    assert abs(np.median(kappas) / (share / np.sqrt(3)) - 1) < 0.15
+    assert abs(np.median(kappas) / (share / np.sqrt(6)) - 1) < 0.15
     assert 0.90 * 160 <= inside <= 0.99 * 160  # 95 % of 160 intervals: binomial sd 1.7 %
     assert 0.8 < np.sqrt(np.mean(np.square(z))) < 1.25
 
 
 def test_the_share_sets_the_chi_square_to_one():
-    """Paule-Mandel's kappa: the generalised least squares' residuals at kappa have a
-    chi-square per degree of freedom of 1 (computed here by whitening by hand), above 1
-    just below it; pure noise within its level leaves kappa 0 and the covariance as given."""
+    """Paule-Mandel's kappa: the generalised least squares' residuals at kappa, with the
+    mix rho found, have a chi-square per degree of freedom of 1 (computed here by
+    whitening by hand), above 1 just below it; pure noise within its level leaves kappa 0
+    and the covariance as given."""
     rng = np.random.default_rng(3)
     k, n = 6, 5
     Y = rng.standard_normal((k * n, 4))
-    noise, friction = np.full(k * n, 0.02), rng.uniform(0.1, 1.0, n)
+    spread = rng.uniform(0.1, 1.0, (k, n))
+    noise, theta = np.full(k * n, 0.02), np.array([1.0, 0.1, -0.2, 0.05])
     cov = np.diag(noise**2)
-    err = np.tile(0.4 * friction, k) * rng.standard_normal(k * n)
-    dtau = Y @ np.array([1.0, 0.1, -0.2, 0.05]) + err
+    dtau = Y @ theta + 0.4 * spread.ravel() * rng.standard_normal(k * n)
+    found, cov_k = side_friction_cov(Y, dtau, cov, spread)
+    V = spread**2
+    scale = ((1 - found.own_pose) * V.mean(axis=0) + found.own_pose * V).ravel()
 
     def chi2_dof(kappa):
-        sd = np.sqrt(noise**2 + kappa**2 * np.tile(friction**2, k))
+        sd = np.sqrt(noise**2 + kappa**2 * scale)
         A, bb = Y / sd[:, None], dtau / sd
         r = bb - A @ np.linalg.lstsq(A, bb, rcond=None)[0]
         return r @ r / (k * n - 4)
 
-    kappa, cov_k = side_friction_cov(Y, dtau, cov, friction)
-    assert chi2_dof(kappa) == pytest.approx(1.0, abs=1e-4)
-    assert chi2_dof(0.99 * kappa) > 1.0
-    assert np.allclose(np.diag(cov_k), noise**2 + kappa**2 * np.tile(friction**2, k))
-    quiet = Y @ np.array([1.0, 0.1, -0.2, 0.05]) + 0.5 * noise * rng.standard_normal(k * n)
-    kappa0, cov0 = side_friction_cov(Y, quiet, cov, friction)
-    assert kappa0 == 0.0 and cov0 is cov
+    assert 0.0 <= found.own_pose <= 1.0
+    assert chi2_dof(found.share_left) == pytest.approx(1.0, abs=1e-4)
+    assert chi2_dof(0.99 * found.share_left) > 1.0
+    assert np.allclose(np.diag(cov_k), noise**2 + found.share_left**2 * scale)
+    quiet = Y @ theta + 0.5 * noise * rng.standard_normal(k * n)
+    found0, cov0 = side_friction_cov(Y, quiet, cov, spread)
+    assert found0.share_left == 0.0 and found0.own_pose is None and cov0 is cov
+
+
+def test_a_pose_whose_own_friction_errs_is_weighed_by_its_own_spread():
+    """Friction left only where a pose's own spread is large (one pose of six): the mix
+    goes to the pose's own spread (rho near 1), whose weights bring the estimate nearer
+    the truth than the joint's mean's (rho 0, computed here by hand)."""
+    rng = np.random.default_rng(11)
+    k, n, theta = 6, 5, np.array([1.0, 0.1, -0.2, 0.05])
+    errs_own, errs_mean = [], []
+    for _ in range(30):
+        Y = rng.standard_normal((k * n, 4))
+        spread = np.full((k, n), 0.01)
+        spread[rng.integers(k)] = 1.0  # one pose stopped with much friction
+        cov = np.diag(np.full(k * n, 1e-4))
+        dtau = Y @ theta + 0.5 * spread.ravel() * rng.standard_normal(k * n)
+        found, cov_k = side_friction_cov(Y, dtau, cov, spread)
+        w = 1 / np.sqrt(np.diag(cov_k))
+        errs_own.append(np.linalg.norm(np.linalg.lstsq(Y * w[:, None], dtau * w)[0] - theta))
+        w0 = 1 / np.sqrt(1e-4 + np.tile((spread**2).mean(axis=0), k))
+        errs_mean.append(np.linalg.norm(np.linalg.lstsq(Y * w0[:, None], dtau * w0)[0] - theta))
+        assert found.own_pose >= 0.5
+    assert np.median(errs_own) < 0.5 * np.median(errs_mean)
 
 
 def test_one_sided_windows_have_no_side_friction(robot):
     log, _, _, before, after = friction_log(robot)
     est = estimate_from_log(robot, log, before, after)
-    assert est.joint_torques.side_friction is None and est.joint_torques.friction_left is None
+    assert est.joint_torques.side_friction is None
 
 
 def test_the_regressor_of_the_share_is_the_estimators(robot):

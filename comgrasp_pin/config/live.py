@@ -23,11 +23,13 @@ class LiveConfig:
             and cancels in their mean (``windows.read_joined``).
         settle_s: wait after a move before recording (s), and then on until every joint
             is slower than ``still_speed`` (at most ``max_settle_s``).
-        still_speed: the joint speed (rad/s, over 0.1 s) below which the arm is still. Far
-            below the static windows' threshold (``windows.MAX_SPEED``, 0.01): a joint that
+        still_speed: the joint speed (rad/s, over 0.1 s) below which the arm is still.
+            Below the static windows' threshold (``windows.MAX_SPEED``, 0.01): a joint that
             stops holds friction, which relaxes while it creeps the last fraction of a
-            milliradian (franky-sim's FR3: at 0.005 rad/s a side's reading still erred by
-            up to 0.7 N m, the CoM by up to 18 mm over 20 payloads; at 1e-4 by 1-4 mm).
+            milliradian; what the two sides' mean leaves of it is weighed and widens the
+            interval (``static_errors.side_friction_cov``). franky-sim's FR3, the same 10
+            payloads: at 1e-4 the CoM within 1.5 mm (rms 0.8), 56 s per identification; at
+            3e-4 within 2.2 mm (rms 1.2), 50 s; at 1e-3 within 2.7 mm (rms 1.6), 45 s.
         max_settle_s: the longest wait for the arm to be still (s); past it, the window is
             recorded anyway and the estimate's static check judges it.
         record_s: the window recorded at each side of each pose (s).
@@ -60,7 +62,7 @@ class LiveConfig:
     max_dynamics_factor: float = 0.3
     approach_rad: float = 0.04
     settle_s: float = 0.3
-    still_speed: float = 1e-4
+    still_speed: float = 3e-4
     max_settle_s: float = 4.0
     record_s: float = 0.5
     sample_period_s: float = 0.002

@@ -12,15 +12,7 @@ from the poses' own residuals whatever their correlation within a pose, with Sat
 degrees of freedom (at most k - 1): the motion's model, whose blocks are spans of time, at
 rest.
 
-``side_friction_cov``: where each pose was read from two sides (approached from above and
-below on every joint, ``windows.read_joined``), the sides' half difference measures each
-joint's stuck friction there, and their mean cancels most of it. What is left is modelled
-per joint as a share kappa of that friction's scale F_j (the RMS of the half differences over
-the poses and both runs): var(dtau_ij) = noise_ij^2 + kappa^2 F_j^2. kappa is found from the
-fit's residuals, the generalised least squares refitted at each trial, so that their
-chi-square per degree of freedom is 1 (Paule and Mandel 1982, the between-laboratory
-variance of interlaboratory studies), or 0 where the noise alone explains them. The weights
-follow: a joint whose reading depends on the side it was approached from counts less.
+Poses read from both sides have their own model (``side_friction``).
 """
 
 from __future__ import annotations
@@ -34,10 +26,6 @@ from comgrasp_pin.robot import RobotModel
 
 RANK_TOL = 1e-9
 """Singular values below this fraction of the largest are directions the fit left open."""
-SHARE_TOL = 1e-6
-"""Paule-Mandel's kappa is bisected to this relative width."""
-MAX_SHARE = 64.0
-"""The largest kappa tried (the friction left, as a multiple of the sides' spread)."""
 
 
 def residual_chi2(est: ComEstimate, sigma: np.ndarray, cov: np.ndarray | None, dtau):
@@ -86,49 +74,3 @@ def pose_block_cov(
                               [np.array([i]) for i in range(k)], p=4)  # fmt: skip
     G = mc_jacobian(np.asarray(theta, dtype=float))
     return G @ sandwich.cov @ G.T, np.array([sandwich.dof(G[r]) for r in range(4)])
-
-
-def side_friction(before, after) -> np.ndarray | None:
-    """(n,) F_j: per joint, the RMS over the poses and both runs of the sides' spread (N m).
-
-    ``before``, ``after``: the paired readings (``windows.StaticReading``); None where a
-    window was read from one side (no measure of its friction).
-    """
-    spreads = [r.side_spread for r in (*before, *after)]
-    if any(s is None for s in spreads):
-        return None
-    return np.sqrt(np.mean(np.square(spreads), axis=0))
-
-
-def side_friction_cov(
-    Y: np.ndarray, dtau: np.ndarray, cov: np.ndarray, friction: np.ndarray
-) -> tuple[float, np.ndarray]:
-    """(kappa, the differences' covariance with the friction left): Paule-Mandel's kappa.
-
-    Args:
-        Y: (k n, 4) the stacked regressor of (m, m c_ee) (``stacked_regressor``).
-        dtau: (k n,) the stacked torque differences (N m).
-        cov: (k n, k n) their covariance from the readings' noise (and drift).
-        friction: (n,) F_j (``side_friction``, N m).
-    """
-    extra = np.diag(np.tile(np.square(friction), len(dtau) // len(friction)))
-    dof = len(dtau) - int(np.linalg.matrix_rank(Y))
-
-    def excess(kappa: float) -> float:
-        """The GLS residuals' chi-square per degree of freedom less 1 at ``kappa``."""
-        L = np.linalg.cholesky(cov + kappa**2 * extra)
-        A, b = np.linalg.solve(L, Y), np.linalg.solve(L, dtau)
-        r = b - A @ np.linalg.lstsq(A, b, rcond=None)[0]
-        return float(r @ r) / dof - 1.0
-
-    if dof <= 0 or not np.any(friction > 0) or excess(0.0) <= 0:
-        return 0.0, cov
-    lo, hi = 0.0, 1.0
-    while excess(hi) > 0:
-        if hi >= MAX_SHARE:  # errors where the sides agree: the chi-square's rule takes them
-            return hi, cov + hi**2 * extra
-        lo, hi = hi, 2.0 * hi
-    while hi - lo > SHARE_TOL * hi:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if excess(mid) > 0 else (lo, mid)
-    return lo, cov + lo**2 * extra

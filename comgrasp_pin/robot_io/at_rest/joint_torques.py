@@ -30,12 +30,8 @@ from comgrasp_pin.estimation.drift import difference_covariance
 from comgrasp_pin.estimation.dynamic_uncertainty import relative_gain_cov
 from comgrasp_pin.estimation.estimate import delta_method
 from comgrasp_pin.estimation.regressor import stacked_regressor
-from comgrasp_pin.estimation.static_errors import (
-    pose_block_cov,
-    residual_chi2,
-    side_friction,
-    side_friction_cov,
-)
+from comgrasp_pin.estimation.side_friction import side_friction_cov, side_spreads
+from comgrasp_pin.estimation.static_errors import pose_block_cov, residual_chi2
 from comgrasp_pin.estimation.trust import (
     MIN_EXPLAINED,
     arm_mass,
@@ -115,13 +111,13 @@ def estimate_from_log(
     )
     sigma, noise_from = _reading_std(rb, ra, torque_std, robot.nq)
     cov = _drift_covariance(rb, ra, sigma, noise_from, drift_std)
-    friction, share = side_friction(rb, ra), None
-    if friction is not None:  # each pose read from both sides: the friction their mean left
+    spread, friction = side_spreads(rb, ra), None
+    if spread is not None:  # each pose read from both sides: the friction their mean left
         base = cov if cov is not None else np.diag(np.tile(2.0 * sigma**2, len(Q)))
-        share, with_friction = side_friction_cov(
-            stacked_regressor(robot, Q)[0], (tau_a - tau_b).ravel(), base, friction
+        friction, with_friction = side_friction_cov(
+            stacked_regressor(robot, Q)[0], (tau_a - tau_b).ravel(), base, spread
         )
-        cov = with_friction if share > 0 else cov
+        cov = with_friction if friction.share_left > 0 else cov
 
     def solve(factor: np.ndarray | None, how: str) -> ComEstimate:
         """The estimate with each joint's efforts scaled by ``factor`` (None: as read).
@@ -144,7 +140,7 @@ def estimate_from_log(
         est = dataclasses.replace(est, cov=total)
     joints = JointTorques(
         sigma, noise_from, gains_cov=gains_part, drift_std=float(drift_std), tau_before=tau_b,
-        tau_after=tau_a, side_friction=friction, friction_left=share,
+        tau_after=tau_a, side_friction=friction,
     )  # fmt: skip
     windows = {"before": [[r.t0, r.t1, r.n_samples] for r in rb],
                "after": [[r.t0, r.t1, r.n_samples] for r in ra]}  # fmt: skip

@@ -23,6 +23,7 @@ import numpy as np
 
 from comgrasp_pin.estimation import ComEstimate
 from comgrasp_pin.estimation.dynamic_uncertainty import Validation
+from comgrasp_pin.estimation.side_friction import SideFriction
 from comgrasp_pin.estimation.trust import t95
 from comgrasp_pin.estimation.wrench import StaticWrenchFit
 
@@ -148,8 +149,8 @@ class JointTorques:
         drift_std: the torque sensor's drift taken in (N m / sqrt(s); 0: none).
         tau_before, tau_after: (k, n) at rest: the empty arm's torques carried to the poses
             and the holding ones; None along a motion.
-        side_friction, friction_left: at rest, poses read from both sides: (n,) each joint's
-            stuck friction (N m) and the share their mean left (``static_errors``), or None.
+        side_friction: at rest, poses read from both sides: their stuck friction and the
+            share their mean left (``estimation.side_friction.SideFriction``), or None.
         offsets, offset_drift: (n,) along a motion: the efforts' offsets (mean) and their
             change from start to end; friction: (n, 2) viscous (N m s/rad) and Coulomb
             (N m) with the URDF's model, else None.
@@ -168,8 +169,7 @@ class JointTorques:
     drift_std: float = 0.0
     tau_before: np.ndarray | None = None
     tau_after: np.ndarray | None = None
-    side_friction: np.ndarray | None = None
-    friction_left: float | None = None
+    side_friction: SideFriction | None = None
     offsets: np.ndarray | None = None
     offset_drift: np.ndarray | None = None
     friction: np.ndarray | None = None

@@ -99,6 +99,11 @@ def _joint_torques(j: JointTorques, at_rest: bool) -> list[str]:
         drift = f"; drift {j.drift_std:g} N m/sqrt(s)" if j.drift_std else ""
         lines.append(f"  torque std ({j.noise_from}): {np.mean(j.torque_std):.3g} N m per averaged "
                      f"reading{drift}")  # fmt: skip
+    if j.side_friction is not None:
+        f = j.side_friction
+        lines.append(f"  stuck friction (the sides' spread, RMS over poses) "
+                     f"{_vec(np.sqrt(np.mean(f.spread**2, axis=0)))} N m; the sides' mean "
+                     f"left {f.share_left:.2f} of it")  # fmt: skip
     if j.residual_rms is not None:
         lines.append(f"  residual RMS per joint {_vec(j.residual_rms)} N m")
     if j.alignment is not None:

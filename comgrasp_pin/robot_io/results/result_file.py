@@ -124,7 +124,10 @@ def _joint_torques(j: er.JointTorques) -> dict:
         "torque_std_Nm": _list(j.torque_std), "torque_std_from": j.noise_from,
         "arm_model": j.arm_model, "gains": j.gains_source,
         "torque_drift_Nm_per_sqrt_s": j.drift_std,
-        "side_friction_Nm": _list(j.side_friction), "side_friction_left": j.friction_left,
+        "side_friction": None if j.side_friction is None else {
+            "spread_Nm": _list(j.side_friction.spread),
+            "share_left": j.side_friction.share_left,
+            "own_pose_weight": j.side_friction.own_pose},
         "offsets_Nm": _list(j.offsets), "offset_drift_Nm": _list(j.offset_drift),
         "friction": None if j.friction is None else {
             "viscous_Nms_per_rad": _list(j.friction[:, 0]), "coulomb_Nm": _list(j.friction[:, 1])},
