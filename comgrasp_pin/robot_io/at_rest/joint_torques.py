@@ -77,7 +77,8 @@ def estimate_from_log(
         robot: the arm (its model's gravity is the one the torques were measured under;
             see ``mount.load_robot``).
         log: readings of the arm's joints, in ``robot.joint_names`` order.
-        before: empty-arm windows (t0, t1) in s, one per pose.
+        before: empty-arm windows (t0, t1) in s, one per pose; spans joined (both sides of
+            a pose, ``parse_windows``) measure the stuck friction (``side_friction``).
         after: holding windows (t0, t1) in s; after[i] pairs with before[i].
         torque_std: std of one averaged torque reading (N m), or None to take it from the
             samples' spread.
@@ -88,11 +89,8 @@ def estimate_from_log(
         gain_cov: (n, n) covariance of the drive gains ((N m / A)^2, absolute; ``Gains.cov``)
             the log's currents were turned into torques with. Where ``log.current_gains`` is
             set, its relative form gain_cov / outer(K, K) is propagated through the
-            estimator (d (m, m c) / d delta by a central difference of the closed-form
-            estimate re-run with each joint's efforts scaled, exact as (m, m c) is linear in
-            them; ``_gains_covariance``) and added to the estimate's covariance
-            (``JointTorques.gains_cov`` holds that part). Ignored when None or when the log
-            holds torques.
+            estimator (``_gains_covariance``) and added to the estimate's covariance
+            (``JointTorques.gains_cov`` holds that part). Ignored for a log of torques.
         pose_errors: the covariance from the poses' block sandwich (``static_errors``):
             errors that stay over a pose (stuck friction), k >= 2.
 
@@ -111,13 +109,7 @@ def estimate_from_log(
     )
     sigma, noise_from = _reading_std(rb, ra, torque_std, robot.nq)
     cov = _drift_covariance(rb, ra, sigma, noise_from, drift_std)
-    spread, friction = side_spreads(rb, ra), None
-    if spread is not None:  # each pose read from both sides: the friction their mean left
-        base = cov if cov is not None else np.diag(np.tile(2.0 * sigma**2, len(Q)))
-        friction, with_friction = side_friction_cov(
-            stacked_regressor(robot, Q)[0], (tau_a - tau_b).ravel(), base, spread
-        )
-        cov = with_friction if friction.share_left > 0 else cov
+    friction, cov = _side_friction(robot, Q, rb, ra, sigma, cov, tau_a - tau_b)
 
     def solve(factor: np.ndarray | None, how: str) -> ComEstimate:
         """The estimate with each joint's efforts scaled by ``factor`` (None: as read).
@@ -146,6 +138,20 @@ def estimate_from_log(
                "after": [[r.t0, r.t1, r.n_samples] for r in ra]}  # fmt: skip
     return judged_at_rest(robot, est, Q, windows, sole_source(JOINT_TORQUES), findings,
                           dof=dof, joint_torques=joints)  # fmt: skip
+
+
+def _side_friction(robot, Q, rb, ra, sigma, cov, dtau):
+    """(``SideFriction`` or None, the differences' covariance with the friction left).
+
+    Where each pose was read from both sides (``side_friction``); else (None, ``cov``).
+    """
+    spread = side_spreads(rb, ra)
+    if spread is None:
+        return None, cov
+    base = cov if cov is not None else np.diag(np.tile(2.0 * sigma**2, len(Q)))
+    found, with_friction = side_friction_cov(stacked_regressor(robot, Q)[0], dtau.ravel(), base,
+                                             spread)  # fmt: skip
+    return found, with_friction if found.share_left > 0 else cov
 
 
 def _residual_rules(robot, est: ComEstimate, Q, sigma, cov, dtau, pose_errors: bool):
