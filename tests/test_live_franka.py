@@ -49,9 +49,10 @@ def test_a_payload_is_identified_and_its_load_set(identified):
     r = json.loads((out / "RESULT.json").read_text())
     assert r["verdict"] == "identified"
     mass, com = r["mass_kg"], np.array(r["com_m"])
-    # 20 payloads (benchmarks/live_franka.py): mass within 0.71 %, CoM within 5.2 mm
+    # 20 payloads (benchmarks/live_franka.py): mass within 0.42 %, CoM within 1.9 mm; the
+    # issue's targets (2 %, 5 mm) here, the intervals below the sharp check
     assert abs(mass - MASS) < 0.02 * MASS
-    assert np.linalg.norm(com - COM) < 10e-3
+    assert np.linalg.norm(com - COM) < 5e-3
     # the truth within its 99.9 % interval (Student's t of the stated dof): 1 in 1000 fails
     dof = [r["dof"]["mass"], *r["dof"]["com"]]
     dof = np.array([np.inf if d is None else d for d in dof], dtype=float)
