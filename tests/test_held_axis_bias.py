@@ -78,3 +78,25 @@ def test_a_thick_handle_no_cylinder_fits_is_refused_naming_the_bias(ur5, no_cyli
     for _, _, _, args in _views(ur5, "obj5", seeds=(0,)):
         with pytest.raises(UntrustedImageError, match=r"bias the tilt by about [2-9]\.\d deg"):
             observe_held_rod(None, *args)
+
+
+def test_a_strip_too_sparse_to_slice_is_none_without_a_warning():
+    """A face whose slices along the axis each hold fewer than MIN_SLICE_POINTS points has
+    no mid-line (None), and says so without NumPy's empty-slice warnings (which reached the
+    main job's console); a dense strip along 0.2 rad gives that direction."""
+    import warnings
+
+    from comgrasp_pin.perception.flat_face import MIN_SLICE_POINTS, SLICE, strip_line
+
+    direction = np.array([np.cos(0.2), np.sin(0.2)])
+    normal = np.array([-direction[1], direction[0]])
+    rng = np.random.default_rng(0)
+    along = np.repeat(np.arange(6) * SLICE + 0.5 * SLICE, MIN_SLICE_POINTS - 1)
+    sparse = np.outer(along, direction) + np.outer(rng.uniform(-2e-3, 2e-3, len(along)), normal)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert strip_line(sparse, np.array([1.0, 0.0])) is None
+    along = rng.uniform(0.0, 0.1, 2000)
+    dense = np.outer(along, direction) + np.outer(rng.uniform(-2e-3, 2e-3, len(along)), normal)
+    found, _, _ = strip_line(dense, np.array([1.0, 0.0]))
+    assert np.degrees(np.arccos(found @ direction)) < 0.5

@@ -108,6 +108,8 @@ def strip_line(
                 lo, hi = np.percentile(across[rows], EDGE_PERCENTILES)
                 mids.append((median(along[rows]), 0.5 * (lo + hi), hi - lo, n))
         whole = np.array(mids).reshape(-1, 4)
+        if len(whole) < 3:  # (no median of too few slices: an empty one warns)
+            return None
         # A slice that sees the strip only in part (cut by an occluder, the image's border
         # or a hole: narrower, or far fewer points) has its mid-point off the mid-line.
         whole = whole[(whole[:, 2] >= WHOLE_WIDTH * np.median(whole[:, 2]))
