@@ -13,6 +13,8 @@ cable) are unreliable.
 import numpy as np
 import pytest
 from _payload import panda, payload_torques
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.estimation.regressor import stacked_regressor
@@ -269,3 +271,40 @@ def test_the_regressor_of_the_share_is_the_estimators(robot):
     tb, ta = payload_torques(robot, Q, MASS, COM)
     Y, _ = stacked_regressor(robot, Q)
     assert np.allclose(Y @ np.r_[MASS, MASS * COM], (ta - tb).ravel(), atol=1e-9)
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    seed=st.integers(0, 2**31 - 1),
+    k=st.integers(2, 6),
+    noise=st.floats(1e-4, 0.1),
+    left=st.floats(0.0, 3.0),
+    zero_joints=st.integers(0, 3),
+)
+def test_the_share_is_found_whatever_the_readings(seed, k, noise, left, zero_joints):
+    """Any regressor, spreads (some joints' zero), noise and friction left: kappa >= 0,
+    rho in [0, 1] (None with kappa 0), the covariance only grows on its diagonal, and where
+    kappa is inside its range the chi-square per degree of freedom is 1 (by hand)."""
+    from comgrasp_pin.estimation.side_friction import MAX_SHARE
+
+    rng = np.random.default_rng(seed)
+    n = 7
+    Y = rng.standard_normal((k * n, 4))
+    spread = rng.uniform(0.0, 1.0, (k, n))
+    spread[:, :zero_joints] = 0.0
+    cov = np.diag(np.full(k * n, noise**2))
+    dtau = Y @ rng.standard_normal(4) + noise * rng.standard_normal(k * n)
+    dtau += left * spread.ravel() * rng.standard_normal(k * n)
+    found, cov_k = side_friction_cov(Y, dtau, cov, spread)
+    assert found.share_left >= 0.0 and np.all(np.isfinite(cov_k))
+    assert np.allclose(cov_k - np.diag(np.diag(cov_k)), 0.0)
+    assert np.all(np.diag(cov_k) >= np.diag(cov))
+    if found.share_left == 0.0:
+        assert found.own_pose is None
+        return
+    assert 0.0 <= found.own_pose <= 1.0
+    if found.share_left < MAX_SHARE:
+        sd = np.sqrt(np.diag(cov_k))
+        A, b = Y / sd[:, None], dtau / sd
+        r = b - A @ np.linalg.lstsq(A, b, rcond=None)[0]
+        assert r @ r / (k * n - 4) == pytest.approx(1.0, abs=1e-4)
