@@ -188,12 +188,14 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     est.add_argument("--before", default=None,
                      help="empty-arm windows T0:T1[,T0:T1...] (s from the log's start); one "
                      "pose's window may join spans, T0:T1+T2:T3 (the pose approached from both "
-                     "sides: the mean of the spans' means: stuck friction cancels)")  # fmt: skip
+                     "sides: the mean of the spans' means cancels stuck friction, their spread "
+                     "measures it, and what the mean leaves weighs the fit and widens the "
+                     "interval)")  # fmt: skip
     est.add_argument("--after", default=None, help="holding windows, paired with --before")
     est.add_argument("--pose-errors", action="store_true",
-                     help="errors that stay over a pose and vary between poses (stuck joint "
-                     "friction): the interval from the poses' spread (block sandwich, "
-                     "Student's t of its dof; 2 poses or more)")  # fmt: skip
+                     help="errors that stay over a pose, vary between poses and are shared by "
+                     "its joints (a servo's sag, a cable): the interval from the poses' spread "
+                     "(block sandwich, Student's t of its dof; 2 poses or more)")  # fmt: skip
     est.add_argument("--auto", action="store_true",
                      help="find static windows and pair them by configuration")  # fmt: skip
     est.add_argument("--grasp-time", type=float, default=None,
