@@ -76,12 +76,12 @@ def side_friction_cov(
     """
     V = np.square(spread)
     dof = len(dtau) - int(np.linalg.matrix_rank(Y))
+    if dof <= 0 or not np.any(V > 0) or _excess(Y, dtau, cov, dof) <= 0:
+        return SideFriction(spread, 0.0, None), cov  # the noise explains the residuals
     tried = []
     for rho in np.linspace(0.0, 1.0, MIX_STEPS):
         extra = np.diag(((1.0 - rho) * V.mean(axis=0) + rho * V).ravel())
         kappa = _paule_mandel(Y, dtau, cov, extra, dof)
-        if kappa == 0.0:
-            return SideFriction(spread, 0.0, None), cov
         L = np.linalg.cholesky(cov + kappa**2 * extra)
         A = np.linalg.solve(L, Y)
         # REML's -log likelihood less constants: its chi-square term is dof at every rho
@@ -91,28 +91,27 @@ def side_friction_cov(
     return SideFriction(spread, kappa, rho), cov + kappa**2 * extra
 
 
+def _excess(Y, dtau, cov, dof: int) -> float:
+    """The GLS residuals' chi-square per degree of freedom less 1 under covariance ``cov``."""
+    L = np.linalg.cholesky(cov)
+    A, b = np.linalg.solve(L, Y), np.linalg.solve(L, dtau)
+    r = b - A @ np.linalg.lstsq(A, b, rcond=None)[0]
+    return float(r @ r) / dof - 1.0
+
+
 def _paule_mandel(Y, dtau, cov, extra, dof: int) -> float:
-    """The kappa >= 0 at which the GLS residuals' chi-square per degree of freedom is 1.
+    """The kappa > 0 at which the GLS residuals' chi-square per degree of freedom is 1.
 
-    0 where it is at most 1 without the friction (or nothing is left to judge it by); at
-    most MAX_SHARE (errors where the sides agree: the chi-square's rule takes the rest).
-    The value returned leaves the chi-square just above 1.
+    The chi-square exceeds 1 without the friction (``side_friction_cov`` checks); at most
+    MAX_SHARE (errors where the sides agree: the chi-square's rule takes the rest). The
+    value returned leaves the chi-square just above 1.
     """
-
-    def excess(kappa: float) -> float:
-        L = np.linalg.cholesky(cov + kappa**2 * extra)
-        A, b = np.linalg.solve(L, Y), np.linalg.solve(L, dtau)
-        r = b - A @ np.linalg.lstsq(A, b, rcond=None)[0]
-        return float(r @ r) / dof - 1.0
-
-    if dof <= 0 or not np.any(np.diag(extra) > 0) or excess(0.0) <= 0:
-        return 0.0
     lo, hi = 0.0, 1.0
-    while excess(hi) > 0:
+    while _excess(Y, dtau, cov + hi**2 * extra, dof) > 0:
         if hi >= MAX_SHARE:
             return hi
         lo, hi = hi, 2.0 * hi
     while hi - lo > SHARE_TOL * hi:
         mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if excess(mid) > 0 else (lo, mid)
+        lo, hi = (mid, hi) if _excess(Y, dtau, cov + mid**2 * extra, dof) > 0 else (lo, mid)
     return lo

@@ -196,8 +196,8 @@ class Wrench:
         tool_params: (10,) the tool's parameters subtracted (ee frame) along a motion;
             tool_cov: (10, 10); at rest ``tool_mass`` (kg) and ``tool_com_sensor`` (m).
         noise_from: how each window's noise was set (at rest).
-        residual_rms: (6,) per axis, or (2,) force and torque RMS at rest (N, N m);
-            wrench_std: (6,) the noise per axis that weighs the rows along a motion.
+        residual_rms: (6,) per axis, or (2,) force and torque RMS at rest (N, N m).
+        wrench_std: (6,) the noise per axis that weighs the rows along a motion.
         delay_s: the wrench's delay behind the positions (s), or None.
         fit: the fit at rest in the sensor frame (``StaticWrenchFit``), or None.
         wrench_payload, wrench_payload_fit: (k, 6) the payload's wrench along a motion.
