@@ -14,7 +14,11 @@ from comgrasp_pin.errors import ColourDepthMismatchError, UntrustedImageError
 from comgrasp_pin.perception.registration import check_registered, cover_by_shift
 from comgrasp_pin.perception.rod_pieces import join_pieces
 from comgrasp_pin.perception.table_plane import fit_table_plane
-from comgrasp_pin.perception.thin_parts import check_no_thin_part, robot_parts
+from comgrasp_pin.perception.thin_parts import (
+    check_no_hidden_part,
+    check_no_thin_part,
+    robot_parts,
+)
 
 PX_PER_M = 500.0  # 2 mm pixels
 H, W = 300, 400
@@ -80,6 +84,34 @@ def test_a_handle_fading_into_the_table_is_refused():
     table[140:160, 115:160] = False
     with pytest.raises(UntrustedImageError, match=r"at (\d|35\d) deg .* joined to it"):
         check_no_thin_part(heights, head, table, PX_PER_M)
+
+
+@pytest.mark.parametrize(
+    "length, width, noise, refused",
+    [
+        (0.09, 0.04, 0.012, True),  # a mallet's head in a depth a 5 mm handle is lost in
+        (0.09, 0.04, 0.004, False),  # the same head where a 3 mm part would show
+        (0.28, 0.04, 0.012, False),  # a rod's shape (7 times as long as wide)
+        (0.13, 0.04, 0.012, False),  # over 3 times: a rod's shape
+    ],
+)
+def test_a_short_object_in_a_depth_too_noisy_for_a_handle_is_refused(length, width, noise,
+                                                                     refused):  # fmt: skip
+    """In white noise of std s, a 16 cm ray (80 px at 2 mm) has a mean of noise
+    s / sqrt(80): 12 mm gives 1.34 mm, so a part lower than 4 of them (5.4 mm) is not found,
+    above the least height of an object (3 mm): an object under 3 times as long as wide may
+    be a head whose handle is lost, and the message gives the 5.4 mm. 4 mm of noise (a part
+    of 1.8 mm would be found) or a rod's shape pass."""
+    heights = np.random.default_rng(4).normal(0.0, noise, (H, W))
+    table = np.ones((H, W), bool)
+    if not refused:
+        check_no_hidden_part(length, width, heights, table, PX_PER_M)
+        return
+    least = 4 * noise / np.sqrt(0.16 * PX_PER_M)
+    with pytest.raises(UntrustedImageError, match=r"9 cm long and 4\.0 cm wide") as err:
+        check_no_hidden_part(length, width, heights, table, PX_PER_M)
+    shown = float(str(err.value).split("lower than ")[1].split(" mm")[0])
+    assert shown == pytest.approx(1e3 * least, rel=0.08)
 
 
 def _rod_mask(du: int = 0, dv: int = 0) -> np.ndarray:

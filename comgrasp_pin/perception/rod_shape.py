@@ -106,7 +106,7 @@ def check_ends_seen(
         return
     normal = np.array([-direction[1], direction[0]])
     half_width = np.percentile(np.abs((p[:, :2] - centroid) @ normal), 95) + END_BAND
-    rel = np.nan_to_num(points[..., :2] - centroid, nan=np.inf)
+    rel = np.nan_to_num(points[..., :2] - centroid, nan=1e9)  # none: 1e9 m along or across
     along, across = rel @ direction, np.abs(rel @ normal)
     lo, hi = ends
     beyond = ((along < lo) & (along > lo - END_REACH)) | ((along > hi) & (along < hi + END_REACH))

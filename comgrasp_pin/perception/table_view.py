@@ -42,6 +42,7 @@ FLYING_MIN, FLYING_SIGMAS = 0.005, 4.0  # a pixel this far (m, noise stds) from 
 DIP_DEPTH = 0.3  # m below the table's plane: lower than this is the floor
 DIP_REACH = 0.2  # m (a rod dipping at a few degrees is near the plane for centimetres first)
 DIP_PIXELS = 10
+DIP_END_GAP = 0.03  # m: a rod that dips over the edge reaches it (its end this near it)
 DIP_BAND = 0.06  # m beyond the table's edge: a dipping rod goes down from the edge (the drop
 # box's walls and their flying pixels stand 8 cm beyond it)
 CUT_END_BAND = 0.03  # a rod meeting the image's border only this near one end (m) runs out
@@ -143,8 +144,9 @@ def check_no_dip(view: TableView, pick_area, centroid, direction, ends, p, min_h
     across it and 1 cm) and within DIP_REACH beyond one of its ``ends`` (along the axis,
     m), DIP_PIXELS or more points lie between DIP_DEPTH and the height threshold below the
     plane (after an opening: a real camera's flying pixels lie in lines a pixel wide, a rod
-    is a surface); ``min_height`` (m): the
-    top view's height threshold.
+    is a surface); ``min_height`` (m): the top view's height threshold. Only beyond an end
+    that reaches the area's edge (within DIP_END_GAP): table between an end and the edge
+    holds the rod up (what lies below it there is the table's edge seen by a noisy camera).
     """
     z = view.points[..., 2]
     dips = ~in_area(view.points, pick_area, 0.0) & in_area(view.points, pick_area, -DIP_BAND)
@@ -158,7 +160,12 @@ def check_no_dip(view: TableView, pick_area, centroid, direction, ends, p, min_h
     rel = view.points[dips][:, :2] - centroid
     along, across = rel @ direction, np.abs(rel @ normal)
     lo, hi = ends
-    beyond = ((along < lo) & (along > lo - DIP_REACH)) | ((along > hi) & (along < hi + DIP_REACH))
+    # an end DIP_END_GAP or more inside the area has table beyond it: nothing dips from it
+    reaches = [not in_area(centroid + (end + gap) * direction, pick_area, 0.0)
+               for end, gap in ((lo, -DIP_END_GAP), (hi, DIP_END_GAP))]  # fmt: skip
+    beyond = (reaches[0] & (along < lo) & (along > lo - DIP_REACH)) | (
+        reaches[1] & (along > hi) & (along < hi + DIP_REACH)
+    )
     count = int(np.count_nonzero(beyond & (across < half_width)))
     if count >= DIP_PIXELS:
         raise ObjectCutByBorderError(

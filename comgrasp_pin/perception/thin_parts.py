@@ -36,6 +36,7 @@ JOINED_SIGMAS = 8.0  # ... whose mean height stands this many of its noise stds 
 # table (a realistic camera's smear at a rod's end: 4-5)
 MIN_JOINED = 0.0005  # ... and at least this high (m): the table's own unevenness
 ANGLES = 360
+ROD_ASPECT = 3.0  # an object shorter than this many times its width is not a rod's shape
 _KERNEL5 = np.ones((5, 5), np.uint8)
 
 
@@ -110,6 +111,30 @@ def check_no_thin_part(heights: np.ndarray, mask: np.ndarray, table: np.ndarray,
         mean = float(h[k, joined[k]].mean())
         if np.isfinite(part_noise) and mean > max(JOINED_SIGMAS * part_noise, MIN_JOINED):
             _refuse(k, mean, extent, part_noise)
+
+
+def check_no_hidden_part(length: float, width: float, heights: np.ndarray, table: np.ndarray,
+                         px_per_m: float) -> None:  # fmt: skip
+    """UntrustedImageError for a short object in a depth too noisy to see a thin part.
+
+    That is: the object is shorter than ROD_ASPECT times its ``width`` (``length``, m: a
+    mallet's head, a box) and a thin part MIN_MEAN high would not stand SIGMAS of its noise
+    along a ray's max(LENGTHS) (``check_no_thin_part`` could not find it): it may be the
+    head of a tool whose handle the noise hides. ``heights``, ``table``, ``px_per_m``: as
+    ``check_no_thin_part`` has them. A rod's shape, or a depth that would show such a part,
+    passes.
+    """
+    if length >= ROD_ASPECT * width:
+        return
+    least = SIGMAS * _stretch_noise(heights, table, max(5, int(round(max(LENGTHS) * px_per_m))))
+    if not least > MIN_MEAN:  # (NaN: too little table to tell, as check_no_thin_part)
+        return
+    raise UntrustedImageError(
+        f"the object is {1e2 * length:.0f} cm long and {1e2 * width:.1f} cm wide, not a rod's "
+        f"shape, and a thin part lower than {1e3 * least:.1f} mm going on from it would be "
+        "lost in this depth's noise: it may be a tool's head whose handle is not seen; view "
+        "it closer, with a less noisy camera, or give the colour image"
+    )
 
 
 def robot_parts(height: np.ndarray, threshold: float, pixel: float) -> np.ndarray:

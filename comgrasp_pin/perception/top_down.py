@@ -56,7 +56,11 @@ from comgrasp_pin.perception.table_view import (
     overhang,
     view_table,
 )
-from comgrasp_pin.perception.thin_parts import check_no_thin_part, robot_parts
+from comgrasp_pin.perception.thin_parts import (
+    check_no_hidden_part,
+    check_no_thin_part,
+    robot_parts,
+)
 
 PICK_AREA = (0.30, 0.80, -0.35, 0.35)  # x_min, x_max, y_min, y_max of the table (m, world)
 # In a cleaned image (``table_view``) the rod is measured without its 1 px fringe
@@ -155,13 +159,7 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
     check_one_rod(view.points[mask], centroid, direction, view.table_z, view.points_noise,
                   measured)  # fmt: skip
     threshold = stands_at(view)
-    if view.cleaned:
-        area = in_area(view.points, pick_area, EDGE_BAND)
-        table = area & ~cv2.dilate(standing.astype(np.uint8), THIN_PART_CLEAR).astype(bool)
-        height = view.points[..., 2] - view.table_z
-        # only what is too low to stand: what stands is the object or another one
-        low = area & ~robot_parts(height, threshold, pixel) & ~(height > threshold)
-        check_no_thin_part(np.where(low, height, np.nan), mask, table, 1.0 / pixel)
+    low = _check_thin_parts(view, pick_area, standing, mask, pixel) if view.cleaned else None
     along = (p[:, :2] - centroid) @ direction
     lo, hi = np.percentile(along, [0.02, 99.98])
     if view.cleaned:
@@ -203,7 +201,26 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
             f"yaw end: {1e3 * length:.0f} mm of it are seen (the exception's ``seen``)",
             seen=det,
         )
+    if low is not None:  # a short object: a head whose handle the noise hides?
+        check_no_hidden_part(length, float(np.median(widths[:, 1])), *low, 1.0 / pixel)
     return det
+
+
+def _check_thin_parts(view: TableView, pick_area, standing, mask, pixel: float):
+    """``thin_parts.check_no_thin_part`` on what is too low to stand in the pick area.
+
+    What stands is the object or another one; the robot's own parts are left out
+    (``robot_parts``); the table's noise is measured THIN_PART_CLEAR away from what stands.
+    Returns (those heights, the table's pixels) for ``check_no_hidden_part``.
+    """
+    area = in_area(view.points, pick_area, EDGE_BAND)
+    table = area & ~cv2.dilate(standing.astype(np.uint8), THIN_PART_CLEAR).astype(bool)
+    height = view.points[..., 2] - view.table_z
+    threshold = stands_at(view)
+    low = area & ~robot_parts(height, threshold, pixel) & ~(height > threshold)
+    heights = np.where(low, height, np.nan)
+    check_no_thin_part(heights, mask, table, 1.0 / pixel)
+    return heights, table
 
 
 def _core(view: TableView, mask: np.ndarray) -> tuple[np.ndarray, int]:
