@@ -10,14 +10,9 @@ import numpy as np
 import pytest
 
 from comgrasp_pin.camera import PinholeCamera
-from comgrasp_pin.errors import (
-    AmbiguousObjectError,
-    ColourDepthMismatchError,
-    UntrustedImageError,
-)
+from comgrasp_pin.errors import ColourDepthMismatchError, UntrustedImageError
 from comgrasp_pin.perception.registration import check_registered, cover_by_shift
 from comgrasp_pin.perception.rod_pieces import join_pieces
-from comgrasp_pin.perception.rod_shape import check_one_rod
 from comgrasp_pin.perception.table_plane import fit_table_plane
 from comgrasp_pin.perception.thin_parts import (
     check_no_hidden_part,
@@ -117,36 +112,6 @@ def test_a_short_object_in_a_depth_too_noisy_for_a_handle_is_refused(length, wid
         check_no_hidden_part(length, width, heights, table, PX_PER_M)
     shown = float(str(err.value).split("lower than ")[1].split(" mm")[0])
     assert shown == pytest.approx(1e3 * least, rel=0.08)
-
-
-def _slab(along, across, height, rng, noise=0.001):
-    """(N, 3) points on a 2 mm grid over ``along`` x ``across`` (m), at ``height(across)``."""
-    a, c = np.meshgrid(np.arange(*along, 0.002), np.arange(*across, 0.002), indexing="ij")
-    z = height(c.ravel()) + rng.normal(0.0, noise, c.size)
-    return np.column_stack([a.ravel(), c.ravel(), z])
-
-
-def test_a_head_and_its_handle_are_one_rod_and_two_rods_side_by_side_are_not():
-    """A 4 cm high head 9 cm across (6 slices of 1 cm) and a 15 mm handle 1 cm across, whose
-    depth measures it over 6 slices (the rest found by colour): the head's middle bins are
-    seen by the handle's slices too, whose median over 12 slices (6 of 15 mm, 6 of 40) is a
-    12 mm notch there, but the head's own profile is one top: one rod. Two 24 mm rods side by
-    side, touching, over 10 slices: their profile's valley between two tops refuses them.
-    (Points half a bin from the bins' edges, the same across the head and the handle.)"""
-    rng = np.random.default_rng(5)
-    head = _slab((0.2405, 0.30), (-0.0445, 0.045), lambda c: 0.04 + 0 * c, rng)  # 6 slices
-    seen = _slab((0.1805, 0.24), (-0.0045, 0.005), lambda c: 0.015 + 0 * c, rng)  # 6 slices
-    by_colour = _slab((0.0005, 0.18), (-0.0045, 0.005), lambda c: 0.0 * c, rng)
-    p = np.vstack([head, seen, by_colour])
-    measured = np.r_[np.ones(len(head) + len(seen), bool), np.zeros(len(by_colour), bool)]
-    check_one_rod(p, np.zeros(2), np.array([1.0, 0.0]), 0.0, 0.001, measured)
-
-    def two_rods(c):  # two round tops 24 mm high, touching at across = 0
-        return np.sqrt(np.clip(0.012**2 - (np.abs(c) - 0.012) ** 2, 0, None)) + 0.012
-
-    pair = _slab((0.0, 0.1), (-0.024, 0.0241), two_rods, rng)
-    with pytest.raises(AmbiguousObjectError, match="not one rod"):
-        check_one_rod(pair, pair[:, :2].mean(axis=0), np.array([1.0, 0.0]), 0.0, 0.001)
 
 
 def _rod_mask(du: int = 0, dv: int = 0) -> np.ndarray:

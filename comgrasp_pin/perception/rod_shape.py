@@ -234,23 +234,15 @@ def _profile_two_tops(p, centroid, direction, table_z, noise, measured) -> bool:
     rows = np.count_nonzero(np.isfinite(grid).any(axis=1))
     if rows < MIN_SPLIT_SLICES:
         return False
-    grid = grid[:, seen >= 0.5 * rows]  # the bins most slices see ...
-    spanning = np.isfinite(grid).sum(axis=1) >= 0.5 * grid.shape[1]  # ... in the slices
-    # that see most of them (a thin handle's slices would put its height in a head's middle)
-    if np.count_nonzero(spanning) < MIN_SPLIT_SLICES:
+    profile = np.nanmedian(grid[:, seen >= 0.5 * rows], axis=0)  # the bins most slices see
+    profile = profile[PROFILE_EDGE_BINS:-PROFILE_EDGE_BINS]  # (the outline: flying pixels)
+    if len(profile) < 3:
         return False
-    grid = grid[spanning, PROFILE_EDGE_BINS:-PROFILE_EDGE_BINS]  # (the outline: flying pixels)
-    grid = grid[:, np.isfinite(grid).any(axis=0)]
-    if grid.shape[1] < 3:
-        return False
-    profile = np.nanmedian(grid, axis=0)
-    n = np.isfinite(grid).sum(axis=0)
     left = np.maximum.accumulate(profile)
     right = np.maximum.accumulate(profile[::-1])[::-1]
     lower_top = np.minimum(left, right)
-    # a bin's median is over the slices that see it: its noise is noise / sqrt(their number)
     need = np.maximum(np.maximum(MIN_VALLEY, PROFILE_VALLEY_SHARE * lower_top),
-                      VALLEY_SIGMAS * noise / np.sqrt(n))  # fmt: skip
+                      VALLEY_SIGMAS * noise / np.sqrt(rows))  # fmt: skip
     return bool(np.any((lower_top - profile)[1:-1] > need[1:-1]))
 
 
