@@ -202,11 +202,13 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
             seen=det,
         )
     if low is not None:  # a short object: a head whose handle the noise hides?
-        check_no_hidden_part(length, float(np.median(widths[:, 1])), *low, 1.0 / pixel)
+        too_low, table = low
+        check_no_hidden_part(length, float(np.median(widths[:, 1])), too_low, table, 1.0 / pixel)
     return det
 
 
-def _check_thin_parts(view: TableView, pick_area, standing, mask, pixel: float):
+def _check_thin_parts(view: TableView, pick_area, standing, mask,
+                      pixel: float) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """``thin_parts.check_no_thin_part`` on what is too low to stand in the pick area.
 
     What stands is the object or another one; the robot's own parts are left out
