@@ -26,7 +26,6 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 import argparse  # noqa: E402
 import json  # noqa: E402
 import time  # noqa: E402
-import zlib  # noqa: E402
 from collections import Counter  # noqa: E402
 from pathlib import Path  # noqa: E402
 
@@ -48,10 +47,8 @@ def main() -> None:
     renders = rf._Renders()
     rows, counts = [], {}
     for frame in frames:
-        # one noise draw per scene: its shifts and colours are compared on the same depth
-        noise_seed = args.seed * 1000 + zlib.crc32(repr(frame.scene).encode()) % 1000
         for draw in range(args.draws if frame.depth != "clean" else 1):
-            judged = rf.run_frame(frame, renders, noise_seed + 7919 * draw)
+            judged = rf.run_frame(frame, renders, rf.noise_seed(frame, args.seed, draw))
             rows.append({"mode": frame.mode, "parameter": frame.parameter, "draw": draw,
                          **judged})  # fmt: skip
             counts.setdefault(frame.mode, Counter())[judged["outcome"]] += 1

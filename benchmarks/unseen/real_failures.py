@@ -27,6 +27,7 @@ a table's colour matter on structured-light depth only; the clean renders are co
 
 from __future__ import annotations
 
+import zlib
 from dataclasses import dataclass, replace
 
 import cv2
@@ -218,6 +219,12 @@ class _Renders:
         if key not in self._cache:
             self._cache[key] = render_top(scene)
         return self._cache[key]
+
+
+def noise_seed(frame: Frame, seed: int = 0, draw: int = 0) -> int:
+    """The seed of ``frame``'s depth noise: one per scene (its shifts and colours are
+    compared on the same depth), the run's ``seed`` and the ``draw`` moving it."""
+    return seed * 1000 + zlib.crc32(repr(frame.scene).encode()) % 1000 + 7919 * draw
 
 
 def run_frame(frame: Frame, renders, noise_seed: int = 0) -> dict:

@@ -159,7 +159,11 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
     check_one_rod(view.points[mask], centroid, direction, view.table_z, view.points_noise,
                   measured)  # fmt: skip
     threshold = stands_at(view)
-    low = _check_thin_parts(view, pick_area, standing, mask, pixel) if view.cleaned else None
+    low = (
+        _check_thin_parts(view, pick_area, standing, mask, pixel, threshold)
+        if view.cleaned
+        else None
+    )
     along = (p[:, :2] - centroid) @ direction
     lo, hi = np.percentile(along, [0.02, 99.98])
     if view.cleaned:
@@ -207,18 +211,18 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
     return det
 
 
-def _check_thin_parts(view: TableView, pick_area, standing, mask,
-                      pixel: float) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def _check_thin_parts(view: TableView, pick_area, standing, mask, pixel: float,
+                      threshold: float) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """``thin_parts.check_no_thin_part`` on what is too low to stand in the pick area.
 
-    What stands is the object or another one; the robot's own parts are left out
-    (``robot_parts``); the table's noise is measured THIN_PART_CLEAR away from what stands.
+    What stands (above ``threshold``, m) is the object or another one; the robot's own parts
+    are left out (``robot_parts``); the table's noise is measured THIN_PART_CLEAR away from
+    what stands.
     Returns (those heights, the table's pixels) for ``check_no_hidden_part``.
     """
     area = in_area(view.points, pick_area, EDGE_BAND)
     table = area & ~cv2.dilate(standing.astype(np.uint8), THIN_PART_CLEAR).astype(bool)
     height = view.points[..., 2] - view.table_z
-    threshold = stands_at(view)
     low = area & ~robot_parts(height, threshold, pixel) & ~(height > threshold)
     heights = np.where(low, height, np.nan)
     check_no_thin_part(heights, mask, table, 1.0 / pixel)
