@@ -64,36 +64,20 @@ def _add_motion_args(p: argparse.ArgumentParser, d) -> None:
         help="Q1,...,Qn: start and end configuration (rad); default: the SRDF's "
         "home/default state, a UR arm's home, else the URDF's neutral",
     )
-    p.add_argument(
-        "--velocity-scale",
-        type=float,
-        default=d.velocity_scale,
-        help="share of the URDF's velocity limits the motion may use",
-    )
-    p.add_argument(
-        "--acceleration",
-        type=float,
-        default=d.acceleration_limit,
-        help="acceleration limit of every joint (rad/s^2; URDFs carry none)",
-    )
-    p.add_argument(
-        "--wrist-range",
-        type=float,
-        default=d.wrist_range_rad,
-        help="largest excursion of the last three joints from the start (rad)",
-    )
-    p.add_argument(
-        "--arm-range",
-        type=float,
-        default=d.arm_range_rad,
-        help="largest excursion of the other joints from the start (rad)",
-    )
-    p.add_argument(
-        "--min-height",
-        type=float,
-        default=d.min_height_m,
-        help="floor clearance of the wrist joints and the ee (m, above the base)",
-    )
+    limits = (  # (flag, default, help): the motion's limits, all floats
+        ("--velocity-scale", d.velocity_scale,
+         "share of the URDF's velocity limits the motion may use"),
+        ("--acceleration", d.acceleration_limit,
+         "acceleration limit of every joint (rad/s^2; URDFs carry none)"),
+        ("--wrist-range", d.wrist_range_rad,
+         "largest excursion of the last three joints from the start (rad)"),
+        ("--arm-range", d.arm_range_rad,
+         "largest excursion of the other joints from the start (rad)"),
+        ("--min-height", d.min_height_m,
+         "floor clearance of the wrist joints and the ee (m, above the base)"),
+    )  # fmt: skip
+    for flag, default, text in limits:
+        p.add_argument(flag, type=float, default=default, help=text)
     p.add_argument(
         "--srdf",
         default=None,

@@ -8,13 +8,10 @@ from pathlib import Path
 
 import numpy as np
 
+from comgrasp_pin.experiments import stats
+from comgrasp_pin.experiments.report import common
 from comgrasp_pin.experiments.report.calibration import calibration_table, calibration_z
 from comgrasp_pin.experiments.report.common import (
-    N01_COV68,
-    NOT_RECORDED,
-    TARGET_COV95_BIN,
-    TARGET_COV95_OVERALL,
-    TARGET_RMS_Z,
     abs_tilts,
     bin_label,
     load_pyplot,
@@ -23,12 +20,6 @@ from comgrasp_pin.experiments.report.common import (
     recorded,
     rows_of,
     without_errors,
-)
-from comgrasp_pin.experiments.stats import (
-    CALIBRATION_BINS_DEG,
-    binned_calibration,
-    calibration,
-    wilson_interval,
 )
 
 Z_SPAN = 5.0  # the histogram's z axis: -5 to 5, beyond in the end bins
@@ -51,7 +42,7 @@ def _calibration_row(axes, rows, objects, edges, colours, markers, extra: bool):
         total += len(z)
         colour, marker = colours[g % len(colours)], markers[g % len(markers)]
         _z_histogram(ax_h, z, name, colour, extra)
-        per_bin = binned_calibration(theta, z, edges) + [(0, 0, calibration(z))]
+        per_bin = stats.binned_calibration(theta, z, edges) + [(0, 0, stats.calibration(z))]
         dodge = 0.0 if not extra else (g - 0.5 * (len(groups) - 1)) * 0.25
         _coverage_points(ax_c, positions + dodge, per_bin, name, colour, marker, extra)
         xs = [p + dodge for p, (_, _, c) in zip(positions, per_bin) if c.n]
@@ -108,7 +99,7 @@ def _coverage_points(ax, xs, per_bin: list, name: str, colour: str, marker: str,
             if not c.n:
                 continue
             k = getattr(c, attr)
-            lo, hi = wilson_interval(k, c.n)
+            lo, hi = stats.wilson_interval(k, c.n)
             x_drawn.append(x + (0.0 if level == 0 else 0.12))
             ps.append(100 * k / c.n)
             lo_err.append(max(0.0, 100 * k / c.n - 100 * lo))
@@ -149,16 +140,22 @@ def _finish_histogram(ax, n_ref: float) -> None:
 def _finish_coverage(ax) -> None:
     """The coverage targets and N(0, 1)'s 68.3 %, the axes' labels."""
     ax.axhspan(
-        100 * TARGET_COV95_OVERALL[0],
-        100 * TARGET_COV95_OVERALL[1],
+        100 * common.TARGET_COV95_OVERALL[0],
+        100 * common.TARGET_COV95_OVERALL[1],
         color="#cfe8cf",
         zorder=0,
         label="95 % target, overall (93–97 %)",
     )
     ax.axhline(
-        100 * TARGET_COV95_BIN, color="0.35", ls="--", lw=1, label="95 % target, every bin (≥ 90 %)"
+        100 * common.TARGET_COV95_BIN,
+        color="0.35",
+        ls="--",
+        lw=1,
+        label="95 % target, every bin (≥ 90 %)",
     )
-    ax.axhline(100 * N01_COV68, color="0.35", ls=":", lw=1, label="N(0, 1) inside ±1σ: 68.3 %")
+    ax.axhline(
+        100 * common.N01_COV68, color="0.35", ls=":", lw=1, label="N(0, 1) inside ±1σ: 68.3 %"
+    )
     ax.set_ylim(0, 103)
     ax.set_ylabel("grasps inside the interval (%)", fontsize=9)
     ax.set_title("coverage per tilt bin (95 % Wilson intervals)", fontsize=9, loc="left")
@@ -167,7 +164,13 @@ def _finish_coverage(ax) -> None:
 def _finish_rms(ax) -> None:
     """The rms z target band and the y axis: linear, or log with plain numbers where a
     heavy tail takes rms z above 3."""
-    ax.axhspan(TARGET_RMS_Z[0], TARGET_RMS_Z[1], color="#cfe8cf", zorder=0, label="target 0.9–1.1")
+    ax.axhspan(
+        common.TARGET_RMS_Z[0],
+        common.TARGET_RMS_Z[1],
+        color="#cfe8cf",
+        zorder=0,
+        label="target 0.9–1.1",
+    )
     ax.axhline(1.0, color="0.35", ls=":", lw=1)
     drawn = [v for line in ax.get_lines() for v in np.asarray(line.get_ydata(), float)]
     top = max([1.2] + [v for v in drawn if np.isfinite(v)])
@@ -217,7 +220,7 @@ def calibration_figure(rows: Sequence[dict], path: Path) -> Path:
         ax.text(
             0.5,
             0.5,
-            f"pos_std_m {NOT_RECORDED} in these rows: no calibration",
+            f"pos_std_m {common.NOT_RECORDED} in these rows: no calibration",
             ha="center",
             va="center",
             fontsize=11,
@@ -235,7 +238,7 @@ def calibration_figure(rows: Sequence[dict], path: Path) -> Path:
                 fontsize=11,
                 fontweight="bold",
             )
-            _calibration_row(axes, ok, objs, CALIBRATION_BINS_DEG, ["#1b4f8a"], ["s"], False)
+            _calibration_row(axes, ok, objs, stats.CALIBRATION_BINS_DEG, ["#1b4f8a"], ["s"], False)
         else:
             sub.suptitle(
                 "Extra objects (not in the paper), each on its own", fontsize=11, fontweight="bold"
@@ -244,7 +247,7 @@ def calibration_figure(rows: Sequence[dict], path: Path) -> Path:
                 axes,
                 ok,
                 objs,
-                CALIBRATION_BINS_DEG,
+                stats.CALIBRATION_BINS_DEG,
                 ["#7b3294", "#008837", "#a6611a"],
                 ["D", "^", "P"],
                 True,
@@ -261,8 +264,8 @@ def calibration_section(rows: Sequence[dict], out: Path, objects=None) -> str:
     objects = objects_in(ok, objects)
     if not recorded(ok, "pos_std_m"):
         return (
-            f"`pos_std_m` (the stated standard deviation of each estimate) is {NOT_RECORDED} "
-            "in this run: no calibration."
+            "`pos_std_m` (the stated standard deviation of each estimate) is "
+            f"{common.NOT_RECORDED} in this run: no calibration."
         )
     calibration_figure(rows, Path(out) / "calibration.png")
     return "![calibration](calibration.png)\n\n" + calibration_table(rows, objects)

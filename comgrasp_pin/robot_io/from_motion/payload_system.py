@@ -21,17 +21,10 @@ import pinocchio as pin
 
 from comgrasp_pin.estimation.payload_regressor import regressor_rows
 from comgrasp_pin.robot import RobotModel
+from comgrasp_pin.robot_io.from_motion import motion_system
 from comgrasp_pin.robot_io.from_motion.alignment import align_empty
 from comgrasp_pin.robot_io.from_motion.arm_model import ArmModel, arm_columns, check_matches
 from comgrasp_pin.robot_io.from_motion.motion_signals import MotionSamples, motion_samples
-from comgrasp_pin.robot_io.from_motion.motion_system import (
-    delay_column,
-    fast_signals,
-    friction_columns,
-    joint_columns,
-    lowpassed,
-    offset_columns,
-)
 from comgrasp_pin.robot_io.log_files.joint_readers import JointLog
 from comgrasp_pin.robot_io.log_files.log_values import on_grid
 
@@ -80,31 +73,31 @@ def payload_system(
     k, n = S.q.shape
 
     def filtered(terms, source=fast, times=S.t):  # the model's terms filtered like tau
-        return lowpassed(source, cutoff_hz, terms, times)
+        return motion_system.lowpassed(source, cutoff_hz, terms, times)
 
     alignment, arm_jac = None, None
     if empty_log is not None:
         E, found = align_empty(robot, S, empty_log, empty_window, cutoff_hz)
         alignment = found.as_dict()
-        fast_empty = fast_signals(robot, empty_log, empty_window, cutoff_hz)
+        fast_empty = motion_system.fast_signals(robot, empty_log, empty_window, cutoff_hz)
         rnea_empty = filtered(lambda F: rnea(robot, F), fast_empty, E.t)
         b = (S.tau - filtered(lambda F: rnea(robot, F))) - (E.tau - rnea_empty)
-        b_gain, columns, source = S.tau - E.tau, offset_columns(S), EMPTY_RUN
+        b_gain, columns, source = S.tau - E.tau, motion_system.offset_columns(S), EMPTY_RUN
     elif arm_model is not None:
         check_matches(arm_model, robot, log)
         arm_jac = filtered(
             lambda F: arm_columns(robot, arm_model.base_columns, F).reshape(len(F.t), n, -1)
         ).reshape(k * n, -1)
         b = S.tau - (arm_jac @ arm_model.params).reshape(k, n)
-        b_gain, columns, source = b, offset_columns(S), ARM_MODEL
+        b_gain, columns, source = b, motion_system.offset_columns(S), ARM_MODEL
     else:
         b = S.tau - filtered(lambda F: rnea(robot, F))
-        friction = filtered(lambda F: np.stack(friction_columns(F), axis=1))
+        friction = filtered(lambda F: np.stack(motion_system.friction_columns(F), axis=1))
         b_gain, source = S.tau, NOMINAL
-        columns = offset_columns(S) + [friction[:, 0], friction[:, 1]]
-    A_x = joint_columns(columns)
+        columns = motion_system.offset_columns(S) + [friction[:, 0], friction[:, 1]]
+    A_x = motion_system.joint_columns(columns)
     if source != EMPTY_RUN:
-        A_x = np.column_stack([A_x, delay_column(fast, S)])
+        A_x = np.column_stack([A_x, motion_system.delay_column(fast, S)])
     return PayloadSystem(S, Y, b, b_gain, A_x, len(columns), source, arm_jac, alignment)
 
 
@@ -114,8 +107,10 @@ def payload_columns(robot: RobotModel, log: JointLog, window, cutoff_hz: float, 
     Y (k, n, 10) is computed on ``fast`` and low-passed like the torques (``lowpassed``).
     """
     S = motion_samples(robot, log, window, cutoff_hz, crop=crop)
-    fast = fast_signals(robot, log, window, cutoff_hz)
-    Y = lowpassed(fast, cutoff_hz, lambda F: regressor_rows(robot, F.q, F.qd, F.qdd), S.t)
+    fast = motion_system.fast_signals(robot, log, window, cutoff_hz)
+    Y = motion_system.lowpassed(
+        fast, cutoff_hz, lambda F: regressor_rows(robot, F.q, F.qd, F.qdd), S.t
+    )
     return S, fast, Y
 
 
@@ -157,5 +152,7 @@ def pipeline_bias(robot: RobotModel, log: JointLog, window, cutoff_hz: float,
     exact = replace(log, position=q, effort=regressor_rows(robot, q, qd, qdd) @ pi,
                     current_gains=None, velocity=None if log.velocity is None else qd)  # fmt: skip
     S, _, Y = payload_columns(robot, exact, window, cutoff_hz, crop=True)
-    A = np.column_stack([Y.reshape(-1, 10), joint_columns(offset_columns(S))])
+    A = np.column_stack(
+        [Y.reshape(-1, 10), motion_system.joint_columns(motion_system.offset_columns(S))]
+    )
     return np.linalg.lstsq(A, S.tau.reshape(-1), rcond=None)[0][:10] - pi
