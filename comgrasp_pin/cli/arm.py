@@ -51,7 +51,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     robot = _robot(args)
     gains = gains_from_args(args, robot)
     try:
-        log = one_log(args.bag, args.csv, "--bag", "--csv", robot, args.topic, gains)
+        log = one_log(args.bag, args.csv, robot, args.topic, gains)
     except LogError as exc:
         if not guessed:
             raise
@@ -86,8 +86,8 @@ def _cmd_calibrate(args: argparse.Namespace) -> int:
     gains = gains_from_args(args, robot)
     if gains is None:  # the logs read as currents: gains of 1 N m per A
         gains = Gains(np.ones(robot.nq), np.zeros((robot.nq, robot.nq)), "unit gains")
-    loaded = one_log(None, args.csv, "--bag", "--csv", robot, None, gains)
-    empty = one_log(None, args.empty_csv, "--bag", "--empty-csv", robot, None, gains)
+    loaded = one_log(None, args.csv, robot, None, gains)
+    empty = one_log(None, args.empty_csv, robot, None, gains)
     cal = calibrate_gains(robot, loaded, empty, args.known_mass, args.known_mass_std, args.cutoff)
     extra = {
         "known_mass_kg": cal.known_mass_kg,
@@ -141,8 +141,9 @@ def add_arm_subcommands(sub: argparse._SubParsersAction) -> None:
         formatter_class=_DEFAULTS,
     )
     _common(ident, ee_required=False)
-    ident.add_argument("--csv", default=None, help="the empty arm's run: CSV or UR recording")
-    ident.add_argument("--bag", default=None, help="the empty arm's run: ROS 2 bag")
+    run = ident.add_mutually_exclusive_group(required=True)  # the empty arm's run
+    run.add_argument("--csv", default=None, help="the empty arm's run: CSV or UR recording")
+    run.add_argument("--bag", default=None, help="the empty arm's run: ROS 2 bag")
     ident.add_argument("--topic", default=DEFAULT_TOPIC, help="JointState topic of --bag")
     ident.add_argument("--window", default=None, help="T0:T1, the part of the log to use (s)")
     ident.add_argument("--out", default="ARM.json", help="the arm model JSON")

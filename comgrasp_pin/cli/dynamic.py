@@ -23,10 +23,11 @@ def add_dynamic_args(est: argparse.ArgumentParser) -> None:
     g.add_argument("--dynamic", action="store_true",
                    help="identify the inertia too, from a motion (the log's efforts, positions "
                    "and velocities where logged)")  # fmt: skip
-    g.add_argument("--empty-bag", default=None,
+    empty = g.add_mutually_exclusive_group()  # the empty run: one of them, or none
+    empty.add_argument("--empty-bag", default=None,
                    help="the same motion with the empty arm (ROS 2 bag); subtracted sample "
                    "by sample. Without it the URDF's model stands for the arm")  # fmt: skip
-    g.add_argument("--empty-csv", default=None, help="the empty-arm motion as a CSV")
+    empty.add_argument("--empty-csv", default=None, help="the empty-arm motion as a CSV")
     g.add_argument("--window", default=None, help="T0:T1, the motion's part of the log (s)")
     g.add_argument("--empty-window", default=None, help="T0:T1 of the empty-arm log (s)")
     g.add_argument("--cutoff", type=float, default=CUTOFF_HZ,
@@ -63,9 +64,8 @@ def run_dynamic(args: argparse.Namespace, robot) -> int:
         raise InvalidInputError("give an empty-arm run (--empty-csv/--empty-bag) or "
                                 "--arm-model, not both")  # fmt: skip
     arm = None if args.arm_model is None else load_arm_model(args.arm_model)
-    log = one_log(args.bag, args.csv, "--bag", "--csv", robot, args.topic, gains, required=True)
-    empty = one_log(args.empty_bag, args.empty_csv, "--empty-bag", "--empty-csv", robot,
-                    args.topic, gains, required=False)  # fmt: skip
+    log = one_log(args.bag, args.csv, robot, args.topic, gains)
+    empty = one_log(args.empty_bag, args.empty_csv, robot, args.topic, gains)
     est = estimate_payload_dynamic(
         robot, log, empty, window(args.window, "--window"),
         window(args.empty_window, "--empty-window"), args.cutoff, prior(args.prior),
@@ -87,17 +87,16 @@ def run_dynamic(args: argparse.Namespace, robot) -> int:
     return finish_estimate(args, robot, est, plot)
 
 
-def one_log(bag, csv, bag_opt, csv_opt, robot, topic, gains=None, required: bool = True):
-    """The log of ``--bag`` or ``--csv`` (one of them), read with ``gains``; None if neither."""
-    from comgrasp_pin.cli.exports import log_path
+def one_log(bag, csv, robot, topic, gains=None):
+    """The log of a ``--bag``/``--csv`` pair of options, read with ``gains``; None if neither.
+
+    The parser lets one of the pair at most be given (a mutually exclusive group).
+    """
     from comgrasp_pin.robot_io.log_files import read_bag, read_csv
 
-    path = log_path(bag, csv, bag_opt, csv_opt, required)
-    if path is None:
-        return None
     if bag is not None:
         return read_bag(bag, robot.joint_names, topic, None, gains)
-    return read_csv(csv, robot.joint_names, gains)
+    return None if csv is None else read_csv(csv, robot.joint_names, gains)
 
 
 def window(text: str | None, option: str):

@@ -139,15 +139,6 @@ def write_exports(args: argparse.Namespace, robot, payload, urdf_path=None) -> l
     return write_rendered(render_exports(args, robot, payload, urdf_path))
 
 
-def log_path(bag, csv, bag_opt: str = "--bag", csv_opt: str = "--csv", required: bool = True):
-    """The one log path of a ``--bag``/``--csv`` pair of options, or None where neither."""
-    if bag is not None and csv is not None:
-        raise InvalidInputError(f"give one of {bag_opt} and {csv_opt}, not both")
-    if bag is None and csv is None and required:
-        raise InvalidInputError(f"give the log: {bag_opt} PATH or {csv_opt} PATH")
-    return bag if bag is not None else csv
-
-
 def finish_estimate(args: argparse.Namespace, robot, est, extra=None) -> int:
     """Every estimate command's ending: RESULT.json, the summary, the payload files.
 

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from comgrasp_pin.cli.dynamic import add_dynamic_args, run_dynamic
-from comgrasp_pin.cli.exports import add_export_args, finish_estimate, log_path
+from comgrasp_pin.cli.exports import add_export_args, finish_estimate
 from comgrasp_pin.cli.gains_args import add_gains_args, gains_from_args
 from comgrasp_pin.cli.motion import add_plan_motion, run_plan_motion
 from comgrasp_pin.cli.wrench import add_wrench_args, run_wrench
@@ -53,7 +53,6 @@ def _log_and_windows(args: argparse.Namespace, robot):
     from comgrasp_pin.robot_io.at_rest import pair_by_configuration, parse_windows, spans
     from comgrasp_pin.robot_io.log_files import read_bag, read_csv
 
-    log_path(args.bag, args.csv)
     if args.auto and args.grasp_time is None:
         raise InvalidInputError("--auto needs --grasp-time T (s from the log's start)")
     if not args.auto and (args.before is None or args.after is None):
@@ -178,12 +177,13 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
         formatter_class=_DEFAULTS,
     )
     add_robot_args(est)
-    est.add_argument("--bag", default=None, help="ROS 2 bag (folder, .db3 or .mcap)")
-    est.add_argument("--topic", default=DEFAULT_TOPIC, help="sensor_msgs/msg/JointState topic")
-    est.add_argument("--csv", default=None,
+    log = est.add_mutually_exclusive_group(required=True)  # the log: one of them
+    log.add_argument("--bag", default=None, help="ROS 2 bag (folder, .db3 or .mcap)")
+    log.add_argument("--csv", default=None,
                      help="CSV with time, J.position, J.effort columns, or a UR recording as "
                      "RTDE's record.py or ur_rtde writes it (timestamp, actual_q_i, "
                      "actual_current_i...)")  # fmt: skip
+    est.add_argument("--topic", default=DEFAULT_TOPIC, help="sensor_msgs/msg/JointState topic")
     add_gains_args(est)
     est.add_argument("--before", default=None,
                      help="empty-arm windows T0:T1[,T0:T1...] (s from the log's start); one "

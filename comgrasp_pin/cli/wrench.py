@@ -84,7 +84,6 @@ def _drift(text: str | None) -> tuple[tuple[float, float], tuple[float, float]]:
 
 def read_wrench(args: argparse.Namespace, robot):
     """The WrenchLog of ``--bag`` or ``--csv`` (a project CSV or a UR recording)."""
-    from comgrasp_pin.cli.exports import log_path
     from comgrasp_pin.robot_io.log_files.wrench_sources import read_wrench_log
 
     if args.grasp_time is not None:
@@ -99,7 +98,7 @@ def read_wrench(args: argparse.Namespace, robot):
         )
     if args.auto and args.windows is not None:
         raise InvalidInputError("give --auto (find the still windows) or --windows, not both")
-    path = log_path(args.bag, args.csv)
+    path = args.bag if args.bag is not None else args.csv  # the parser: one of them
     return read_wrench_log(path, robot, args.sensor_frame, args.wrench_topic, args.topic,
                            args.tcp_frame)  # fmt: skip
 

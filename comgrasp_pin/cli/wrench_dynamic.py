@@ -15,10 +15,9 @@ from comgrasp_pin.errors import InvalidInputError
 
 
 def _empty_log(args: argparse.Namespace, robot):
-    from comgrasp_pin.cli.exports import log_path
     from comgrasp_pin.robot_io.log_files.wrench_sources import read_wrench_log
 
-    path = log_path(args.empty_bag, args.empty_csv, "--empty-bag", "--empty-csv", False)
+    path = args.empty_bag if args.empty_bag is not None else args.empty_csv  # at most one
     if path is None:
         return None
     return read_wrench_log(path, robot, args.sensor_frame, args.wrench_topic, args.topic,
