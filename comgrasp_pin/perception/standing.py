@@ -13,7 +13,12 @@ import cv2
 import numpy as np
 
 from comgrasp_pin.errors import ObjectCutByBorderError, ObjectNotFoundError
-from comgrasp_pin.perception._points import border_pixels, largest_component
+from comgrasp_pin.perception._points import (
+    border_pixels,
+    largest_component,
+    noise_level,
+    slice_medians,
+)
 from comgrasp_pin.perception.registration import check_registered
 from comgrasp_pin.perception.rod_pieces import join_pieces
 from comgrasp_pin.perception.rod_shape import check_one_object, reaching_border
@@ -26,6 +31,11 @@ MIN_PIXELS = 40
 # stds above it, and gaps of up to 4 px close.
 HEIGHT_SIGMAS = 2.5
 CLOSE_KERNEL = np.ones((5, 5), np.uint8)
+MARK_CLEAR = np.ones((9, 9), np.uint8)  # a colour mark's height noise is measured on table
+# this far from what stands on it, with the mark's shape laid at this many places at least
+MARK_PLACES = 20
+DETECT_SNR = 4.0  # what stands lower than this many noise stds (its median; after the
+# cleaning's median) is not told from the noise's own bumps: not the rod, nor another object
 EDGE_BAND = 0.01  # the table's height and noise are measured this far inside its edge (m)
 
 
@@ -63,8 +73,12 @@ def segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, np
     if view.cleaned:  # a rod broken apart by the noise, joined again
         mask, bridge = join_pieces(view.points, inside & standing, mask, view.table_z)
         standing = standing | bridge
-    check_one_object(inside & standing, mask, at_edge=reaching_border(standing))  # other
-    # objects are the reason to refuse first
+    objects = inside & standing
+    if view.cleaned:
+        objects &= ~noise_bumps(objects & ~mask, view.points[..., 2] - view.table_z,
+                                DETECT_SNR * view.points_noise)  # fmt: skip
+    check_one_object(objects, mask, at_edge=reaching_border(standing))  # other objects are
+    # the reason to refuse first
     if border_pixels(mask).any():
         raise ObjectCutByBorderError(
             "the object runs out of the top-down image (inside the pick area): part of it is "
@@ -72,10 +86,12 @@ def segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, np
         )
     if view.cleaned and rgb is not None:
         height = float(np.median(z[mask])) - view.table_z
-        if height < min_height:
+        table = inside & ~cv2.dilate(standing.astype(np.uint8), MARK_CLEAR).astype(bool)
+        least = max(MIN_HEIGHT, DETECT_SNR * median_noise(z - view.table_z, mask, table))
+        if not height >= least:
             raise ObjectNotFoundError(
                 f"what differs from the table in colour stands {1e3 * height:.1f} mm above it "
-                f"(less than {1e3 * min_height:.1f} mm): a mark or a shadow, not an object"
+                f"(less than {1e3 * least:.1f} mm): a mark or a shadow, not an object"
             )
     mask, rod_standing = over_the_edge(view, mask, inside, standing, in_depth, min_height)
     return mask, rod_standing, standing & ~in_depth, bool(border_pixels(mask).any())
@@ -87,6 +103,44 @@ def stands_at(view: TableView) -> float:
     MIN_HEIGHT, or HEIGHT_SIGMAS of the camera's noise where that is higher.
     """
     return max(MIN_HEIGHT, HEIGHT_SIGMAS * view.noise)
+
+
+def noise_bumps(blobs: np.ndarray, height: np.ndarray, least: float) -> np.ndarray:
+    """(H, W) bool: the noise's own bumps among ``blobs`` ((H, W) bool).
+
+    That is: the 8-connected blobs whose median ``height`` ((H, W), m) is below ``least``
+    (m), which no height tells from an object.
+    """
+    count, labels = cv2.connectedComponents(blobs.astype(np.uint8), connectivity=8)
+    found = labels > 0
+    ids, medians = slice_medians(labels[found], (height[found],), 1)
+    low = np.zeros(count, bool)
+    low[ids[medians[:, 0] < least]] = True
+    return low[labels]
+
+
+def median_noise(height: np.ndarray, blob: np.ndarray, table: np.ndarray) -> float:
+    """The noise (m, robust std) of the median ``height`` over a blob of ``blob``'s shape.
+
+    Measured, not modelled: the blob's shape is laid over the bare ``table`` ((H, W) bool)
+    at MARK_PLACES places on a grid, and the spread of the medians there is taken; the
+    depth's noise is correlated over a few pixels, which no count of pixels would say.
+    ``height``: (H, W) above the table (m). NaN where the table has too few places.
+    """
+    rows, cols = np.nonzero(blob)
+    rows, cols = rows - rows.min(), cols - cols.min()
+    h, w = table.shape
+    spans = (h - rows.max() - 1, w - cols.max() - 1)
+    if min(spans) <= 0:
+        return float("nan")
+    medians = []
+    steps = int(np.ceil(np.sqrt(4 * MARK_PLACES)))
+    for r0 in np.linspace(0, spans[0], steps).astype(int):
+        for c0 in np.linspace(0, spans[1], steps).astype(int):
+            on = table[rows + r0, cols + c0]
+            if on.mean() >= 0.9:
+                medians.append(np.median(height[rows[on] + r0, cols[on] + c0]))
+    return noise_level(np.array(medians)) if len(medians) >= MARK_PLACES else float("nan")
 
 
 def closed(mask: np.ndarray) -> np.ndarray:

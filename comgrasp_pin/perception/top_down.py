@@ -39,6 +39,7 @@ from comgrasp_pin.perception.grasp_points import (  # noqa: F401 (their home bef
 from comgrasp_pin.perception.rod_detection import RodDetection
 from comgrasp_pin.perception.rod_shape import check_ends_seen, check_one_rod
 from comgrasp_pin.perception.standing import (  # noqa: F401 (the thresholds' names here too)
+    DETECT_SNR,
     EDGE_BAND,
     HEIGHT_SIGMAS,
     MAX_HEIGHT,
@@ -66,9 +67,8 @@ PICK_AREA = (0.30, 0.80, -0.35, 0.35)  # x_min, x_max, y_min, y_max of the table
 # In a cleaned image (``table_view``) the rod is measured without its 1 px fringe
 ERODE_PX = 1  # (2 holds flying pixels better, 35 % dropouts worse)
 KEEP_EXTENT = 0.8  # ... unless the eroded rod is shorter than this share (a thin rod's handle gone)
-DETECT_SNR = 4.0  # a rod lower than this many noise stds (after the median) is not told
-# from the noise's own bumps
-END_SNR = 8.0  # ... and below this many its ends are left to a colour image, if one is given
+END_SNR = 8.0  # a rod below this many noise stds (down to ``standing.DETECT_SNR``): its
+# ends are left to a colour image, if one is given
 THIN_PART_CLEAR = np.ones((9, 9), np.uint8)  # the table's noise is measured this far from
 # what stands on it (``thin_parts``)
 
