@@ -87,7 +87,8 @@ def segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, np
     if view.cleaned and rgb is not None:
         height = float(np.median(z[mask])) - view.table_z
         table = inside & ~cv2.dilate(standing.astype(np.uint8), MARK_CLEAR).astype(bool)
-        least = max(MIN_HEIGHT, DETECT_SNR * median_noise(z - view.table_z, mask, table))
+        noise = median_noise(z - view.table_z, mask, table)  # NaN: the pixel's threshold
+        least = max(MIN_HEIGHT, DETECT_SNR * noise) if np.isfinite(noise) else min_height
         if not height >= least:
             raise ObjectNotFoundError(
                 f"what differs from the table in colour stands {1e3 * height:.1f} mm above it "
@@ -122,24 +123,26 @@ def noise_bumps(blobs: np.ndarray, height: np.ndarray, least: float) -> np.ndarr
 def median_noise(height: np.ndarray, blob: np.ndarray, table: np.ndarray) -> float:
     """The noise (m, robust std) of the median ``height`` over a blob of ``blob``'s shape.
 
-    Measured, not modelled: the blob's shape is laid over the bare ``table`` ((H, W) bool)
-    at MARK_PLACES places on a grid, and the spread of the medians there is taken; the
-    depth's noise is correlated over a few pixels, which no count of pixels would say.
-    ``height``: (H, W) above the table (m). NaN where the table has too few places.
+    Measured, not modelled: the blob's shape is laid over the image at places on a grid, and
+    the spread of the medians of ``height`` ((H, W), m) over its pixels that land on the bare
+    ``table`` ((H, W) bool) is taken, where at least half of them do (a long rod's shape
+    fits nowhere whole; a median over fewer pixels scatters more, so the noise is not
+    underestimated). The depth's noise is correlated over a few pixels, which no count of
+    pixels would say. NaN where fewer than MARK_PLACES places hold half the shape.
     """
     rows, cols = np.nonzero(blob)
     rows, cols = rows - rows.min(), cols - cols.min()
     h, w = table.shape
-    spans = (h - rows.max() - 1, w - cols.max() - 1)
-    if min(spans) <= 0:
-        return float("nan")
+    steps = int(np.ceil(np.sqrt(16 * MARK_PLACES)))
     medians = []
-    steps = int(np.ceil(np.sqrt(4 * MARK_PLACES)))
-    for r0 in np.linspace(0, spans[0], steps).astype(int):
-        for c0 in np.linspace(0, spans[1], steps).astype(int):
-            on = table[rows + r0, cols + c0]
-            if on.mean() >= 0.9:
-                medians.append(np.median(height[rows[on] + r0, cols[on] + c0]))
+    for r0 in np.linspace(-rows.max(), h - 1, steps).astype(int):
+        for c0 in np.linspace(-cols.max(), w - 1, steps).astype(int):
+            r, c = rows + r0, cols + c0
+            seen = (r >= 0) & (r < h) & (c >= 0) & (c < w)
+            on = np.zeros(len(r), bool)
+            on[seen] = table[r[seen], c[seen]]
+            if 2 * on.sum() >= len(r):
+                medians.append(np.median(height[r[on], c[on]]))
     return noise_level(np.array(medians)) if len(medians) >= MARK_PLACES else float("nan")
 
 
