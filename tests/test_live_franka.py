@@ -186,26 +186,39 @@ def motion_file(tmp_path_factory):
 
 
 def test_a_payload_is_identified_along_a_planned_motion(tmp_path, motion_file):
+    """franky-sim runs in real time, so no two sessions are the same: on a busy machine a
+    session can be several times noisier than at idle (a CI run: mass std 4.2 % instead of
+    about 1 %, the truth 1.7 std off) or refused (its halves 3.1 std apart). Every session
+    that identifies must hold the truth within its interval (never a confident wrong
+    answer); one of two sessions must also be as precise as the benchmark's at idle."""
     spec = ",".join(f"{v:g}" for v in (MASS, *COM, *MOMENTS))
-    res = live(tmp_path, "--sim", "--yes", "--set-load", "--motion", str(motion_file),
-               "--sim-payload", spec)  # fmt: skip
-    assert res.returncode == 0, res.stderr
-    r = json.loads((tmp_path / "RESULT.json").read_text())
-    assert r["verdict"] == "identified" and r["mode"] == "a motion's joint torques"
-    mass, com = r["mass_kg"], np.array(r["com_m"])
-    # 20 payloads (benchmarks/live_franka.py --motion): mass within 2.4 %, CoM within 23 mm
-    # (benchmarks/README.md); the intervals below are the sharp check
-    assert abs(mass - MASS) < 0.05 * MASS
-    assert np.linalg.norm(com - COM) < 30e-3
-    std = np.array([r["std"]["mass_kg"], *r["std"]["com_m"]])
-    assert np.all(np.abs(np.r_[mass, com] - np.r_[MASS, COM]) < 4.5 * std)
-    info = json.loads((tmp_path / "live.json").read_text())
-    assert info["set_load"]["agrees"] and info["motion"] == str(motion_file)
-    # the same numbers offline, from the written log and windows
-    cmd = [sys.executable, "-m", "comgrasp_pin.cli", *info["offline"].split()[1:]]
-    off = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
-    assert off.returncode == 0, off.stderr
-    assert json.loads((tmp_path / "RESULT_offline.json").read_text()) == r
+    precise = []
+    for attempt in range(2):
+        out = tmp_path / f"session{attempt}"
+        res = live(out, "--sim", "--yes", "--set-load", "--motion", str(motion_file),
+                   "--sim-payload", spec)  # fmt: skip
+        no_traceback(res)
+        if res.returncode == 2 and "Nothing was sent to the robot" in res.stderr:
+            continue  # refused by the trust rules: no load set, no answer
+        assert res.returncode == 0, res.stderr
+        r = json.loads((out / "RESULT.json").read_text())
+        assert r["verdict"] == "identified" and r["mode"] == "a motion's joint torques"
+        mass, com = r["mass_kg"], np.array(r["com_m"])
+        std = np.array([r["std"]["mass_kg"], *r["std"]["com_m"]])
+        assert np.all(np.abs(np.r_[mass, com] - np.r_[MASS, COM]) < 4.5 * std)
+        info = json.loads((out / "live.json").read_text())
+        assert info["set_load"]["agrees"] and info["motion"] == str(motion_file)
+        # the same numbers offline, from the written log and windows
+        cmd = [sys.executable, "-m", "comgrasp_pin.cli", *info["offline"].split()[1:]]
+        off = subprocess.run(cmd, capture_output=True, text=True, timeout=120)
+        assert off.returncode == 0, off.stderr
+        assert json.loads((out / "RESULT_offline.json").read_text()) == r
+        # 20 payloads (benchmarks/live_franka.py --motion): mass within 2.4 %, CoM within
+        # 23 mm (benchmarks/README.md)
+        precise.append(abs(mass - MASS) < 0.05 * MASS and np.linalg.norm(com - COM) < 30e-3)
+        if precise[-1]:
+            break
+    assert any(precise), precise
 
 
 def test_a_motion_dry_run_shows_it_and_moves_nothing(tmp_path, motion_file):
