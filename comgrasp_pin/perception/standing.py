@@ -31,9 +31,9 @@ MIN_PIXELS = 40
 # stds above it, and gaps of up to 4 px close.
 HEIGHT_SIGMAS = 2.5
 CLOSE_KERNEL = np.ones((5, 5), np.uint8)
-MARK_CLEAR = np.ones((9, 9), np.uint8)  # a colour mark's height noise is measured on table
-# this far from what stands on it, with the mark's shape laid at this many places at least
-MARK_PLACES = 20
+TABLE_CLEAR = np.ones((9, 9), np.uint8)  # the table's noise is measured this far from what
+# stands on it (``bare_table``)
+MARK_PLACES = 20  # a colour mark's height noise: its shape laid at this many places at least
 DETECT_SNR = 4.0  # what stands lower than this many noise stds (its median; after the
 # cleaning's median) is not told from the noise's own bumps: not the rod, nor another object
 EDGE_BAND = 0.01  # the table's height and noise are measured this far inside its edge (m)
@@ -74,9 +74,9 @@ def segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, np
         mask, bridge = join_pieces(view.points, inside & standing, mask, view.table_z)
         standing = standing | bridge
     objects = inside & standing
+    height = z - view.table_z
     if view.cleaned:
-        objects &= ~noise_bumps(objects & ~mask, view.points[..., 2] - view.table_z,
-                                DETECT_SNR * view.points_noise)  # fmt: skip
+        objects &= ~noise_bumps(objects & ~mask, height, DETECT_SNR * view.points_noise)
     check_one_object(objects, mask, at_edge=reaching_border(standing))  # other objects are
     # the reason to refuse first
     if border_pixels(mask).any():
@@ -85,13 +85,12 @@ def segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, np
             "out of view, so its extent and centre are not known; move it, or the camera"
         )
     if view.cleaned and rgb is not None:
-        height = float(np.median(z[mask])) - view.table_z
-        table = inside & ~cv2.dilate(standing.astype(np.uint8), MARK_CLEAR).astype(bool)
-        noise = median_noise(z - view.table_z, mask, table)  # NaN: the pixel's threshold
+        median = float(np.median(z[mask])) - view.table_z
+        noise = median_noise(height, mask, bare_table(inside, standing))
         least = max(MIN_HEIGHT, DETECT_SNR * noise) if np.isfinite(noise) else min_height
-        if not height >= least:
+        if not median >= least:  # (noise NaN, not measured: the per-pixel threshold)
             raise ObjectNotFoundError(
-                f"what differs from the table in colour stands {1e3 * height:.1f} mm above it "
+                f"what differs from the table in colour stands {1e3 * median:.1f} mm above it "
                 f"(less than {1e3 * least:.1f} mm): a mark or a shadow, not an object"
             )
     mask, rod_standing = over_the_edge(view, mask, inside, standing, in_depth, min_height)
@@ -104,6 +103,15 @@ def stands_at(view: TableView) -> float:
     MIN_HEIGHT, or HEIGHT_SIGMAS of the camera's noise where that is higher.
     """
     return max(MIN_HEIGHT, HEIGHT_SIGMAS * view.noise)
+
+
+def bare_table(area: np.ndarray, standing: np.ndarray) -> np.ndarray:
+    """(H, W) bool: the bare table, where its noise is measured.
+
+    That is: the pixels of ``area`` at least TABLE_CLEAR from what is ``standing`` (both
+    (H, W) bool).
+    """
+    return area & ~cv2.dilate(standing.astype(np.uint8), TABLE_CLEAR).astype(bool)
 
 
 def noise_bumps(blobs: np.ndarray, height: np.ndarray, least: float) -> np.ndarray:

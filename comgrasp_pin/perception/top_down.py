@@ -46,6 +46,7 @@ from comgrasp_pin.perception.standing import (  # noqa: F401 (the thresholds' na
     MIN_HEIGHT,
     MIN_PIXELS,
     ColourNoHelp,
+    bare_table,
     segment,
     stands_at,
 )
@@ -69,8 +70,6 @@ ERODE_PX = 1  # (2 holds flying pixels better, 35 % dropouts worse)
 KEEP_EXTENT = 0.8  # ... unless the eroded rod is shorter than this share (a thin rod's handle gone)
 END_SNR = 8.0  # a rod below this many noise stds (down to ``standing.DETECT_SNR``): its
 # ends are left to a colour image, if one is given
-THIN_PART_CLEAR = np.ones((9, 9), np.uint8)  # the table's noise is measured this far from
-# what stands on it (``thin_parts``)
 
 
 def detect_rod_top_down(
@@ -216,12 +215,12 @@ def _check_thin_parts(view: TableView, pick_area, standing, mask, pixel: float,
     """``thin_parts.check_no_thin_part`` on what is too low to stand in the pick area.
 
     What stands (above ``threshold``, m) is the object or another one; the robot's own parts
-    are left out (``robot_parts``); the table's noise is measured THIN_PART_CLEAR away from
-    what stands.
+    are left out (``robot_parts``); the table's noise is measured on the bare table
+    (``standing.bare_table``).
     Returns (those heights, the table's pixels) for ``check_no_hidden_part``.
     """
     area = in_area(view.points, pick_area, EDGE_BAND)
-    table = area & ~cv2.dilate(standing.astype(np.uint8), THIN_PART_CLEAR).astype(bool)
+    table = bare_table(area, standing)
     height = view.points[..., 2] - view.table_z
     low = area & ~robot_parts(height, threshold, pixel) & ~(height > threshold)
     heights = np.where(low, height, np.nan)
