@@ -159,6 +159,38 @@ def test_depth_without_multisampling_is_the_multisampled_depth_to_the_bit():
         rig.close()
 
 
+def test_depth_is_drawn_without_the_shadow_pass_and_is_the_same_to_the_bit():
+    """A depth frame skips the shadows' pass (most of its time in a software renderer):
+    its images must be what a plain MuJoCo renderer with shadows on gives, while the colour
+    image does show the shadows."""
+    import mujoco
+
+    from comgrasp_pin.simulation import build_model
+    from comgrasp_pin.simulation.objects import OBJECTS, add_object
+    from comgrasp_pin.simulation.world import SIDE_CAMERA, TOP_CAMERA
+
+    model = build_model(extras=[lambda spec: add_object(spec, OBJECTS["obj6"], (0.5, 0.0, 0.3))])
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    rig, plain = CameraRig(model), mujoco.Renderer(model, 480, 640)
+    try:
+        for camera in (TOP_CAMERA, SIDE_CAMERA):
+            plain.update_scene(data, camera)
+            plain.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = True
+            plain.enable_depth_rendering()
+            expected = plain.render().astype(float)
+            plain.disable_depth_rendering()
+            expected[expected >= model.vis.map.zfar * model.stat.extent * 0.999] = np.inf
+            np.testing.assert_array_equal(rig.depth(data, camera), expected)
+        rig.shadows = True
+        shaded = rig.rgb(data, TOP_CAMERA)
+        rig.shadows = False
+        assert np.abs(shaded.astype(int) - rig.rgb(data, TOP_CAMERA)).sum() > 1000
+    finally:
+        plain.close()
+        rig.close()
+
+
 @pytest.mark.parametrize("stride", [2, 3, 4])
 def test_a_render_of_every_stride_th_pixel_is_those_pixels_of_the_full_render(stride):
     """A slip watch's frame is rendered at every stride-th pixel's centre alone (MuJoCo's

@@ -15,7 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from comgrasp_pin.camera import PinholeCamera
-from comgrasp_pin.perception._points import median, points_at, points_in
+from comgrasp_pin.perception._points import median, points_at, points_in, slice_percentiles
 from comgrasp_pin.perception.cylinder_fit import cylinder_residuals, fit_cylinders
 from comgrasp_pin.perception.held_region import (
     REACH,
@@ -333,3 +333,19 @@ def test_row_medians_are_each_rows_median_to_the_bit(k, n, keep, seed):
     got = _row_medians(values, mask)
     for row, m, g in zip(values, mask, got, strict=True):
         assert (np.isnan(g) and not m.any()) or g == np.median(row[m])
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(1, 400), st.integers(1, 12), st.integers(1, 8), st.integers(0, 2**31 - 1),
+       st.sampled_from([(2, 98), (10, 90), (0.1, 99.9), (50,), (0, 100)]))  # fmt: skip
+def test_slice_percentiles_are_each_slices_to_the_bit(n, n_bins, min_count, seed, percentiles):
+    rng = np.random.default_rng(seed)
+    bins = rng.integers(-n_bins, n_bins, n)
+    values = rng.normal(0.0, 0.01, n)
+    values[rng.random(n) < 0.1] = 0.0  # ties
+    full = [b for b in np.unique(bins) if (bins == b).sum() >= min_count]
+    counts, ends = slice_percentiles(bins, values, percentiles, min_count)
+    assert counts.tolist() == [(bins == b).sum() for b in full]
+    assert ends.shape == (len(full), len(percentiles))
+    for b, row in zip(full, ends, strict=True):
+        assert row.tolist() == np.percentile(values[bins == b], percentiles).tolist()

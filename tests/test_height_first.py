@@ -15,6 +15,7 @@ from comgrasp_pin.perception.registration import check_registered, cover_by_shif
 from comgrasp_pin.perception.rod_pieces import join_pieces
 from comgrasp_pin.perception.table_plane import fit_table_plane
 from comgrasp_pin.perception.thin_parts import (
+    TableStretches,
     check_no_hidden_part,
     check_no_thin_part,
     robot_parts,
@@ -203,3 +204,25 @@ def test_a_rod_broken_by_the_noise_is_joined_and_two_rods_end_to_end_are_not():
     points, standing, first = _broken_rod(0.0)
     apart, bridge = join_pieces(points, standing, first, 0.0)
     assert not apart[150, 200] and not bridge.any()
+
+
+@pytest.mark.parametrize("length_px", [1, 5, 12, 37, 120, 401])
+def test_a_stretchs_noise_is_that_of_every_whole_strip_on_the_table(length_px):
+    heights, _, table = _head_and_handle(0.005, 0.002, seed=3)
+    heights[np.random.default_rng(4).random((H, W)) < 0.02] = np.nan  # lost pixels
+    seen = table & np.isfinite(heights)
+    h = np.where(seen, heights, 0.0).astype(np.float32).astype(float)
+    means = []
+    for hh, ss in ((h, seen), (h.T, seen.T)):  # every strip along rows, then columns
+        if length_px > hh.shape[1]:
+            continue
+        windows = np.lib.stride_tricks.sliding_window_view(hh, length_px, axis=1)
+        whole = np.lib.stride_tricks.sliding_window_view(ss, length_px, axis=1).all(axis=2)
+        means.append(windows.sum(axis=2)[whole] / length_px)
+    values = np.concatenate(means) if means else np.zeros(0)
+    noise = TableStretches(heights, table).noise(length_px)
+    if len(values) <= 100:
+        assert np.isnan(noise)
+    else:
+        expected = 1.4826 * np.median(np.abs(values - np.median(values)))
+        assert noise == pytest.approx(expected, rel=1e-9)

@@ -191,7 +191,7 @@ def noise_level(heights: np.ndarray) -> float:
         # More than half exactly 0 (a clean render against its median): the median is 0,
         # and so is the median of the absolute deviations.
         return 0.0
-    return float(1.4826 * np.median(np.abs(heights - np.median(heights))))
+    return float(1.4826 * median(np.abs(heights - median(heights))))
 
 
 _RING = np.array([[1, 1, 1], [1, 0, 1], [1, 1, 1]], np.uint8)  # a pixel's 8 neighbours
@@ -256,3 +256,30 @@ def slice_medians(
     rows = [[median(v[order[a : a + n]]) for v in values]
             for a, n in zip(starts[full], counts[full], strict=True)]  # fmt: skip
     return labels[full], np.array(rows, dtype=float).reshape(len(rows), len(values))
+
+
+def slice_percentiles(
+    bins: np.ndarray, values: np.ndarray, percentiles: tuple[float, ...], min_count: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per slice of ``bins`` with at least ``min_count`` points, its count and percentiles.
+
+    Returns (counts (k,), (k, len(percentiles)) percentiles of ``values``), the slices in
+    increasing order: ``np.percentile(values[bins == b], percentiles)``, to the bit
+    (NumPy's linear method: its index, weight and two-sided interpolation), from one sort
+    of all the points instead of a mask and a partition per slice.
+    """
+    order = np.lexsort((values, bins))
+    _, starts, counts = np.unique(bins[order], return_index=True, return_counts=True)
+    starts, counts = starts[counts >= min_count], counts[counts >= min_count]
+    ordered = values[order]
+    last = starts + counts - 1  # (a slice of one point: its value, as NumPy's)
+    out = np.empty((len(counts), len(percentiles)))
+    for j, q in enumerate(np.true_divide(percentiles, 100)):
+        virtual = (counts - 1) * q
+        below = np.floor(virtual)
+        t = virtual - below
+        a = ordered[np.minimum(starts + below.astype(np.intp), last)]
+        b = ordered[np.minimum(starts + below.astype(np.intp) + 1, last)]
+        step = b - a
+        out[:, j] = np.where(t >= 0.5, b - step * (1 - t), a + step * t)
+    return counts, out

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from comgrasp_pin.perception._points import median
+from comgrasp_pin.perception._points import median, slice_medians, slice_percentiles
 from comgrasp_pin.perception.rod_axis import slope_std
 
 FLAT_WIDTH_SHARE = 0.6  # a handle seen less wide than this share of the jaws' gap is flat
@@ -99,15 +99,10 @@ def strip_line(
         normal = np.array([-direction[1], direction[0]])
         along, across = xz @ direction, xz @ normal
         bins = np.floor(along / SLICE).astype(int)
-        order = np.argsort(bins, kind="stable")
-        _, starts, counts = np.unique(bins[order], return_index=True, return_counts=True)
-        mids = []
-        for a, n in zip(starts, counts, strict=True):
-            if n >= MIN_SLICE_POINTS:
-                rows = order[a : a + n]
-                lo, hi = np.percentile(across[rows], EDGE_PERCENTILES)
-                mids.append((median(along[rows]), 0.5 * (lo + hi), hi - lo, n))
-        whole = np.array(mids).reshape(-1, 4)
+        counts, ends = slice_percentiles(bins, across, EDGE_PERCENTILES, MIN_SLICE_POINTS)
+        lo, hi = ends.T
+        mid_along = slice_medians(bins, (along,), MIN_SLICE_POINTS)[1][:, 0]
+        whole = np.column_stack([mid_along, 0.5 * (lo + hi), hi - lo, counts])
         if len(whole) < 3:  # (no median of too few slices: an empty one warns)
             return None
         # A slice that sees the strip only in part (cut by an occluder, the image's border

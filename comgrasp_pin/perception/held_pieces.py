@@ -39,6 +39,7 @@ import numpy as np
 
 from comgrasp_pin.camera import PinholeCamera
 from comgrasp_pin.errors import AmbiguousObjectError, UntrustedImageError
+from comgrasp_pin.perception._points import slice_percentiles
 from comgrasp_pin.perception.rod_axis import centre_line
 
 OFF_AXIS_MIN_SHARE = 0.2  # smaller blobs are left as they were: the slice medians ignore them
@@ -195,9 +196,9 @@ def check_width(
     normal = np.array([-x_axis[2], 0.0, x_axis[0]])  # across the axis in the x-z plane
     across = (points[handle] - offset) @ normal
     bins = np.floor(along[handle] / 0.01).astype(int)
-    widths = [np.ptp(np.percentile(across[bins == b], [2, 98])) for b in np.unique(bins)
-              if (bins == b).sum() >= 5]  # fmt: skip
-    width = float(np.median(widths)) if widths else 0.0
+    _, ends = slice_percentiles(bins, across, (2, 98), 5)
+    widths = ends[:, 1] - ends[:, 0]  # np.ptp of each slice's two
+    width = float(np.median(widths)) if len(widths) else 0.0
     if width > 2 * half_gap * WIDTH_RATIO + WIDTH_MARGIN:
         raise AmbiguousObjectError(
             f"the held handle is {1e3 * width:.0f} mm wide across its axis, the jaws hold "

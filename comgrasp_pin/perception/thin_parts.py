@@ -76,7 +76,8 @@ def check_no_thin_part(heights: np.ndarray, mask: np.ndarray, table: np.ndarray,
     outline = np.where(inside, radius, 0).max(axis=1)
     leaves = away & (radius > outline[:, None])
     start = np.where(leaves.any(axis=1), np.argmax(leaves, axis=1), h.shape[1])
-    step_px, noise = _bare_window(heights, table, step_px)
+    stretches = TableStretches(heights, table)
+    step_px, noise = _bare_window(stretches, step_px)
     if not np.isfinite(noise):
         return
     seen = seen > 0.5
@@ -94,20 +95,16 @@ def check_no_thin_part(heights: np.ndarray, mask: np.ndarray, table: np.ndarray,
         sums = (h * stretch).sum(axis=1)
         means = np.where(counts > length_px // 2, sums / np.maximum(counts, 1), 0.0)
         k = int(np.argmax(means))
-        stretch_noise = _stretch_noise(heights, table, length_px)
+        stretch_noise = stretches.noise(length_px)
         if np.isfinite(stretch_noise) and means[k] > max(SIGMAS * stretch_noise, MIN_MEAN):
             _refuse(k, float(means[k]), length, stretch_noise)
-    part_noises: dict[int, float] = {}  # per length (px): rays share their lengths
     for k in np.argsort(extent_px)[::-1][: ANGLES // 8]:
         extent = extent_px[k] / px_per_m
         if extent < MIN_EXTENT:
             return
         if not joined[k].any():  # the ray's part is not seen (beyond the area, the robot)
             continue
-        n = int(extent_px[k])
-        if n not in part_noises:
-            part_noises[n] = _stretch_noise(heights, table, n)
-        part_noise = part_noises[n]
+        part_noise = stretches.noise(int(extent_px[k]))
         mean = float(h[k, joined[k]].mean())
         if np.isfinite(part_noise) and mean > max(JOINED_SIGMAS * part_noise, MIN_JOINED):
             _refuse(k, mean, extent, part_noise)
@@ -126,7 +123,8 @@ def check_no_hidden_part(length: float, width: float, heights: np.ndarray, table
     """
     if length >= ROD_ASPECT * width:
         return
-    least = SIGMAS * _stretch_noise(heights, table, max(5, int(round(max(LENGTHS) * px_per_m))))
+    longest = max(5, int(round(max(LENGTHS) * px_per_m)))
+    least = SIGMAS * TableStretches(heights, table).noise(longest)
     if not least > MIN_MEAN:  # (NaN: too little table to tell, as check_no_thin_part)
         return
     raise UntrustedImageError(
@@ -164,14 +162,14 @@ def _refuse(ray: int, mean: float, length: float, noise: float) -> None:
     )
 
 
-def _bare_window(heights, table, step_px: int) -> tuple[int, float]:
+def _bare_window(stretches: TableStretches, step_px: int) -> tuple[int, float]:
     """(window length (px), its mean's noise (m)) for telling bare table.
 
     STEP, or longer (2, 4 STEP) until the noise is at most BARE_NOISE: in a noisy image a
     short window of a handle may look bare.
     """
     for factor in (1, 2, 4):
-        noise = _stretch_noise(heights, table, factor * step_px)
+        noise = stretches.noise(factor * step_px)
         if not noise > BARE_NOISE:
             break
     return factor * step_px, noise
@@ -190,14 +188,37 @@ def _window_means(h: np.ndarray, seen: np.ndarray, step_px: int) -> np.ndarray:
     return np.where(count > step_px / 2, total / np.maximum(count, 1), 0.0)
 
 
-def _stretch_noise(heights: np.ndarray, table: np.ndarray, length_px: int) -> float:
-    """The noise (m, robust std) of a stretch's mean height on the empty ``table``."""
-    h = np.where(table & np.isfinite(heights), heights, 0.0).astype(np.float32)
-    w = (table & np.isfinite(heights)).astype(np.float32)
-    means = []
-    for kernel in (np.ones((1, length_px), np.float32), np.ones((length_px, 1), np.float32)):
-        total = cv2.filter2D(h, -1, kernel, borderType=cv2.BORDER_CONSTANT)
-        count = cv2.filter2D(w, -1, kernel, borderType=cv2.BORDER_CONSTANT)
-        means.append(total[count >= length_px - 0.5] / length_px)
-    values = np.concatenate(means)
-    return noise_level(values) if len(values) > 100 else float("nan")
+class TableStretches:
+    """The noise of a stretch's mean height on the empty table, per stretch length.
+
+    ``heights`` (H, W) as ``check_no_thin_part`` has them, ``table`` (H, W) bool its bare
+    table's pixels. The stretches are the strips along the image's rows and columns wholly
+    on seen table; their sums come from running sums along each row and column (one
+    integral image), so each length costs a difference and a median (``noise``), and a
+    length asked twice is computed once.
+    """
+
+    def __init__(self, heights: np.ndarray, table: np.ndarray):
+        seen = table & np.isfinite(heights)
+        h = np.where(seen, heights, 0.0).astype(np.float32)  # the depth's own precision
+        total = cv2.integral(h, sdepth=cv2.CV_64F)  # (H + 1, W + 1): sums above and left
+        count = cv2.integral(seen.astype(np.uint8))  # int32, exact
+        # running sums along each row, and down each column (as rows: transposed), from 0
+        self._running = [(np.diff(total, axis=0), np.diff(count, axis=0)),
+                         (np.diff(total, axis=1).T, np.diff(count, axis=1).T)]  # fmt: skip
+        self._noise: dict[int, float] = {}
+
+    def noise(self, length_px: int) -> float:
+        """The robust std (m) of the mean height of stretches ``length_px`` long.
+
+        NaN where there are 100 or fewer.
+        """
+        n = length_px
+        if n not in self._noise:
+            means = []
+            for total, count in self._running:
+                whole = (count[:, n:] - count[:, :-n]) == n
+                means.append((total[:, n:] - total[:, :-n])[whole] / n)
+            values = np.concatenate(means)
+            self._noise[n] = noise_level(values) if len(values) > 100 else float("nan")
+        return self._noise[n]

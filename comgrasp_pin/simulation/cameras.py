@@ -114,8 +114,10 @@ class CameraRig:
     Attributes:
         noise: the depth errors of each camera, by name (``DepthNoise``; none: the renders
             as they are). ``depth`` applies them; ``calibration_error`` gives the pose error.
-        shadows: cast the lights' shadows (off: a software renderer draws a frame about
-            four times faster, as a video needs; depth images do not depend on it).
+        shadows: cast the lights' shadows in colour images (off: a software renderer draws
+            a frame about four times faster, as a video needs). Depth never draws them: it
+            does not depend on them, to the bit, and a software renderer's shadow pass
+            (the sun's 4096² map) is most of a depth frame's time (tests/test_cameras.py).
     """
 
     def __init__(
@@ -184,18 +186,18 @@ class CameraRig:
             r.enable_segmentation_rendering()
         if stride == 1:
             r.update_scene(data, camera)
-            image = self._draw(r)
+            image = self._draw(r, shadows=self.shadows and not depth)
         else:  # the scene's camera keeps the frustum update_scene gives it
             with sampling_every(self.model, camera, self.intrinsics(camera), stride) as sampled:
                 r.update_scene(data, camera)
             with _viewport(r, sampled.width, sampled.height):
-                image = self._draw(r)
+                image = self._draw(r, shadows=self.shadows and not depth)
         r.disable_depth_rendering()
         r.disable_segmentation_rendering()
         return image
 
-    def _draw(self, r: mujoco.Renderer) -> np.ndarray:
-        r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = self.shadows  # renderers are shared
+    def _draw(self, r: mujoco.Renderer, shadows: bool) -> np.ndarray:
+        r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = shadows  # renderers are shared
         return r.render()  # a new array each call
 
     def rgb(self, data: mujoco.MjData, camera: str) -> np.ndarray:
