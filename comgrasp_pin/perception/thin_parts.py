@@ -95,8 +95,10 @@ def check_no_thin_part(heights: np.ndarray, mask: np.ndarray, table: np.ndarray,
         sums = (h * stretch).sum(axis=1)
         means = np.where(counts > length_px // 2, sums / np.maximum(counts, 1), 0.0)
         k = int(np.argmax(means))
+        if means[k] <= MIN_MEAN:  # too low whatever the noise (which is not measured then)
+            continue
         stretch_noise = stretches.noise(length_px)
-        if np.isfinite(stretch_noise) and means[k] > max(SIGMAS * stretch_noise, MIN_MEAN):
+        if np.isfinite(stretch_noise) and means[k] > SIGMAS * stretch_noise:
             _refuse(k, float(means[k]), length, stretch_noise)
     for k in np.argsort(extent_px)[::-1][: ANGLES // 8]:
         extent = extent_px[k] / px_per_m
@@ -104,9 +106,11 @@ def check_no_thin_part(heights: np.ndarray, mask: np.ndarray, table: np.ndarray,
             return
         if not joined[k].any():  # the ray's part is not seen (beyond the area, the robot)
             continue
-        part_noise = stretches.noise(int(extent_px[k]))
         mean = float(h[k, joined[k]].mean())
-        if np.isfinite(part_noise) and mean > max(JOINED_SIGMAS * part_noise, MIN_JOINED):
+        if mean <= MIN_JOINED:  # too low whatever the noise (which is not measured then)
+            continue
+        part_noise = stretches.noise(int(extent_px[k]))
+        if np.isfinite(part_noise) and mean > JOINED_SIGMAS * part_noise:
             _refuse(k, mean, extent, part_noise)
 
 
