@@ -1,6 +1,7 @@
 """What the levers that change the physics buy, and what they cost: paired sweeps.
 
     python benchmarks/bench_levers.py [--trials 10] [--workers 2] [--runs /tmp/levers]
+                                      [--levers sim_dt,settle,noslip] [--cases CASES]
                                       [--out benchmarks/results/levers.json]
 
 Issue 16 lists levers that would make an episode cheaper by changing what is simulated: a
@@ -47,8 +48,11 @@ LEVERS = {
                "and holding"),
     "noslip": ("world.noslip_iterations", (50, 20), "MuJoCo's no-slip solver iterations, "
                "which make static friction hold in the jaws"),
+    "watch_stride": ("sensors.watch_stride", (3, 4), "the slip watch's frames: every 3rd or "
+                     "every 4th pixel of each row and column rendered and read (the physics "
+                     "unchanged)"),
 }  # fmt: skip
-CASES = (("accuracy", "ideal"), ("accuracy", "realistic"), ("regrasp", "ideal"))
+CASES = "accuracy:ideal,accuracy:realistic,regrasp:ideal"  # --cases; regrasp:realistic too
 
 
 def run_sweep(path: str, values, experiment: str, sensors: str, args, out: Path) -> Path:
@@ -143,6 +147,7 @@ def main() -> None:
     parser.add_argument("--trials", type=int, default=10)
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--levers", default=",".join(LEVERS))
+    parser.add_argument("--cases", default=CASES, help="experiment:sensors, comma-separated")
     parser.add_argument("--runs", type=Path, default=Path("/tmp/comgrasp_levers"))
     parser.add_argument("--out", type=Path, default=Path("benchmarks/results/levers.json"))
     args = parser.parse_args()
@@ -150,14 +155,14 @@ def main() -> None:
     for name in args.levers.split(","):
         path, values, what = LEVERS[name]
         results[name] = {"path": path, "what": what}
-        for experiment, sensors in CASES:
+        for experiment, sensors in (c.split(":") for c in args.cases.split(",")):
             out = args.runs / f"{name}_{experiment}_{sensors}"
             csv_path = run_sweep(path, values, experiment, sensors, args, out)
             case = compare(csv_path, path, values, experiment)
             results[name][f"{experiment}_{sensors}"] = case
             print(name, experiment, sensors, json.dumps(case["speed"]), flush=True)
     write(results, {"trials_per_object": args.trials, "objects": OBJECTS,
-                    "workers": args.workers}, args.out)  # fmt: skip
+                    "workers": args.workers, "cases": args.cases}, args.out)  # fmt: skip
 
 
 def write(results: dict, environment: dict, out: Path) -> None:

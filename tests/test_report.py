@@ -473,8 +473,8 @@ def test_reproduce_report_with_two_seeds_and_an_extra_object(tmp_path, monkeypat
                     if new_columns and method == "regrasp":
                         r["extra_pose"] = k % 2
                     reg.append(r)
-    monkeypatch.setattr(rep, "run_accuracy", lambda opts: acc)
-    monkeypatch.setattr(rep, "run_regrasp", lambda opts: reg)
+    monkeypatch.setattr(rep, "run_accuracy", lambda opts, draw: acc)
+    monkeypatch.setattr(rep, "run_regrasp", lambda opts, draw: reg)
     text = rep.reproduce(rep.RunOptions(out=tmp_path, trials=4)).read_text()
     assert "seeds 0, 1 pooled" in text and "8 per object and method" in text
     for heading in ("## Calibration", "### Ours against the paper's method",
@@ -492,7 +492,7 @@ def test_reproduce_with_a_second_seed_runs_accuracy_again_and_reports_it(tmp_pat
 
     calls = []
 
-    def fake_accuracy(opts):
+    def fake_accuracy(opts, draw):
         calls.append(opts)
         # the second seed's grasps: every estimate 1 mm off with a 1 mm std (z = 1)
         return [_acc_row("obj1", 10.0 * k, 0.99, seed=opts.seed * 100_000 + 1000 + k, trial=k,
@@ -500,7 +500,7 @@ def test_reproduce_with_a_second_seed_runs_accuracy_again_and_reports_it(tmp_pat
                          estimator="ipopt") for k in range(4)]  # fmt: skip
 
     monkeypatch.setattr(rep, "run_accuracy", fake_accuracy)
-    monkeypatch.setattr(rep, "run_regrasp", lambda opts: [])
+    monkeypatch.setattr(rep, "run_regrasp", lambda opts, draw: [])
     opts = rep.RunOptions(out=tmp_path, trials=4, second_seed=7, sensors="realistic")
     text = rep.reproduce(opts).read_text()
     # the headline, the second seed with its sensors and with ideal ones, the ideal headline
@@ -514,6 +514,54 @@ def test_reproduce_with_a_second_seed_runs_accuracy_again_and_reports_it(tmp_pat
         assert f"### `{preset}` sensors (files in `{folder}`)" in section
     assert section.count("| tilt bin (deg) | n | coverage ±1σ (68 %)") == 2
     assert "rms z" in section
+
+
+def test_reproduce_draws_each_parts_files_beside_the_next_part_and_raises_their_errors(
+    tmp_path, monkeypatch
+):
+    """A part's figures are drawn in a thread while the next part runs: every drawing has
+    ended when reproduce returns (its files there), and one that fails fails the run."""
+    import threading
+    import time
+
+    from comgrasp_pin.experiments import reproduce as rep
+
+    rows = [_acc_row("obj1", 10.0 * k, 0.99, seed=1000 + k, trial=k, method="trial")
+            for k in range(4)]  # fmt: skip
+    drawn_in = []
+
+    def slow_drawing(path):
+        def job():
+            time.sleep(0.2)  # still drawing when the next part starts
+            drawn_in.append(threading.current_thread().name)
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text("drawn")
+
+        return job
+
+    def fake_accuracy(opts, draw):
+        draw(slow_drawing(opts.out / f"accuracy_{opts.sensors}.txt"))
+        return rows
+
+    def fake_regrasp(opts, draw):
+        draw(slow_drawing(opts.out / f"regrasp_{opts.sensors}.txt"))
+        return []
+
+    monkeypatch.setattr(rep, "run_accuracy", fake_accuracy)
+    monkeypatch.setattr(rep, "run_regrasp", fake_regrasp)
+    rep.reproduce(rep.RunOptions(out=tmp_path, trials=4, sensors="realistic"))
+    for name in ("accuracy_realistic", "regrasp_realistic"):
+        assert (tmp_path / f"{name}.txt").read_text() == "drawn"
+    assert (tmp_path / "ideal" / "accuracy_ideal.txt").read_text() == "drawn"
+    assert len(drawn_in) == 4 and all(n.startswith("report") for n in drawn_in)
+
+    def broken(opts, draw):
+        draw(lambda: 1 / 0)
+        return rows
+
+    monkeypatch.setattr(rep, "run_accuracy", broken)
+    with pytest.raises(ZeroDivisionError):
+        rep.reproduce(rep.RunOptions(out=tmp_path / "broken", trials=4))
 
 
 def test_the_trials_own_time_sums_every_rows_wall_time(tmp_path):

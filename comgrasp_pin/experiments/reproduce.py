@@ -5,6 +5,8 @@ from __future__ import annotations
 import json
 import platform
 import time
+from collections.abc import Callable
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, replace
 from importlib import metadata
 from pathlib import Path
@@ -101,21 +103,36 @@ def _run(opts: RunOptions, fn, methods, name: str, columns) -> list[dict]:
                       trial_timeout_s=opts.trial_timeout_s)  # fmt: skip
 
 
-def run_accuracy(opts: RunOptions) -> list[dict]:
+Draw = Callable[[Callable[[], object]], object]  # runs a job that writes report files
+
+
+def _now(job: Callable[[], object]) -> object:
+    return job()
+
+
+def run_accuracy(opts: RunOptions, draw: Draw = _now) -> list[dict]:
     """Experiment 1: writes accuracy.csv (its settings beside it), accuracy.png and
-    accuracy_table.md."""
+    accuracy_table.md (by ``draw``: now, or beside the next part's trials)."""
     rows = _run(opts, accuracy_trial, ("trial",), "accuracy", ACCURACY_COLUMNS)
-    report.accuracy_figure(rows, opts.out / "accuracy.png")
-    (opts.out / "accuracy_table.md").write_text(report.accuracy_table(rows) + "\n")
+
+    def files() -> None:
+        report.accuracy_figure(rows, opts.out / "accuracy.png")
+        (opts.out / "accuracy_table.md").write_text(report.accuracy_table(rows) + "\n")
+
+    draw(files)
     return rows
 
 
-def run_regrasp(opts: RunOptions) -> list[dict]:
+def run_regrasp(opts: RunOptions, draw: Draw = _now) -> list[dict]:
     """Experiment 2: writes regrasp.csv (its settings beside it), regrasp.png and
-    regrasp_table.md."""
+    regrasp_table.md (by ``draw``, as ``run_accuracy``)."""
     rows = _run(opts, regrasp_trial, ("baseline", "regrasp"), "regrasp", REGRASP_COLUMNS)
-    report.regrasp_figure(rows, opts.out / "regrasp.png")
-    (opts.out / "regrasp_table.md").write_text(report.regrasp_table(rows) + "\n")
+
+    def files() -> None:
+        report.regrasp_figure(rows, opts.out / "regrasp.png")
+        (opts.out / "regrasp_table.md").write_text(report.regrasp_table(rows) + "\n")
+
+    draw(files)
     return rows
 
 
@@ -130,7 +147,7 @@ def _versions() -> dict:
     return out
 
 
-def _second_seed_section(opts: RunOptions, out: Path) -> str:
+def _second_seed_section(opts: RunOptions, out: Path, draw: Draw) -> str:
     """The accuracy experiment again with ``opts.second_seed`` (its files in
     ``out/seed<S>``), and with ideal sensors too where the headline preset is another
     (``out/ideal/seed<S>``), as a report section: each one's calibration and accuracy
@@ -145,7 +162,7 @@ def _second_seed_section(opts: RunOptions, out: Path) -> str:
                                       out=out / "ideal" / f"seed{seed}")))  # fmt: skip
     parts = []
     for sensors, sub in runs:
-        rows = run_accuracy(sub)
+        rows = run_accuracy(sub, draw)
         parts.append(f"""### `{sensors}` sensors (files in `{sub.out.relative_to(out)}/`)
 
 {report.calibration_table(rows)}
@@ -160,7 +177,7 @@ first, then the accuracy per bin.
 """ + "\n".join(parts)
 
 
-def _ideal_section(opts: RunOptions, out: Path, acc: list, reg: list) -> str:
+def _ideal_section(opts: RunOptions, out: Path, acc: list, reg: list, draw: Draw) -> str:
     """Both experiments again with ideal sensors (the paper's world; files in ``out/ideal``)
     and a report section with the headline run beside them; "" when the headline is the
     ideal preset. Same seeds, objects and trials; the ideal preset's torque noise."""
@@ -168,7 +185,7 @@ def _ideal_section(opts: RunOptions, out: Path, acc: list, reg: list) -> str:
         return ""
     noise = sensor_preset("ideal").torque.noise_std
     sub = replace(opts, sensors="ideal", noise=noise, out=out / "ideal", second_seed=None)
-    acc_ideal, reg_ideal = run_accuracy(sub), run_regrasp(sub)
+    acc_ideal, reg_ideal = run_accuracy(sub, draw), run_regrasp(sub, draw)
     return f"""## Realistic sensors against ideal ones
 
 This report's runs use the `{opts.sensors}` sensor preset (RealSense-class depth, its
@@ -213,23 +230,38 @@ def _parts(meta: dict) -> str:
 
 
 def reproduce(opts: RunOptions) -> Path:
-    """Both experiments and ``report.md`` with figures, tables and the settings used."""
+    """Both experiments and ``report.md`` with figures, tables and the settings used.
+
+    A part's figures and tables are drawn in a thread while the next part's trials run (the
+    workers wait on nothing; a drawing error is raised at the end, as it would have been).
+    """
     check_backend(opts.backend, opts.ray_address)
     opts.out.mkdir(parents=True, exist_ok=True)
-    with kept_pool(opts.workers if opts.backend == "local" else 1):  # workers started once
+    drawn: list[Future] = []
+    with (
+        kept_pool(opts.workers if opts.backend == "local" else 1),  # workers started once
+        ThreadPoolExecutor(max_workers=1, thread_name_prefix="report") as drawing,
+    ):
+
+        def draw(job: Callable[[], object]) -> Future:
+            drawn.append(drawing.submit(job))
+            return drawn[-1]
+
         start = time.perf_counter()
-        acc = run_accuracy(opts)
+        acc = run_accuracy(opts, draw)
         mid = time.perf_counter()
-        reg = run_regrasp(opts)
+        calibration = draw(lambda: report.calibration_section(acc, opts.out))  # its PNG too
+        reg = run_regrasp(opts, draw)
         end = time.perf_counter()
-        second = _second_seed_section(opts, opts.out)
+        second = _second_seed_section(opts, opts.out, draw)
         after_second = time.perf_counter()
-        ideal = _ideal_section(opts, opts.out, acc, reg)
+        ideal = _ideal_section(opts, opts.out, acc, reg, draw)
         done = time.perf_counter()
+        for job in drawn:
+            job.result()
     meta = _run_meta(opts, (start, mid, end, after_second, done))
     (opts.out / "run.json").write_text(json.dumps(meta, indent=2, default=str))
-    calibration = report.calibration_section(acc, opts.out)  # writes calibration.png if recorded
-    sections = ReportSections(acc, reg, calibration, second, ideal)
+    sections = ReportSections(acc, reg, calibration.result(), second, ideal)
     path = opts.out / "report.md"
     path.write_text(report_markdown(meta, opts.sensors, opts.noise, _parts(meta), sections))
     return path
