@@ -206,3 +206,17 @@ def test_a_line_figure_of_points_at_0_and_100_percent(tmp_path, monkeypatch):
         np.testing.assert_allclose(x, [0.0, 3.0])
         np.testing.assert_allclose(drawn, [y, y], atol=1e-9)
         assert all(seg[:, 1].min() >= 0 for seg in error_bar_segments(ax)), measure
+
+
+def test_a_pick_and_place_part_hands_out_each_scenes_long_trial_first_and_ends_on_a_short_one():
+    from comgrasp_pin.experiments.trials import REGRASP_TASK_METHODS, make_tasks
+
+    objects = ["obj1", "obj2", "obj3"]
+    tasks = make_tasks(objects, 3, 0, REGRASP_TASK_METHODS)
+    order = {(t["object"], t["trial"], t["method"]): i for i, t in enumerate(tasks)}
+    for obj in objects:
+        for k in range(3):
+            assert order[(obj, k, "regrasp")] < order[(obj, k, "baseline")]
+    assert tasks[-1]["method"] == "baseline"  # the other worker does not wait on a long one
+    assert {t["object"] for t in tasks[: 2 * len(objects)]} == set(objects)  # all early
+    assert len(order) == len(tasks) == 18

@@ -27,6 +27,7 @@ from comgrasp_pin.experiments.runner import (
 from comgrasp_pin.experiments.trials import (
     ACCURACY_COLUMNS,
     REGRASP_COLUMNS,
+    REGRASP_TASK_METHODS,
     accuracy_trial,
     make_tasks,
     regrasp_trial,
@@ -126,7 +127,7 @@ def run_accuracy(opts: RunOptions, draw: Draw = _now) -> list[dict]:
 def run_regrasp(opts: RunOptions, draw: Draw = _now) -> list[dict]:
     """Experiment 2: writes regrasp.csv (its settings beside it), regrasp.png and
     regrasp_table.md (by ``draw``, as ``run_accuracy``)."""
-    rows = _run(opts, regrasp_trial, ("baseline", "regrasp"), "regrasp", REGRASP_COLUMNS)
+    rows = _run(opts, regrasp_trial, REGRASP_TASK_METHODS, "regrasp", REGRASP_COLUMNS)
 
     def files() -> None:
         report.regrasp_figure(rows, opts.out / "regrasp.png")

@@ -34,6 +34,7 @@ from comgrasp_pin.experiments.stats import coverage, mean_ci, wilson_interval, z
 from comgrasp_pin.experiments.trials import (
     ACCURACY_COLUMNS,
     REGRASP_COLUMNS,
+    REGRASP_TASK_METHODS,
     accuracy_trial,
     episode_config,
     make_tasks,
@@ -42,7 +43,7 @@ from comgrasp_pin.experiments.trials import (
 
 EXPERIMENTS = {
     "accuracy": (accuracy_trial, ("trial",), ACCURACY_COLUMNS),
-    "regrasp": (regrasp_trial, ("baseline", "regrasp"), REGRASP_COLUMNS),
+    "regrasp": (regrasp_trial, REGRASP_TASK_METHODS, REGRASP_COLUMNS),
 }
 MEASURES = {
     "accuracy": "mean accuracy (%)",

@@ -39,6 +39,10 @@ REGRASP_COLUMNS = [
     "pos_real_m", "pos_esti_m", "theta_deg", "accuracy", "mass_real_kg", "mass_esti_kg",
     "final_grasp_offset_m", "pos_std_m", "extra_pose", "sim_s", "wall_s",
 ]  # fmt: skip
+REGRASP_TASK_METHODS = ("regrasp", "baseline")
+"""The pick-and-place experiment's methods in the order each scene's tasks are handed out:
+the longer first (2.7 s against 0.5 s a trial), so that a part ends on a short trial and
+the other worker is not left waiting on a long one."""
 ACCURACY_COM_RANGE = (0.0, 0.3)  # true CoM |pos_real| / length, uniform (capped, see below)
 ACCURACY_GRASP_OFFSET = 0.25  # grasp offsets from the rectangle's centre, |offset| / length
 # Grasp-to-CoM distance as a fraction of the nominal holding lever (``holding_lever``): the
