@@ -184,14 +184,15 @@ class CameraRig:
             r.enable_depth_rendering()
         if segmentation:
             r.enable_segmentation_rendering()
+        shadows = self.shadows and not depth  # depth does not show them
         if stride == 1:
             r.update_scene(data, camera)
-            image = self._draw(r, shadows=self.shadows and not depth)
+            image = self._draw(r, shadows)
         else:  # the scene's camera keeps the frustum update_scene gives it
             with sampling_every(self.model, camera, self.intrinsics(camera), stride) as sampled:
                 r.update_scene(data, camera)
             with _viewport(r, sampled.width, sampled.height):
-                image = self._draw(r, shadows=self.shadows and not depth)
+                image = self._draw(r, shadows)
         r.disable_depth_rendering()
         r.disable_segmentation_rendering()
         return image
