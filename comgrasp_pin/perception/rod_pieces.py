@@ -5,7 +5,8 @@ projector's shadow beside a tall head): one hammer stands as two blobs on one li
 the count of objects would take for two objects. A piece is joined to the rod when it lies
 on the rod's axis (its centroid within MAX_OFFSET of it), beyond one of its ends by at most
 MAX_GAP, and the gap between them stands above the table: its pixels' mean height at least
-BRIDGE_SHARE of the lower piece's median height. Table seen between them is another object,
+BRIDGE_SHARE of the lower piece's median height (the gap as wide as the rod's end that faces
+the piece, not as its head). Table seen between them is another object,
 left to be counted as such (``rod_shape.check_one_object``).
 """
 
@@ -70,7 +71,8 @@ def _gap_if_on_axis(points, mask, piece, table_z) -> np.ndarray | None:
         return None  # beside the rod, not beyond an end
     if end - start > MAX_GAP:
         return None
-    widths = np.percentile((p_rod[:, :2] - centre) @ normal, [10, 90])
+    near_end = np.abs(rod_along - (hi if start == hi else lo)) < MAX_GAP  # the end it faces:
+    widths = np.percentile((p_rod[near_end, :2] - centre) @ normal, [10, 90])  # (not a head)
     half = max(MIN_BRIDGE_HALF_WIDTH, 0.5 * float(widths[1] - widths[0]))
     xy = points[..., :2] - centre
     along, across = xy @ axis, xy @ normal

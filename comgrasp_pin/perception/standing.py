@@ -35,16 +35,23 @@ TABLE_CLEAR = np.ones((9, 9), np.uint8)  # the table's noise is measured this fa
 # stands on it (``bare_table``)
 MARK_PLACES = 20  # a colour mark's height noise: its shape laid at this many places at least
 DETECT_SNR = 4.0  # what stands lower than this many noise stds (its median; after the
-# cleaning's median) is not told from the noise's own bumps: not the rod, nor another object
+# cleaning's median) is not told from the noise's own bumps by its height ...
+BUMP_FALSE_ALARM = 1e-3  # ... but by its size: larger than the view's bumps grow but with this
+# probability (``largest_bump``)
+MIN_BUMPS = 8  # fewer bumps in the pick area: their size is not measured (the height decides)
 EDGE_BAND = 0.01  # the table's height and noise are measured this far inside its edge (m)
 
 
-def segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, np.ndarray, bool]:
-    """(the rod's mask, standing pixels, their unmeasured ones, whether it meets the border).
+Segments = tuple[np.ndarray, np.ndarray, np.ndarray, bool, float]
+
+
+def segment(view: TableView, pick_area, rgb) -> Segments:
+    """(rod's mask, standing pixels, their unmeasured ones, meets border?, largest bump).
 
     That is: the rod's mask, the pixels standing on the table, those whose depth does not
-    measure them, and whether the rod reaches the image's border. The first three (H, W)
-    bool; the third are the standing pixels that the colour found or the
+    measure them, whether the rod reaches the image's border, and the area (px) that a blob
+    of the noise's own reaches but rarely (``largest_bump``; inf where not measured). The
+    first three (H, W) bool; the third are the standing pixels that the colour found or the
     closing filled in: their depth does not measure their height.
 
     The threshold follows the camera's own noise (the median's heights beside a tall head
@@ -75,8 +82,11 @@ def segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, np
         standing = standing | bridge
     objects = inside & standing
     height = z - view.table_z
+    bump_px = float("inf")
     if view.cleaned:
-        objects &= ~noise_bumps(objects & ~mask, height, DETECT_SNR * view.points_noise)
+        bumps, areas = noise_bumps(objects & ~mask, height, DETECT_SNR * view.points_noise)
+        objects &= ~bumps
+        bump_px = largest_bump(areas)
     check_one_object(objects, mask, at_edge=reaching_border(standing))  # other objects are
     # the reason to refuse first
     if border_pixels(mask).any():
@@ -94,7 +104,7 @@ def segment(view: TableView, pick_area, rgb) -> tuple[np.ndarray, np.ndarray, np
                 f"(less than {1e3 * least:.1f} mm): a mark or a shadow, not an object"
             )
     mask, rod_standing = over_the_edge(view, mask, inside, standing, in_depth, min_height)
-    return mask, rod_standing, standing & ~in_depth, bool(border_pixels(mask).any())
+    return mask, rod_standing, standing & ~in_depth, bool(border_pixels(mask).any()), bump_px
 
 
 def stands_at(view: TableView) -> float:
@@ -114,18 +124,40 @@ def bare_table(area: np.ndarray, standing: np.ndarray) -> np.ndarray:
     return area & ~cv2.dilate(standing.astype(np.uint8), TABLE_CLEAR).astype(bool)
 
 
-def noise_bumps(blobs: np.ndarray, height: np.ndarray, least: float) -> np.ndarray:
-    """(H, W) bool: the noise's own bumps among ``blobs`` ((H, W) bool).
+def noise_bumps(
+    blobs: np.ndarray, height: np.ndarray, least: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """((H, W) bool, (n,) int): the noise's own bumps among ``blobs`` ((H, W) bool), areas.
 
     That is: the 8-connected blobs whose median ``height`` ((H, W), m) is below ``least``
-    (m), which no height tells from an object.
+    (m), which no height tells from an object, and their areas (px).
     """
-    count, labels = cv2.connectedComponents(blobs.astype(np.uint8), connectivity=8)
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(blobs.astype(np.uint8),
+                                                               connectivity=8)  # fmt: skip
     found = labels > 0
     ids, medians = slice_medians(labels[found], (height[found],), 1)
     low = np.zeros(count, bool)
     low[ids[medians[:, 0] < least]] = True
-    return low[labels]
+    return low[labels], stats[low, cv2.CC_STAT_AREA]
+
+
+def largest_bump(areas: np.ndarray) -> float:
+    """The area (px) the largest of the view's noise bumps exceeds but rarely.
+
+    That is: with probability BUMP_FALSE_ALARM; inf where fewer than MIN_BUMPS bumps were
+    seen (not measured).
+
+    A Gaussian field's blobs above a high threshold have exponentially distributed areas
+    (its excursion sets; the structured-light frames of ``benchmarks/unseen`` follow it to
+    the tail: tests/test_noise_bumps.py). With n bumps of mean area a (taken at its upper
+    two-sigma bound, a (1 + 2 / sqrt(n))), the largest of n exceeds a ln(n / alpha) with
+    probability alpha. ``areas``: the bumps' areas (px, ``noise_bumps``).
+    """
+    n = len(areas)
+    if n < MIN_BUMPS:
+        return float("inf")
+    mean = float(np.mean(areas)) * (1 + 2 / np.sqrt(n))
+    return mean * float(np.log(n / BUMP_FALSE_ALARM))
 
 
 def median_noise(height: np.ndarray, blob: np.ndarray, table: np.ndarray) -> float:

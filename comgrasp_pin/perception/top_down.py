@@ -145,7 +145,7 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
     help if it fails: a rod lower than END_SNR noise stds is then left to the colour (its
     ends), rather than measured from the depth down to DETECT_SNR.
     """
-    mask, standing, unmeasured, cut = segment(view, pick_area, rgb)
+    mask, standing, unmeasured, cut, bump_px = segment(view, pick_area, rgb)
     if unmeasured.any():
         view = _on_the_rods_axis(view, mask, unmeasured, camera, T_world_cam)
     measured = ~unmeasured[mask]
@@ -173,11 +173,17 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
     heights = p[near_centre, 2] - view.table_z if near_centre.any() else p[:, 2] - view.table_z
     handle_height = float(np.median(heights))
     least = END_SNR if colour_to_come else DETECT_SNR
-    if view.cleaned and rgb is None and handle_height < least * view.points_noise:
+    told = not colour_to_come and mask.sum() > bump_px  # larger than the noise's bumps grow
+    if view.cleaned and rgb is None and handle_height < least * view.points_noise and not told:
         raise (_LeftToColour if colour_to_come else ObjectNotFoundError)(
             f"the rod stands {1e3 * handle_height:.0f} mm above the table, less than "
-            f"{least:g} times the filtered depth noise ({1e3 * view.points_noise:.1f} mm): "
-            "it cannot be told from the noise's own bumps; view it closer or with a less "
+            f"{least:g} times the filtered depth noise ({1e3 * view.points_noise:.1f} mm)"
+            + (
+                f" over {mask.sum()} px, no more than its own bumps reach ({bump_px:.0f} px)"
+                if np.isfinite(bump_px)
+                else ""
+            )  # fmt: skip
+            + ": it cannot be told from the noise's own bumps; view it closer or with a less "
             "noisy camera"
         )
     yaw = float(np.arctan2(direction[1], direction[0]))
