@@ -3,10 +3,11 @@
     python benchmarks/real_frames.py [--extra DIR ...] [--out benchmarks/results/real_frames.json]
 
 Reads the frames in ../shared/realdata/rgbd (never copied into the repository) and, with
-``--extra``, folders of other real frames (``gqcnn_frames.py`` makes the 24 of the results), each holding ``color.png``, ``depth_mm.png`` (16-bit,
-mm), ``camera_info.yaml`` and, where known, ``segmask.png`` (the object's mask drawn in the
-depth image by the frame's authors). No camera pose is used: the table's plane is fitted and
-its clear rectangle is the pick area, as ``comgrasp views`` does without ``--T-world-cam``.
+``--extra``, folders of other real frames (``gqcnn_frames.py`` makes the 24 of the results),
+each holding ``color.png``, ``depth_mm.png`` (16-bit, mm), ``camera_info.yaml`` and, where
+known, ``segmask.png`` (the object's mask drawn in the depth image by the frame's authors).
+No camera pose is used: the table's plane is fitted and its clear rectangle is the pick
+area, as ``comgrasp views`` does without ``--T-world-cam``.
 A frame with a mask of one object is judged against it (issue 34: *wrong* when the length is
 20 % off, the yaw 10 deg, the centre 3 cm); a frame of several objects should be refused.
 

@@ -179,7 +179,8 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
             f"the rod stands {1e3 * handle_height:.0f} mm above the table, less than "
             f"{least:g} times the filtered depth noise ({1e3 * view.points_noise:.1f} mm)"
             + (
-                f" over {mask.sum()} px, no more than its own bumps reach ({bump_px:.0f} px)"
+                f" and covers {mask.sum()} px, no more than the noise's bumps reach "
+                f"({bump_px:.0f} px)"
                 if np.isfinite(bump_px)
                 else ""
             )  # fmt: skip
