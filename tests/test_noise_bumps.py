@@ -120,11 +120,11 @@ def test_a_1cm_handle_marked_by_the_colour_is_measured_not_taken_for_clutter():
 def test_a_hammer_is_measured_from_the_depth_alone_and_a_low_rod_never_wrongly():
     """The hammer (obj2, a 2 cm handle) seen by the structured-light camera at 1.25 m on a
     black and a red board, 4 noise draws each. Its handle stands 14-17 mm, under DETECT_SNR
-    per-pixel noise stds, which refused it from the depth alone in all 8 frames (or a piece
-    of its handle beyond a gap measured as wide as its head was a second object). Its blob
-    (2400 px) is far larger than the noise's bumps grow (about 200 px here), so it is now
-    measured. A rod 8 mm high, whose largest blob is a 50 px bump, stays refused: measured,
-    it would be 23 cm short."""
+    per-pixel noise stds: the depth alone refused 5 of these 8 frames for that, the others
+    for a piece of it beyond its end (the gap to it looked at as wide as its head) or as
+    clutter; none was measured. Its blob (2400 px) is far larger than the noise's bumps
+    grow (about 200 px here), so 6 are now measured. A rod 8 mm high, whose largest blob
+    is a 50 px bump, stays refused: measured, it would be 23 cm short."""
     renders = rf._Renders()
     judged = {}
     boards = ("black_board", "red_board")

@@ -148,10 +148,11 @@ def largest_bump(areas: np.ndarray) -> float:
     seen (not measured).
 
     A Gaussian field's blobs above a high threshold have exponentially distributed areas
-    (its excursion sets; the structured-light frames of ``benchmarks/unseen`` follow it to
-    the tail: tests/test_noise_bumps.py). With n bumps of mean area a (taken at its upper
-    two-sigma bound, a (1 + 2 / sqrt(n))), the largest of n exceeds a ln(n / alpha) with
-    probability alpha. ``areas``: the bumps' areas (px, ``noise_bumps``).
+    (its excursion sets: tests/test_noise_bumps.py on such fields; the structured-light
+    frames of ``benchmarks/unseen`` follow it to the tail, docs/design.md). With n bumps
+    of mean area a (taken at its upper two-sigma bound, a (1 + 2 / sqrt(n))), the largest
+    of n exceeds a ln(n / alpha) with probability alpha. ``areas``: the bumps' areas (px,
+    ``noise_bumps``).
     """
     n = len(areas)
     if n < MIN_BUMPS:
