@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from comgrasp_pin.errors import AmbiguousObjectError
-from comgrasp_pin.perception.rod_shape import check_one_rod
+from comgrasp_pin.perception.rod_flat import propped_ends
+from comgrasp_pin.perception.rod_shape import SLICE, check_one_rod
 
 GRID = 0.0015  # m
 NOISE = 0.0005  # m
@@ -76,3 +77,19 @@ def test_a_flat_rod_with_a_tall_head_is_one_rod():
     p = np.r_[handle, head]
     centroid = p[:, :2].mean(axis=0)
     check_one_rod(p, centroid, _turned(0.0), 0.0, NOISE)
+
+
+def test_a_tapered_body_lying_flat_is_not_propped():
+    """A round body thickening from 16 to 32 mm along it (a toy shark, a bottle) lies flat:
+    its top rises as steadily as a propped handle's, but with its width."""
+    along = np.arange(-0.15, 0.15 + 1e-9, GRID)
+    points = []
+    for x in along:
+        r = 0.5 * (0.016 + 0.016 * (x + 0.15) / 0.30)
+        for y in np.arange(-r, r + 1e-9, GRID):
+            points.append((x, y, r + np.sqrt(max(r**2 - y**2, 0.0))))
+    p = np.array(points)
+    assert propped_ends(p, np.zeros(2), np.array([1.0, 0.0]), 0.0, NOISE, None, SLICE) is None
+    handle = _rod((-0.15, 0.15), (-0.005, 0.005), (0.016, 0.032))
+    ends = propped_ends(handle, np.zeros(2), np.array([1.0, 0.0]), 0.0, NOISE, None, SLICE)
+    assert ends is not None and abs(ends[1] - ends[0] - 0.016 * 0.29 / 0.30) < 0.001

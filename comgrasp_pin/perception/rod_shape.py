@@ -13,6 +13,7 @@ import numpy as np
 
 from comgrasp_pin.errors import AmbiguousObjectError, ClutterError
 from comgrasp_pin.perception._points import opened_blobs
+from comgrasp_pin.perception.rod_flat import propped_ends
 
 SECOND_OBJECT = 0.05  # another blob of this share of the rod's pixels is another object
 CLUTTER_OBJECTS = 3  # this many objects (or piles) in the pick area are clutter
@@ -39,8 +40,6 @@ TOP_BAND, TOP_SIGMAS = 0.002, 3.0  # m, noise stds
 PROFILE_BIN = 0.001  # m
 PROFILE_EDGE_BINS = 3  # bins at each side of the profile not looked at (its outline)
 PROFILE_VALLEY_SHARE = 0.15
-# A rod whose tops rise steadily does not lie flat (a head turned on its side props it up):
-FLAT_RISE, FLAT_FIT, FLAT_BAND = 0.01, 0.6, 0.003  # m end to end, share of tops within m
 _KERNEL3, _KERNEL5 = np.ones((3, 3), np.uint8), np.ones((5, 5), np.uint8)
 
 
@@ -144,7 +143,7 @@ def check_one_rod(
     """
     split, total = split_slices(p, centroid, direction, table_z, noise, measured)
     if total and split >= max(MIN_SPLIT_SLICES, SPLIT_SLICES * total):
-        ends = _propped(p, centroid, direction, table_z, noise, measured)
+        ends = propped_ends(p, centroid, direction, table_z, noise, measured, SLICE)
         if ends is not None:
             raise AmbiguousObjectError(
                 f"what lies on the table does not lie flat: its top rises steadily from "
@@ -165,32 +164,6 @@ def check_one_rod(
             "along (two rods side by side, touching?); the top view measures one rod alone "
             "on the table: move the others away"
         )
-
-
-def _propped(p, centroid, direction, table_z, noise, measured) -> tuple[float, float] | None:
-    """(the top's height at the rod's two ends) (m) where its tops rise steadily, else None.
-
-    A SLICE's top: the 90th percentile of its measured heights (10 or more); the line:
-    Theil-Sen's (a head's few slices do not move it). Steadily: FLAT_RISE or more end to
-    end, FLAT_FIT of the tops within FLAT_BAND or 3 ``noise`` stds of the line (the
-    arguments are ``split_slices``').
-    """
-    keep = np.ones(len(p), bool) if measured is None else measured
-    along, height = ((p[:, :2] - centroid) @ direction)[keep], p[keep, 2] - table_z
-    slices = np.floor(along / SLICE).astype(int)
-    ids = [k for k, n in zip(*np.unique(slices, return_counts=True), strict=True) if n >= 10]
-    if len(ids) < 2 * MIN_SPLIT_SLICES:
-        return None
-    x = np.array([np.median(along[slices == k]) for k in ids])
-    top = np.array([np.percentile(height[slices == k], 90) for k in ids])
-    i, j = np.triu_indices(len(ids), 1)
-    slope = float(np.median((top[j] - top[i]) / (x[j] - x[i])))
-    offset = float(np.median(top - slope * x))
-    on_line = np.abs(top - (slope * x + offset)) < max(FLAT_BAND, 3 * noise)
-    ends = slope * x[[0, -1]] + offset
-    if abs(ends[1] - ends[0]) < FLAT_RISE or on_line.mean() < FLAT_FIT:
-        return None
-    return float(ends[0]), float(ends[1])
 
 
 def split_slices(
