@@ -139,7 +139,8 @@ def check_one_rod(
 
     That is: the blob's points ``p`` (N, 3), which should lie along ``direction`` (2,)
     through ``centroid`` (2,): too many of its slices across the axis are split in two
-    pieces or two tops (``split_slices``; ``measured``: see there).
+    pieces or two tops (``split_slices``; ``measured``: see there). A rod whose tops rise
+    steadily along it is named as not lying flat (``rod_flat.propped_ends``).
     """
     split, total = split_slices(p, centroid, direction, table_z, noise, measured)
     if total and split >= max(MIN_SPLIT_SLICES, SPLIT_SLICES * total):
