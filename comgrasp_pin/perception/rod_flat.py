@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from comgrasp_pin.perception._points import slice_medians, slice_percentiles
+
 MIN_SLICES = 6  # slices of 10 points or more, at least
 FLAT_RISE = 0.01  # m: tops rising this much end to end, and their high end this far above
 # the slices' width ...
@@ -43,13 +45,13 @@ def propped_ends(
     rel, height = p[keep, :2] - centroid, p[keep, 2] - table_z
     along, across = rel @ direction, rel @ np.array([-direction[1], direction[0]])
     slices = np.floor(along / slice_m).astype(int)
-    ids = [k for k, n in zip(*np.unique(slices, return_counts=True), strict=True) if n >= 10]
-    if len(ids) < MIN_SLICES:
+    x = slice_medians(slices, (along,), 10)[1][:, 0]
+    if len(x) < MIN_SLICES:
         return None
-    x = np.array([np.median(along[slices == k]) for k in ids])
-    top = np.array([np.percentile(height[slices == k], 90) for k in ids])
-    width = np.array([np.ptp(across[slices == k]) for k in ids])
-    i, j = np.triu_indices(len(ids), 1)
+    top = slice_percentiles(slices, height, (90,), 10)[1][:, 0]
+    lowest, highest = slice_percentiles(slices, across, (0, 100), 10)[1].T
+    width = highest - lowest
+    i, j = np.triu_indices(len(x), 1)
     slope = float(np.median((top[j] - top[i]) / (x[j] - x[i])))
     offset = float(np.median(top - slope * x))
     on_line = np.abs(top - (slope * x + offset)) < max(FLAT_BAND, 3 * noise)
