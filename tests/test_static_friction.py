@@ -112,8 +112,9 @@ def test_both_sides_cancel_the_friction(robot):
     assert abs(est.mass - MASS) < 0.02 * MASS
     assert np.linalg.norm(est.com_ee - COM) < 5e-3
     # the residuals (the friction's asymmetry) exceed the samples' noise: the covariance
-    # is theirs, with Student's t of 4 * 7 - 4 degrees of freedom
-    assert np.all(est.dof == 4 * 7 - 4)
+    # is theirs; the share left is estimated from readings where the friction dominates
+    # the noise, so Satterthwaite's dof are nearly the readings less the unknowns, 4 * 7 - 4
+    assert np.all(est.dof <= 4 * 7 - 4) and np.all(est.dof > 20)
     half = est.t95[0] * est.std[0]
     assert abs(est.mass - MASS) < half
 
@@ -190,14 +191,15 @@ def test_the_share_left_and_its_intervals(robot):
     pose keeps f s (u1 - u2) / 2, of variance f^2 s^2 / 6, and the sides' spread is f, so
     the difference of the two runs has the variance V_ij s^2 / 6 whatever the mix of a
     pose's own V and the joint's mean: kappa = s / sqrt(6). Estimated from 24 degrees of
-    freedom (relative sd about 15 %); the mass and CoM's 95 % intervals (Student's t of 24)
-    cover the truth at about their level."""
+    freedom (relative sd about 15 %); the mass and CoM's 95 % intervals (Student's t of
+    Satterthwaite's dof, nearly 24 where the friction dominates the noise as here) cover the
+    truth at about their level."""
     share, kappas, inside, z = 0.3, [], 0, []
     for seed in range(40):
         log, before, after, _, _ = friction_log(robot, seed=700 + seed, asymmetry=share)
         est = estimate_from_log(robot, log, before, after)
         kappas.append(est.joint_torques.side_friction.share_left)
-        assert np.all(est.dof == len(Q) * robot.nq - 4)
+        assert np.all(est.dof <= len(Q) * robot.nq - 4) and np.all(est.dof > 20)
         x = np.r_[est.mass, est.com_ee] - np.r_[MASS, COM]
         z.append(x / est.std)
         inside += np.sum(np.abs(x) < est.t95 * est.std)

@@ -18,8 +18,15 @@ generalised least squares' residuals, refitted at each trial, have a chi-square 
 of freedom of 1 (Paule and Mandel 1982, the between-laboratory variance of interlaboratory
 studies), or 0 where the noise alone explains them; rho is the one whose restricted
 likelihood (REML, Patterson and Thompson 1971) is highest. The weights follow: a joint whose
-reading depends on the side it came from counts less, and the interval holds what it leaves
-(Student's t of the readings less the unknowns).
+reading depends on the side it came from counts less, and the interval holds what it leaves.
+
+kappa is itself estimated, and from few readings where the noise hides the friction on most
+joints: a CoM component that rests on the one joint whose friction shows has a variance
+known far worse than "the readings less the unknowns" says. Its degrees of freedom are
+Satterthwaite's (``share_dof``): 2 v^2 / ((dv / dkappa^2)^2 var(kappa^2)), with the moment
+estimator's var(kappa^2) = 2 dof / tr(P E)^2 (P the GLS residual projector, E the friction's
+scale): the readings less the unknowns where the friction dominates every reading, fewer
+where it shows on few.
 """
 
 from __future__ import annotations
@@ -80,7 +87,7 @@ def side_friction_cov(
         return SideFriction(spread, 0.0, None), cov  # the noise explains the residuals
     tried = []
     for rho in np.linspace(0.0, 1.0, MIX_STEPS):
-        extra = np.diag(((1.0 - rho) * V.mean(axis=0) + rho * V).ravel())
+        extra = _scale(V, float(rho))
         kappa = _paule_mandel(Y, dtau, cov, extra, dof)
         L = np.linalg.cholesky(cov + kappa**2 * extra)
         A = np.linalg.solve(L, Y)
@@ -89,6 +96,33 @@ def side_friction_cov(
         tried.append((float(nll), float(rho), kappa, extra))
     _, rho, kappa, extra = min(tried, key=lambda t: t[0])
     return SideFriction(spread, kappa, rho), cov + kappa**2 * extra
+
+
+def share_dof(Y: np.ndarray, cov: np.ndarray, found: SideFriction, G: np.ndarray) -> np.ndarray:
+    """(p,) Satterthwaite's degrees of freedom of each estimate's variance, kappa estimated.
+
+    ``G`` (p, 4): d(estimate) / d(m, m c_ee) at the fit; ``cov``: ``side_friction_cov``'s,
+    kappa included. At most the readings less the unknowns; infinite where kappa is 0 (the
+    noise alone, known from many samples).
+    """
+    dof = len(cov) - int(np.linalg.matrix_rank(Y))
+    if found.share_left <= 0 or dof <= 0:
+        return np.full(len(G), np.inf)
+    E = _scale(np.square(found.spread), float(found.own_pose))
+    W = np.linalg.inv(cov)
+    cov_theta = np.linalg.inv(Y.T @ W @ Y)
+    K = cov_theta @ Y.T @ W  # the GLS's gain: theta = K dtau
+    trace_PE = np.trace(W @ E) - np.trace(K @ E @ W @ Y)
+    var_k2 = 2.0 * dof / trace_PE**2
+    v = np.einsum("ij,jk,ik->i", G, cov_theta, G)
+    dv = np.einsum("ij,jk,ik->i", G, K @ E @ K.T, G)  # d v / d kappa^2
+    with np.errstate(divide="ignore"):
+        return np.minimum(2.0 * v**2 / (dv**2 * var_k2), float(dof))
+
+
+def _scale(V: np.ndarray, rho: float) -> np.ndarray:
+    """(k n, k n) the friction's scale, diag((1 - rho) mean_i V_ij + rho V_ij), pose-major."""
+    return np.diag(((1.0 - rho) * V.mean(axis=0) + rho * V).ravel())
 
 
 def _excess(Y, dtau, cov, dof: int) -> float:

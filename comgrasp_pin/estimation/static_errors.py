@@ -12,16 +12,22 @@ from the poses' own residuals whatever their correlation within a pose, with Sat
 degrees of freedom (at most k - 1): the motion's model, whose blocks are spans of time, at
 rest.
 
-Poses read from both sides have their own model (``side_friction``).
+Poses read from both sides have their own model (``side_friction``). ``residual_rules``
+applies them: the covariance, its degrees of freedom and the share explained.
 """
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
+from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.estimation.block_sandwich import block_sandwich
 from comgrasp_pin.estimation.estimate import ComEstimate, mc_jacobian
 from comgrasp_pin.estimation.regressor import stacked_regressor
+from comgrasp_pin.estimation.side_friction import share_dof
+from comgrasp_pin.estimation.trust import MIN_EXPLAINED, payload_seen, t95, unexplained_reason
 from comgrasp_pin.robot import RobotModel
 
 RANK_TOL = 1e-9
@@ -74,3 +80,35 @@ def pose_block_cov(
                               [np.array([i]) for i in range(k)], p=4)  # fmt: skip
     G = mc_jacobian(np.asarray(theta, dtype=float))
     return G @ sandwich.cov @ G.T, np.array([sandwich.dof(G[r]) for r in range(4)])
+
+
+def residual_rules(robot, est: ComEstimate, Q, sigma, cov, dtau, pose_errors: bool, friction):
+    """(estimate, dof of its covariance, findings) after the residuals' two rules.
+
+    The covariance is scaled by the chi-square per degree of freedom where that exceeds 1
+    (the readings err more than their noise; the wrist sensor's rule), with its dof; and the
+    payload must explain ``trust.MIN_EXPLAINED`` of the torque differences (the motion's).
+    With ``pose_errors``, the covariance and its (4,) dof are the poses' block sandwich;
+    with the sides' ``friction`` (its share above 0), Satterthwaite's (``share_dof``).
+    """
+    chi2_dof, dof, explained = residual_chi2(est, sigma, cov, dtau)
+    if pose_errors:
+        if len(Q) < 2:
+            raise InvalidInputError("pose errors need 2 poses or more: their spread is the error")
+        theta = np.r_[est.mass, est.mass * est.com_ee]
+        cov_mc, dof = pose_block_cov(robot, Q, dtau, sigma, theta)
+        est = dataclasses.replace(est, cov=cov_mc)
+    elif friction is not None and friction.share_left > 0:  # chi-square 1 at kappa
+        est = dataclasses.replace(est, cov=est.cov * max(chi2_dof, 1.0))
+        G = mc_jacobian(np.r_[est.mass, est.mass * est.com_ee])
+        dof = np.minimum(dof, share_dof(stacked_regressor(robot, Q)[0], cov, friction, G))
+    elif chi2_dof > 1:
+        est = dataclasses.replace(est, cov=est.cov * chi2_dof)
+    else:
+        dof = np.inf
+    findings = []
+    q = t95(np.atleast_1d(dof)[0])
+    seen = est.cov is not None and payload_seen(est.mass, np.sqrt(est.cov[0, 0]), q)
+    if seen and explained < MIN_EXPLAINED:
+        findings.append(unexplained_reason(explained, "torque differences"))
+    return est, dof, findings

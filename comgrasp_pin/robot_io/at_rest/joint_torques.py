@@ -31,14 +31,11 @@ from comgrasp_pin.estimation.dynamic_uncertainty import relative_gain_cov
 from comgrasp_pin.estimation.estimate import delta_method
 from comgrasp_pin.estimation.regressor import stacked_regressor
 from comgrasp_pin.estimation.side_friction import side_friction_cov, side_spreads
-from comgrasp_pin.estimation.static_errors import pose_block_cov, residual_chi2
+from comgrasp_pin.estimation.static_errors import residual_rules
 from comgrasp_pin.estimation.trust import (
-    MIN_EXPLAINED,
     arm_mass,
     judge,
-    payload_seen,
     t95,
-    unexplained_reason,
 )
 from comgrasp_pin.robot import RobotModel
 from comgrasp_pin.robot_io.at_rest.windows import MAX_SPEED, StaticReading, read_pairs
@@ -124,7 +121,8 @@ def estimate_from_log(
                             dtau_cov=cov)  # fmt: skip
 
     est = solve(None, method)
-    est, dof, findings = _residual_rules(robot, est, Q, sigma, cov, tau_a - tau_b, pose_errors)
+    est, dof, findings = residual_rules(robot, est, Q, sigma, cov, tau_a - tau_b, pose_errors,
+                                        friction)  # fmt: skip
     gains_part = None
     if rel is not None:
         gains_part = _gains_covariance(lambda f: solve(f, "lstsq"), est, rel)
@@ -152,33 +150,6 @@ def _side_friction(robot, Q, rb, ra, sigma, cov, dtau):
     found, with_friction = side_friction_cov(stacked_regressor(robot, Q)[0], dtau.ravel(), base,
                                              spread)  # fmt: skip
     return found, with_friction if found.share_left > 0 else cov
-
-
-def _residual_rules(robot, est: ComEstimate, Q, sigma, cov, dtau, pose_errors: bool):
-    """(estimate, dof of its covariance, findings) after the residuals' two rules.
-
-    The covariance is scaled by the chi-square per degree of freedom where that exceeds 1
-    (the readings err more than their noise; the wrist sensor's rule), with its dof; and the
-    payload must explain ``trust.MIN_EXPLAINED`` of the torque differences (the motion's).
-    With ``pose_errors``, the covariance and its (4,) dof are the poses' block sandwich.
-    """
-    chi2_dof, dof, explained = residual_chi2(est, sigma, cov, dtau)
-    if pose_errors:
-        if len(Q) < 2:
-            raise InvalidInputError("pose errors need 2 poses or more: their spread is the error")
-        theta = np.r_[est.mass, est.mass * est.com_ee]
-        cov_mc, dof = pose_block_cov(robot, Q, dtau, sigma, theta)
-        est = dataclasses.replace(est, cov=cov_mc)
-    elif chi2_dof > 1:
-        est = dataclasses.replace(est, cov=est.cov * chi2_dof)
-    else:
-        dof = np.inf
-    findings = []
-    q = t95(np.atleast_1d(dof)[0])
-    seen = est.cov is not None and payload_seen(est.mass, np.sqrt(est.cov[0, 0]), q)
-    if seen and explained < MIN_EXPLAINED:
-        findings.append(unexplained_reason(explained, "torque differences"))
-    return est, dof, findings
 
 
 def judged_at_rest(
