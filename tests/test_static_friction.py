@@ -208,11 +208,18 @@ def test_the_share_left_and_its_intervals(robot):
     assert 0.8 < np.sqrt(np.mean(np.square(z))) < 1.25
 
 
-def test_the_share_sets_the_chi_square_to_one():
-    """Paule-Mandel's kappa: the generalised least squares' residuals at kappa, with the
-    mix rho found, have a chi-square per degree of freedom of 1 (computed here by
-    whitening by hand), above 1 just below it; pure noise within its level leaves kappa 0
-    and the covariance as given."""
+def reml_nll(Y, dtau, sd):
+    """REML's -log likelihood of readings of independent errors of std ``sd``, by hand:
+    sum log sd + 1/2 log det(A^T A) + 1/2 |r|^2 of the whitened fit (constants dropped)."""
+    A, b = Y / sd[:, None], dtau / sd
+    r = b - A @ np.linalg.lstsq(A, b, rcond=None)[0]
+    return np.sum(np.log(sd)) + 0.5 * np.linalg.slogdet(A.T @ A)[1] + 0.5 * r @ r
+
+
+def test_the_share_is_the_restricted_likelihoods_highest():
+    """kappa and rho maximise the restricted likelihood (computed here by hand): a kappa 3 %
+    either side, or another rho of the grid at its own best kappa, is less likely; pure noise
+    within its level leaves kappa 0 and the covariance as given."""
     rng = np.random.default_rng(3)
     k, n = 6, 5
     Y = rng.standard_normal((k * n, 4))
@@ -222,18 +229,20 @@ def test_the_share_sets_the_chi_square_to_one():
     dtau = Y @ theta + 0.4 * spread.ravel() * rng.standard_normal(k * n)
     found, cov_k = side_friction_cov(Y, dtau, cov, spread)
     V = spread**2
-    scale = ((1 - found.own_pose) * V.mean(axis=0) + found.own_pose * V).ravel()
 
-    def chi2_dof(kappa):
-        sd = np.sqrt(noise**2 + kappa**2 * scale)
-        A, bb = Y / sd[:, None], dtau / sd
-        r = bb - A @ np.linalg.lstsq(A, bb, rcond=None)[0]
-        return r @ r / (k * n - 4)
+    def nll(kappa, rho):
+        scale = ((1 - rho) * V.mean(axis=0) + rho * V).ravel()
+        return reml_nll(Y, dtau, np.sqrt(noise**2 + kappa**2 * scale))
 
-    assert 0.0 <= found.own_pose <= 1.0
-    assert chi2_dof(found.share_left) == pytest.approx(1.0, abs=1e-4)
-    assert chi2_dof(0.99 * found.share_left) > 1.0
-    assert np.allclose(np.diag(cov_k), noise**2 + found.share_left**2 * scale)
+    kappa, rho = found.share_left, found.own_pose
+    assert 0.0 <= rho <= 1.0 and kappa > 0
+    best = nll(kappa, rho)
+    assert best < nll(0.97 * kappa, rho) and best < nll(1.03 * kappa, rho)
+    for other in np.linspace(0.0, 1.0, 11):
+        kappas = kappa * np.geomspace(0.2, 5.0, 81)
+        assert best <= min(nll(x, other) for x in kappas) + 1e-9
+    scale = ((1 - rho) * V.mean(axis=0) + rho * V).ravel()
+    assert np.allclose(np.diag(cov_k), noise**2 + kappa**2 * scale)
     quiet = Y @ theta + 0.5 * noise * rng.standard_normal(k * n)
     found0, cov0 = side_friction_cov(Y, quiet, cov, spread)
     assert found0.share_left == 0.0 and found0.own_pose is None and cov0 is cov
@@ -286,8 +295,8 @@ def test_the_regressor_of_the_share_is_the_estimators(robot):
 def test_the_share_is_found_whatever_the_readings(seed, k, noise, left, zero_joints):
     """Any regressor, spreads (some joints' zero), noise and friction left: kappa >= 0,
     rho in [0, 1] (None with kappa 0), the covariance only grows on its diagonal, and where
-    kappa is inside its range the chi-square per degree of freedom is 1 (by hand)."""
-    from comgrasp_pin.estimation.side_friction import MAX_SHARE
+    kappa is inside its range the restricted likelihood (by hand) is highest there."""
+    from comgrasp_pin.estimation.side_friction import MAX_SHARE, MIN_SHARE
 
     rng = np.random.default_rng(seed)
     n = 7
@@ -305,8 +314,12 @@ def test_the_share_is_found_whatever_the_readings(seed, k, noise, left, zero_joi
         assert found.own_pose is None
         return
     assert 0.0 <= found.own_pose <= 1.0
-    if found.share_left < MAX_SHARE:
-        sd = np.sqrt(np.diag(cov_k))
-        A, b = Y / sd[:, None], dtau / sd
-        r = b - A @ np.linalg.lstsq(A, b, rcond=None)[0]
-        assert r @ r / (k * n - 4) == pytest.approx(1.0, abs=1e-4)
+    kappa, V = found.share_left, spread**2
+    scale = ((1 - found.own_pose) * V.mean(axis=0) + found.own_pose * V).ravel()
+
+    def nll(x):
+        return reml_nll(Y, dtau, np.sqrt(noise**2 + x**2 * scale))
+
+    assert nll(kappa) < nll(0.0) + 1e-9
+    if 1.01 * MIN_SHARE < kappa < MAX_SHARE / 1.01:
+        assert nll(kappa) <= min(nll(0.99 * kappa), nll(1.01 * kappa)) + 1e-9

@@ -13,20 +13,22 @@ spread at the visit, so its variance is modelled as a share kappa^2 of a scale S
 
 rho in [0, 1] weighing the pose's own spread against the joint's mean over the poses (a
 joint may stop with little friction at one pose and much at the next, or the spread at one
-visit may be mostly noise). For each rho of a grid, kappa is the value at which the
-generalised least squares' residuals, refitted at each trial, have a chi-square per degree
-of freedom of 1 (Paule and Mandel 1982, the between-laboratory variance of interlaboratory
-studies), or 0 where the noise alone explains them; rho is the one whose restricted
-likelihood (REML, Patterson and Thompson 1971) is highest. The weights follow: a joint whose
-reading depends on the side it came from counts less, and the interval holds what it leaves.
+visit may be mostly noise). kappa and rho are the pair of highest restricted likelihood
+(REML, Patterson and Thompson 1971: the likelihood of the residuals, which the fitted
+payload does not bias): for each rho of a grid, kappa maximises it (0 where the noise alone
+explains the residuals best). The weights follow: a joint whose reading depends on the side
+it came from counts less, and the interval holds what it leaves.
 
 kappa is itself estimated, and from few readings where the noise hides the friction on most
 joints: a CoM component that rests on the one joint whose friction shows has a variance
 known far worse than "the readings less the unknowns" says. Its degrees of freedom are
-Satterthwaite's (``share_dof``): 2 v^2 / ((dv / dkappa^2)^2 var(kappa^2)), with the moment
-estimator's var(kappa^2) = 2 dof / tr(P E)^2 (P the GLS residual projector, E the friction's
-scale): the readings less the unknowns where the friction dominates every reading, fewer
-where it shows on few.
+Satterthwaite's (``share_dof``): 2 v^2 / ((dv / dkappa^2)^2 var(kappa^2)), with REML's
+var(kappa^2) = 2 / tr(P E P E) (P the GLS residual projector, E the friction's scale): the
+readings less the unknowns where the friction dominates every reading, about as many as the
+readings it dominates where it shows on few. (Paule and Mandel's moment estimator, which
+sets the residuals' chi-square per degree of freedom to 1, was used before: on franky-sim's
+sessions it left kappa to the noise of the many readings the friction does not show in,
+with Satterthwaite's dof below 1 at times.)
 """
 
 from __future__ import annotations
@@ -34,9 +36,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import minimize_scalar
 
 SHARE_TOL = 1e-6
-"""Paule-Mandel's kappa is bisected to this relative width."""
+"""log(kappa) is found to this width (a relative width of kappa)."""
+RANK_TOL = 1e-9
+"""Singular values below this fraction of the largest are directions the poses leave open."""
+MIN_SHARE = 1e-6
+"""The smallest kappa tried above 0."""
 MAX_SHARE = 64.0
 """The largest kappa tried (the friction left, as a multiple of the sides' spread)."""
 MIX_STEPS = 11
@@ -83,18 +90,15 @@ def side_friction_cov(
     """
     V = np.square(spread)
     dof = len(dtau) - int(np.linalg.matrix_rank(Y))
-    if dof <= 0 or not np.any(V > 0) or _excess(Y, dtau, cov, dof) <= 0:
-        return SideFriction(spread, 0.0, None), cov  # the noise explains the residuals
+    if dof <= 0 or not np.any(V > 0):
+        return SideFriction(spread, 0.0, None), cov
     tried = []
     for rho in np.linspace(0.0, 1.0, MIX_STEPS):
         extra = _scale(V, float(rho))
-        kappa = _paule_mandel(Y, dtau, cov, extra, dof)
-        L = np.linalg.cholesky(cov + kappa**2 * extra)
-        A = np.linalg.solve(L, Y)
-        # REML's -log likelihood less constants: its chi-square term is dof at every rho
-        nll = np.sum(np.log(np.diag(L))) + 0.5 * np.linalg.slogdet(A.T @ A)[1]
-        tried.append((float(nll), float(rho), kappa, extra))
-    _, rho, kappa, extra = min(tried, key=lambda t: t[0])
+        tried.append((*_reml_share(Y, dtau, cov, extra), float(rho), extra))
+    nll, kappa, rho, extra = min(tried, key=lambda t: t[0])
+    if _reml_nll(Y, dtau, cov) <= nll:
+        return SideFriction(spread, 0.0, None), cov  # the noise explains the residuals
     return SideFriction(spread, kappa, rho), cov + kappa**2 * extra
 
 
@@ -110,10 +114,10 @@ def share_dof(Y: np.ndarray, cov: np.ndarray, found: SideFriction, G: np.ndarray
         return np.full(len(G), np.inf)
     E = _scale(np.square(found.spread), float(found.own_pose))
     W = np.linalg.inv(cov)
-    cov_theta = np.linalg.inv(Y.T @ W @ Y)
+    cov_theta = np.linalg.pinv(Y.T @ W @ Y, rcond=RANK_TOL)
     K = cov_theta @ Y.T @ W  # the GLS's gain: theta = K dtau
-    trace_PE = np.trace(W @ E) - np.trace(K @ E @ W @ Y)
-    var_k2 = 2.0 * dof / trace_PE**2
+    PE = E @ W - E @ W @ Y @ K  # (P E) transposed: P = W - W Y K is symmetric
+    var_k2 = 2.0 / np.sum(PE * PE.T)  # REML: 2 / tr(P E P E)
     v = np.einsum("ij,jk,ik->i", G, cov_theta, G)
     dv = np.einsum("ij,jk,ik->i", G, K @ E @ K.T, G)  # d v / d kappa^2
     with np.errstate(divide="ignore"):
@@ -125,27 +129,21 @@ def _scale(V: np.ndarray, rho: float) -> np.ndarray:
     return np.diag(((1.0 - rho) * V.mean(axis=0) + rho * V).ravel())
 
 
-def _excess(Y, dtau, cov, dof: int) -> float:
-    """The GLS residuals' chi-square per degree of freedom less 1 under covariance ``cov``."""
-    L = np.linalg.cholesky(cov)
+def _reml_share(Y, dtau, cov, extra) -> tuple[float, float]:
+    """(REML's -log likelihood, kappa) at the kappa in [MIN_SHARE, MAX_SHARE] that minimises it."""
+    found = minimize_scalar(
+        lambda log_kappa: _reml_nll(Y, dtau, cov + np.exp(2.0 * log_kappa) * extra),
+        bounds=(np.log(MIN_SHARE), np.log(MAX_SHARE)), method="bounded",
+        options={"xatol": SHARE_TOL},
+    )  # fmt: skip
+    return float(found.fun), float(np.exp(found.x))
+
+
+def _reml_nll(Y: np.ndarray, dtau: np.ndarray, V: np.ndarray) -> float:
+    """REML's -log likelihood of ``dtau`` = Y theta + e, e ~ N(0, V), less constants."""
+    L = np.linalg.cholesky(V)
     A, b = np.linalg.solve(L, Y), np.linalg.solve(L, dtau)
     r = b - A @ np.linalg.lstsq(A, b, rcond=None)[0]
-    return float(r @ r) / dof - 1.0
-
-
-def _paule_mandel(Y, dtau, cov, extra, dof: int) -> float:
-    """The kappa > 0 at which the GLS residuals' chi-square per degree of freedom is 1.
-
-    The chi-square exceeds 1 without the friction (``side_friction_cov`` checks); at most
-    MAX_SHARE (errors where the sides agree: the chi-square's rule takes the rest). The
-    value returned leaves the chi-square just above 1.
-    """
-    lo, hi = 0.0, 1.0
-    while _excess(Y, dtau, cov + hi**2 * extra, dof) > 0:
-        if hi >= MAX_SHARE:
-            return hi
-        lo, hi = hi, 2.0 * hi
-    while hi - lo > SHARE_TOL * hi:
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if _excess(Y, dtau, cov + mid**2 * extra, dof) > 0 else (lo, mid)
-    return lo
+    sv = np.linalg.svd(A, compute_uv=False)
+    log_det = 2.0 * np.sum(np.log(sv[sv > RANK_TOL * sv[0]]))  # over what the poses see
+    return float(np.sum(np.log(np.diag(L))) + 0.5 * log_det + 0.5 * r @ r)
