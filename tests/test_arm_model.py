@@ -146,7 +146,9 @@ def test_calibrated_gains_recover_the_gains_put_into_the_currents(runs):
     cal = calibrate_gains(robot, *currents, known_mass_kg=box().mass)
     std = np.sqrt(np.diag(cal.cov))
     assert np.all(np.abs(cal.gains - K_true) < 4 * std), (cal.gains, std)
-    assert np.all(np.abs(cal.gains / K_true - 1) < 0.03)
+    # within 3 % where the motion determines the gain (std 0.1 %); the last wrist joint's
+    # (std 2.5 %: the box barely loads it) is held by its 4 std above
+    assert np.all(np.abs(cal.gains[:5] / K_true[:5] - 1) < 0.03)
     assert np.linalg.norm(cal.com_m - box().p_com_ee) < 5e-3
 
 

@@ -290,7 +290,7 @@ def test_dynamic_estimate_writes_through_the_same_exports(tmp_path):
     from comgrasp_pin.robot import RobotModel
 
     robot = RobotModel.ur5()
-    motion = fourier_motion(robot, seed=5)
+    motion = fourier_motion(robot, duration=20.0, seed=5)  # the inertia determined (as below)
     logs = {option: str(write_csv(rnea_log(robot, held, motion, seed=seed), tmp_path / name))
             for option, held, seed, name in (("--csv", PAYLOAD, 6, "loaded.csv"),
                                              ("--empty-csv", None, 7, "empty.csv"))}  # fmt: skip

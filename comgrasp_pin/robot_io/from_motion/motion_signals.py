@@ -40,7 +40,10 @@ SAMPLES_PER_CUTOFF = 2.5
 MIN_DURATION_S = 3.0
 """Shortest usable motion (s): a few periods of the filter, edges dropped."""
 EDGE_S = 0.5
-"""Seconds dropped at each end after filtering (the filter's start-up transient)."""
+"""Seconds dropped at each end after filtering (the filter's start-up transient); with
+``crop``, also after the arm starts moving and before it stops: at rest each joint holds the
+stuck friction its stop left (up to its Coulomb friction), which differs between an empty and
+a loaded run and does not cancel, and the filter spreads it over about this much."""
 MIN_PEAK_SPEED = 0.2
 """The fastest joint must reach this speed (rad/s) somewhere, or inertia is not seen."""
 LIMIT_MARGIN = 1e-3
@@ -93,11 +96,12 @@ def motion_samples(
         log: the motion's readings.
         window: (t0, t1) s from the log's first message, or None for the whole log.
         cutoff_hz: low-pass cutoff (Hz).
-        crop: where ``window`` is None, keep only the motion (``find_motion``: the first to
-            the last moving sample, ``MOTION_MARGIN_S`` around): the still parts before and
-            after it are left out, so that an empty run of the same motion with shorter still
-            parts still covers the samples (``alignment.align_empty``). A given ``window`` is
-            kept as it is.
+        crop: keep only the motion, for an empty run's subtraction: from ``EDGE_S`` after
+            the first to ``EDGE_S`` before the last moving sample (``moving_span``). The still
+            parts before and after it are left out: their stuck friction differs from run to
+            run, and an empty run of the same motion with shorter still parts still covers
+            the samples (``alignment.align_empty``). Where ``window`` is None, the motion
+            (``find_motion``) must last ``MIN_DURATION_S``.
 
     Raises:
         MotionLogError: as ``filtered_signals``; with ``crop``, a motion shorter than
@@ -114,7 +118,9 @@ def motion_samples(
                 f"s); at least {MIN_DURATION_S} s are needed: play an excitation motion "
                 "(comgrasp plan-motion), or give --window around the motion"
             )
-        keep &= (full.t >= t0) & (full.t <= t1)
+    if crop:
+        first, last = moving_span(full)
+        keep &= (full.t >= first + EDGE_S) & (full.t <= last - EDGE_S)
     return _take(full, np.flatnonzero(keep)[::stride])
 
 
@@ -127,6 +133,17 @@ def find_motion(full: MotionSamples, speed: float = MOTION_SPEED) -> tuple[float
     Raises:
         MotionLogError: no joint reaches ``speed``.
     """
+    first, last = moving_span(full, speed)
+    t0 = max(first - MOTION_MARGIN_S, float(full.t[0]))
+    t1 = min(last + MOTION_MARGIN_S, float(full.t[-1]))
+    return t0, t1
+
+
+def moving_span(full: MotionSamples, speed: float = MOTION_SPEED) -> tuple[float, float]:
+    """(first, last) s: the first and last sample where a joint is faster than ``speed``.
+
+    ``speed`` in rad/s; a MotionLogError where no joint is.
+    """
     fastest = np.max(np.abs(full.qd), axis=1)
     moving = np.flatnonzero(fastest > speed)
     if not moving.size:
@@ -135,9 +152,7 @@ def find_motion(full: MotionSamples, speed: float = MOTION_SPEED) -> tuple[float
             f"{float(fastest.max()):.3f} rad/s, a motion is found above {speed} rad/s; give "
             "the log of an excitation motion (comgrasp plan-motion) or a lower speed"
         )
-    t0 = max(float(full.t[moving[0]]) - MOTION_MARGIN_S, float(full.t[0]))
-    t1 = min(float(full.t[moving[-1]]) + MOTION_MARGIN_S, float(full.t[-1]))
-    return t0, t1
+    return float(full.t[moving[0]]), float(full.t[moving[-1]])
 
 
 def filtered_signals(
