@@ -24,6 +24,10 @@ import pinocchio as pin
 
 from comgrasp_pin.robot import RobotModel
 
+RANK_TOL = 1e-9
+"""Singular values of a (whitened) regressor below this fraction of the largest are directions
+the poses leave open."""
+
 _WORLD_ALIGNED = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 

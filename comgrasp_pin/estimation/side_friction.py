@@ -38,10 +38,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize_scalar
 
+from comgrasp_pin.estimation.regressor import RANK_TOL
+
 SHARE_TOL = 1e-6
 """log(kappa) is found to this width (a relative width of kappa)."""
-RANK_TOL = 1e-9
-"""Singular values below this fraction of the largest are directions the poses leave open."""
 MIN_SHARE = 1e-6
 """The smallest kappa tried above 0."""
 MAX_SHARE = 64.0
@@ -110,9 +110,9 @@ def share_dof(Y: np.ndarray, cov: np.ndarray, found: SideFriction, G: np.ndarray
     noise alone, known from many samples).
     """
     dof = len(cov) - int(np.linalg.matrix_rank(Y))
-    if found.share_left <= 0 or dof <= 0:
+    if found.share_left <= 0 or found.own_pose is None or dof <= 0:
         return np.full(len(G), np.inf)
-    E = _scale(np.square(found.spread), float(found.own_pose))
+    E = _scale(np.square(found.spread), found.own_pose)
     W = np.linalg.inv(cov)
     cov_theta = np.linalg.pinv(Y.T @ W @ Y, rcond=RANK_TOL)
     K = cov_theta @ Y.T @ W  # the GLS's gain: theta = K dtau

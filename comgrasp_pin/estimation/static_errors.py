@@ -25,13 +25,10 @@ import numpy as np
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.estimation.block_sandwich import block_sandwich
 from comgrasp_pin.estimation.estimate import ComEstimate, mc_jacobian
-from comgrasp_pin.estimation.regressor import stacked_regressor
+from comgrasp_pin.estimation.regressor import RANK_TOL, stacked_regressor
 from comgrasp_pin.estimation.side_friction import share_dof
 from comgrasp_pin.estimation.trust import MIN_EXPLAINED, payload_seen, t95, unexplained_reason
 from comgrasp_pin.robot import RobotModel
-
-RANK_TOL = 1e-9
-"""Singular values below this fraction of the largest are directions the fit left open."""
 
 
 def residual_chi2(est: ComEstimate, sigma: np.ndarray, cov: np.ndarray | None, dtau):
@@ -98,7 +95,7 @@ def residual_rules(robot, est: ComEstimate, Q, sigma, cov, dtau, pose_errors: bo
         theta = np.r_[est.mass, est.mass * est.com_ee]
         cov_mc, dof = pose_block_cov(robot, Q, dtau, sigma, theta)
         est = dataclasses.replace(est, cov=cov_mc)
-    elif friction is not None and friction.share_left > 0:  # chi-square 1 at kappa
+    elif friction is not None and friction.share_left > 0:  # the sides' friction (REML)
         est = dataclasses.replace(est, cov=est.cov * max(chi2_dof, 1.0))
         G = mc_jacobian(np.r_[est.mass, est.mass * est.com_ee])
         dof = np.minimum(dof, share_dof(stacked_regressor(robot, Q)[0], cov, friction, G))
