@@ -25,15 +25,19 @@ THETA = np.array([1.1, 0.033, -0.044, 0.055])  # (m, m c) of a payload
 NOISE = np.array([8.4, 3.0, 6.4, 2.5, 33.0, 8.0, 765.0]) * 1e-3
 SPREAD = np.array([7.0, 180.0, 6.0, 22.0, 16.0, 4.5, 500.0]) * 1e-3
 KAPPA = 0.12
+# another regime: the friction (spread 0.2 N m, kappa 0.3) shows above the noise on one
+# joint of seven; on the others the noise (0.05 N m) hides it
+ONE_JOINT_NOISE = np.r_[np.full(N - 1, 0.05), 0.005]
+ONE_JOINT_SPREAD = np.r_[np.full(N - 1, 0.05), 0.2]
 
 
-def problem(seed=0):
+def problem(seed=0, noise=NOISE, spread=SPREAD):
     """(Y, noise covariance, spread): a regressor of torques of about 1 N m per kg or kg m,
-    the FR3's noise and spreads. Every pose has its joint's spread, so the mix rho changes
-    nothing."""
+    each joint's noise and spread (N m; the FR3's by default). Every pose has its joint's
+    spread, so the mix rho changes nothing."""
     rng = np.random.default_rng(seed)
     Y = rng.standard_normal((K * N, 4)) * np.array([1.0, 10.0, 10.0, 10.0])
-    return Y, np.diag(np.tile(NOISE**2, K)), np.tile(SPREAD, (K, 1))
+    return Y, np.diag(np.tile(noise**2, K)), np.tile(spread, (K, 1))
 
 
 def draw(Y, cov, spread, kappa, rng):
@@ -66,24 +70,17 @@ def test_no_share_is_known_noise():
     assert np.all(share_dof(Y, cov, SideFriction(spread, 0.0, None), np.eye(4)) == np.inf)
 
 
-def one_joint_shows(seed):
-    """(Y, noise covariance, spread): the friction (spread 0.2 N m, kappa 0.3) shows above
-    the noise on one joint of seven; on the others the noise (0.05 N m) hides it."""
-    rng = np.random.default_rng(seed)
-    Y = rng.standard_normal((K * N, 4)) * np.array([1.0, 10.0, 10.0, 10.0])
-    noise = np.r_[np.full(N - 1, 0.05), 0.005]
-    spread = np.r_[np.full(N - 1, 0.05), 0.2]
-    return Y, np.diag(np.tile(noise**2, K)), np.tile(spread, (K, 1))
-
-
 @pytest.mark.parametrize(
-    "case, kappa, seed", [("fr3", KAPPA, 1), ("fr3", KAPPA, 3), ("one joint", 0.3, 1)]
-)
-def test_intervals_of_the_stated_dof_cover_at_their_level(case, kappa, seed):
+    "noise, spread, kappa, seed",
+    [(NOISE, SPREAD, KAPPA, 1), (NOISE, SPREAD, KAPPA, 3),
+     (ONE_JOINT_NOISE, ONE_JOINT_SPREAD, 0.3, 1)],
+    ids=["fr3-1", "fr3-3", "one-joint-1"],
+)  # fmt: skip
+def test_intervals_of_the_stated_dof_cover_at_their_level(noise, spread, kappa, seed):
     """95 % intervals of Student's t of the stated dof hold the truth in 95 % of 2000
     (500 draws of 4 parameters: binomial sd about 0.5 %, more with the draws' parameters
     correlated): as franky-sim's FR3 reads, and where the friction shows on one joint."""
-    Y, cov, spread = problem(seed) if case == "fr3" else one_joint_shows(seed)
+    Y, cov, spread = problem(seed, noise, spread)
     rng = np.random.default_rng(seed + 10)
     inside = 0
     for _ in range(500):
