@@ -98,6 +98,12 @@ def test_servo_writing_into_ctrl_is_the_plain_formula(seed, limit):
         servo.ctrl(q, q_des, tau_ff, DT, out)
         tau_i = np.clip(tau_i + (4.0 * 800.0 * DT) * (q_des - q), -limit, limit)
         np.testing.assert_array_equal(out, q_des + (tau_ff + tau_i) * (1.0 / 800.0))
+        np.testing.assert_array_equal(servo.tau_i, tau_i)
+    fresh = ArmServo(6, kp=800.0, ki=4.0, tau_i_limit=limit)  # without ``out``: a new array
+    q, q_des, tau_ff = rng.normal(size=(3, 6))
+    tau_i = np.clip((4.0 * 800.0 * DT) * (q_des - q), -limit, limit)
+    np.testing.assert_array_equal(fresh.ctrl(q, q_des, tau_ff, DT),
+                                  q_des + (tau_ff + tau_i) * (1.0 / 800.0))  # fmt: skip
 
 
 def _sensor_reader(sim: Simulation) -> None:
