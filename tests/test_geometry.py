@@ -153,6 +153,25 @@ def test_invert_transform():
     assert check_transform(T).shape == (4, 4)
 
 
+@settings(max_examples=300, deadline=None)
+@given(seed=st.integers(0, 2**31), scale=st.floats(-9, 1), atol=st.floats(-9, -3))
+def test_transform_check_accepts_what_numpy_allclose_accepts(seed, scale, atol):
+    """The check's closeness is ``np.allclose``'s (the reference), on rotations disturbed
+    by anything from far below to far above the tolerance."""
+    rng = np.random.default_rng(seed)
+    T = transform(rot_y(rng.uniform(-3, 3)) @ rot_x(rng.uniform(-3, 3)), rng.normal(size=3))
+    T[:3, :3] += 10.0**scale * rng.normal(size=(3, 3))
+    R, tol = T[:3, :3], 10.0**atol
+    expected = (np.abs(R).max() <= 1 + tol and np.allclose(R.T @ R, np.eye(3), atol=tol)
+                and np.linalg.det(R) >= 0)  # fmt: skip
+    try:
+        check_transform(T, atol=tol)
+        accepted = True
+    except cg.InvalidInputError:
+        accepted = False
+    assert accepted == expected
+
+
 unit = (
     st.lists(st.floats(-1, 1), min_size=3, max_size=3)
     .map(np.array)
