@@ -35,8 +35,10 @@ _LAST_ROW = np.array([0.0, 0.0, 0.0, 1.0])
 
 
 def _allclose(a: np.ndarray, b: np.ndarray, atol: float) -> bool:
-    """``np.allclose(a, b, atol=atol)`` for finite arrays, without its checks (a tenth of
-    its time on a 3 x 3: perception checks thousands of transforms an episode)."""
+    """``np.allclose(a, b, atol=atol)`` for finite arrays, without its checks.
+
+    A tenth of its time on a 3 x 3: perception checks thousands of transforms an episode.
+    """
     return bool((np.abs(a - b) <= atol + 1e-5 * np.abs(b)).all())
 
 

@@ -139,4 +139,5 @@ def _row_medians(values: np.ndarray, mask: np.ndarray) -> np.ndarray:
     ``np.median(values[k][mask[k]])``, the same numbers, each from a partition of its row
     (faster than one sort of all the rows for every K the fits take); NaN if none.
     """
-    return np.array([median(v[m]) if m.any() else np.nan for v, m in zip(values, mask, strict=True)])
+    rows = zip(values, mask, strict=True)
+    return np.array([median(v[m]) if m.any() else np.nan for v, m in rows])
