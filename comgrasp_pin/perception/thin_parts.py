@@ -20,7 +20,7 @@ import numpy as np
 from comgrasp_pin.errors import UntrustedImageError
 from comgrasp_pin.perception._points import noise_level
 from comgrasp_pin.perception.rod_shape import reaching_border
-from comgrasp_pin.perception.standing import MAX_HEIGHT
+from comgrasp_pin.perception.standing import MAX_HEIGHT, bare_table
 
 GAP = 0.01  # rays are followed from this far beyond the outline (m): its fringe and smear
 STEP = 0.01  # a part is followed along a ray in windows this long (m) up to the first
@@ -57,12 +57,10 @@ def check_no_thin_part(heights: np.ndarray, mask: np.ndarray, table: np.ndarray,
     of bare table, ``BARE_SIGMAS``) at least MIN_EXTENT long whose own mean stands
     JOINED_SIGMAS and MIN_JOINED above it (a handle that fades into the table).
     """
-    rows, cols = np.nonzero(mask)
-    centre = (float(cols.mean()), float(rows.mean()))
+    centre, reach = _reach(mask, px_per_m)
     gap_px = max(2, int(round(GAP * px_per_m)))
     step_px = max(3, int(round(STEP * px_per_m)))
     longest = max(5, int(round(max(LENGTHS) * px_per_m)))
-    reach = np.hypot(rows - centre[1], cols - centre[0]).max() + gap_px + longest + step_px + 2
     size = (int(reach), ANGLES)  # (radius samples, angles): a row per angle
     flags = cv2.INTER_LINEAR | cv2.WARP_POLAR_LINEAR | cv2.WARP_FILL_OUTLIERS
     h = cv2.warpPolar(np.nan_to_num(heights).astype(np.float32), size, centre, reach, flags)
@@ -112,6 +110,46 @@ def check_no_thin_part(heights: np.ndarray, mask: np.ndarray, table: np.ndarray,
         part_noise = stretches.noise(int(extent_px[k]))
         if np.isfinite(part_noise) and mean > JOINED_SIGMAS * part_noise:
             _refuse(k, mean, extent, part_noise)
+
+
+def _reach(mask: np.ndarray, px_per_m: float) -> tuple[tuple[float, float], float]:
+    """((u, v) the object's centre in the image, the rays' reach from it (px)).
+
+    The reach: its farthest pixel, then GAP, the longest stretch, a window and two pixels.
+    """
+    rows, cols = np.nonzero(mask)
+    centre = (float(cols.mean()), float(rows.mean()))
+    gap_px = max(2, int(round(GAP * px_per_m)))
+    step_px = max(3, int(round(STEP * px_per_m)))
+    longest = max(5, int(round(max(LENGTHS) * px_per_m)))
+    reach = np.hypot(rows - centre[1], cols - centre[0]).max() + gap_px + longest + step_px + 2
+    return centre, float(reach)
+
+
+def around_object(height: np.ndarray, mask: np.ndarray, standing: np.ndarray,
+                  threshold: float, robot: np.ndarray, px_per_m: float) -> tuple:  # fmt: skip
+    """(heights, table) for the thin-part checks: the disc the rays reach around the object.
+
+    ``height``: (H, W) above the table's plane (m, NaN where none); ``mask``, ``standing``,
+    ``robot``: (H, W) bool, the object, what stands on the table (above ``threshold``, m)
+    and the robot's own parts (``robot_parts``).
+
+    Only the disc around the object that ``check_no_thin_part``'s rays reach counts, wherever
+    the pick area's edges are and whatever the frame the heights are in (issue 44: the same
+    answer for the same scene): its bare table (within ``threshold`` of the plane, clear of
+    what stands and of the robot; ``standing.bare_table``) gives both the level the heights
+    are taken from (its median) and the noise (``TableStretches``). Returns the heights that
+    are too low to stand (NaN elsewhere: above the threshold, far below the plane, the
+    robot, outside the disc) and the bare table (H, W) bool.
+    """
+    (u, v), reach = _reach(mask, px_per_m)
+    rows, cols = np.ogrid[: height.shape[0], : height.shape[1]]
+    disc = ((cols - u) ** 2 + (rows - v) ** 2 <= reach**2) & ~robot
+    with np.errstate(invalid="ignore"):  # NaN heights are no table
+        table = bare_table(disc & (np.abs(height) <= threshold), standing)
+        level = float(np.median(height[table])) if table.any() else 0.0
+        low = disc & (np.abs(height - level) <= threshold)
+    return np.where(low, height - level, np.nan), table
 
 
 def check_no_hidden_part(length: float, width: float, heights: np.ndarray, table: np.ndarray,

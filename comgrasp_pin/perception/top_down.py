@@ -46,7 +46,6 @@ from comgrasp_pin.perception.standing import (  # noqa: F401 (the thresholds' na
     MIN_HEIGHT,
     MIN_PIXELS,
     ColourNoHelp,
-    bare_table,
     segment,
     stands_at,
 )
@@ -54,11 +53,11 @@ from comgrasp_pin.perception.table_view import (
     TableView,
     check_no_dip,
     cut_end_of,
-    in_area,
     overhang,
     view_table,
 )
 from comgrasp_pin.perception.thin_parts import (
+    around_object,
     check_no_hidden_part,
     check_no_thin_part,
     robot_parts,
@@ -159,7 +158,7 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
                   measured)  # fmt: skip
     threshold = stands_at(view)
     low = (
-        _check_thin_parts(view, pick_area, standing, mask, pixel, threshold)
+        _check_thin_parts(view, standing, mask, pixel, threshold)
         if view.cleaned
         else None
     )
@@ -217,20 +216,18 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
     return det
 
 
-def _check_thin_parts(view: TableView, pick_area, standing, mask, pixel: float,
+def _check_thin_parts(view: TableView, standing, mask, pixel: float,
                       threshold: float) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """``thin_parts.check_no_thin_part`` on what is too low to stand in the pick area.
+    """``thin_parts.check_no_thin_part`` on what is too low to stand around the object.
 
     What stands (above ``threshold``, m) is the object or another one; the robot's own parts
-    are left out (``robot_parts``); the table's noise is measured on the bare table
-    (``standing.bare_table``).
+    are left out (``robot_parts``); the heights' level and the table's noise come from the
+    bare table around the object (``around_object``), not from the pick area.
     Returns (those heights, the table's pixels) for ``check_no_hidden_part``.
     """
-    area = in_area(view.points, pick_area, EDGE_BAND)
-    table = bare_table(area, standing)
     height = view.points[..., 2] - view.table_z
-    low = area & ~robot_parts(height, threshold, pixel) & ~(height > threshold)
-    heights = np.where(low, height, np.nan)
+    robot = robot_parts(height, threshold, pixel)
+    heights, table = around_object(height, mask, standing, threshold, robot, 1.0 / pixel)
     check_no_thin_part(heights, mask, table, 1.0 / pixel)
     return heights, table
 
