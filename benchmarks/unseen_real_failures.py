@@ -14,7 +14,11 @@ depth (the top view looks at the colour only where such a depth fails). Writes e
 frame's mode, parameter, outcome and the refusal's message or the errors. ``--quick``:
 fewer frames (~30 s). ``--draws N``: each frame with a structured-light camera's depth
 under N draws of its noise (the first the one a single run draws): an answer that holds
-for one draw may not for the next.
+for one draw may not for the next. Each answer is also asked in the fitted table's frame
+(``differing_in_table_frame``) and, in the world frame, with the pick area moved by 3 cm in
+x and y where no object enters or leaves (``unseen.moved_areas``; ``moved_areas`` counts
+them, ``differing_for_moved_areas`` the frames whose answer changed in one): issue 44's one
+answer per scene.
 """
 
 from __future__ import annotations
@@ -57,6 +61,7 @@ def main() -> None:
     total = Counter(r["outcome"] for r in rows)
     alone = Counter(r["depth_alone"]["outcome"] for r in rows)
     differ = sum(not v for r in rows for v in r["same_in_table_frame"].values())
+    moved = sum(not v for r in rows for v in r["same_for_moved_areas"].values())
     result = {
         "seed": args.seed,
         "quick": args.quick,
@@ -65,6 +70,8 @@ def main() -> None:
         "total": {o: total[o] for o in OUTCOMES},
         "total_depth_alone": {o: alone[o] for o in OUTCOMES},
         "differing_in_table_frame": differ,
+        "moved_areas": sum(r["moved_areas"] for r in rows),
+        "differing_for_moved_areas": moved,
         "by_mode": by_mode,
         "wrong_bounds": {
             "length_rel": rf.WRONG_LENGTH,
@@ -76,7 +83,8 @@ def main() -> None:
         "date": time.strftime("%Y-%m-%d %H:%M:%S UTC", time.gmtime()),
     }
     Path(args.out).write_text(json.dumps(result, indent=1) + "\n")
-    shown = ("total", "total_depth_alone", "differing_in_table_frame", "by_mode", "wall_s")
+    shown = ("total", "total_depth_alone", "differing_in_table_frame", "moved_areas",
+             "differing_for_moved_areas", "by_mode", "wall_s")
     print(json.dumps({k: result[k] for k in shown}, indent=1))
 
 

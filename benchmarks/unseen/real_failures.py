@@ -40,6 +40,7 @@ from comgrasp_pin.perception.table_plane import fit_table_plane
 from comgrasp_pin.simulation.depth_noise import DepthNoise
 
 from .families import BLACK, BROWN, GREEN, _at, judge
+from .moved_areas import moved_areas
 from .scenes import Clutter, Look, Rod, UnseenScene, render_top
 
 WRONG_LENGTH = 0.20  # relative
@@ -237,11 +238,12 @@ def run_frame(frame: Frame, renders, noise_seed: int = 0) -> dict:
         depth = DepthNoise(STRUCTURED_LIGHT, noise_seed).apply(depth)
         if frame.depth.endswith("shadow"):
             depth = projector_shadow(depth, camera.fx)
-    judged, same = {}, {}
+    judged, same, same_moved = {}, {}, {}
     try:
         in_table = fit_table_plane(depth, camera)
     except PerceptionError:
         in_table = None
+    areas = moved_areas(frame.scene)
     for label, colour in (("", rgb), ("depth_alone", None)):
         found = _detect(colour, depth, camera, T_world_cam, None)
         judged[label] = outcome(found, frame.truth)
@@ -249,7 +251,12 @@ def run_frame(frame: Frame, renders, noise_seed: int = 0) -> dict:
         other = _detect(colour, depth, camera, *in_table) if in_table else ObjectNotFoundError()
         same[label or "with_colour"] = same_answer(other, found, in_table[0], T_world_cam) \
             if in_table else isinstance(found, PerceptionError)  # fmt: skip
-    return {**judged[""], "depth_alone": judged["depth_alone"], "same_in_table_frame": same}
+        # ... and with the pick area moved by 3 cm where no object enters or leaves
+        same_moved[label or "with_colour"] = all(
+            same_answer(_detect(colour, depth, camera, T_world_cam, a), found, T_world_cam,
+                        T_world_cam) for a in areas)  # fmt: skip
+    return {**judged[""], "depth_alone": judged["depth_alone"], "same_in_table_frame": same,
+            "moved_areas": len(areas), "same_for_moved_areas": same_moved}  # fmt: skip
 
 
 def _detect(colour, depth, camera, T, area):
