@@ -13,7 +13,9 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+import pytest
 
+from comgrasp_pin.errors import AmbiguousObjectError
 from comgrasp_pin.perception.standing import DETECT_SNR, largest_bump, median_noise, noise_bumps
 
 sys.path.append(str(Path(__file__).resolve().parents[1] / "benchmarks"))
@@ -138,3 +140,39 @@ def test_a_hammer_is_measured_from_the_depth_alone_and_a_low_rod_never_wrongly()
     assert all(j["outcome"] != "wrong" for j in hammer + low), judged
     assert sum(j["outcome"] == "right" for j in hammer) >= 4, hammer
     assert all(j["outcome"] == "refused" for j in low), low
+
+
+def _rod_on_grid(extra: list[tuple[int, int, int, int]]):
+    """(points (H, W, 3), standing, the rod's blob, centroid, direction, ends, its points):
+    a rod along x on a 1 mm grid, and ``extra`` blobs (row0, row1, col0, col1) standing."""
+    h, w = 120, 400
+    rows, cols = np.mgrid[:h, :w]
+    points = np.dstack([cols * 0.001, rows * 0.001, np.zeros((h, w))])
+    blob = (rows >= 55) & (rows < 65) & (cols >= 100) & (cols < 250)
+    standing = blob.copy()
+    for r0, r1, c0, c1 in extra:
+        standing[r0:r1, c0:c1] = True
+    p = points[blob]
+    centroid = p[:, :2].mean(axis=0)
+    along = (p[:, :2] - centroid) @ np.array([1.0, 0.0])
+    return points, standing, blob, centroid, np.array([1.0, 0.0]), (along.min(), along.max()), p
+
+
+@pytest.mark.parametrize("bump_px", [float("inf"), 30.0, 35.0])
+def test_a_blob_on_the_axis_beyond_an_end_is_the_rod_unless_no_larger_than_the_noises_bumps(
+    bump_px,
+):
+    """6 x 6 px standing on the axis 1 cm beyond the rod's end (36 px, END_PIXELS or more):
+    the rod may go on there, unless the view's noise makes bumps of 36 px (``bump_px`` at
+    least 36; inf: not measured, every blob counts). The same blob off the axis, or more than
+    END_REACH beyond the end, is not weighed."""
+    from comgrasp_pin.perception.rod_shape import END_REACH, check_ends_seen
+
+    on_axis = _rod_on_grid([(57, 63, 260, 266)])
+    with pytest.raises(AmbiguousObjectError, match="36 px stand on the table on the rod's"):
+        check_ends_seen(*on_axis, bump_px)
+    check_ends_seen(*on_axis, 36.0)  # a blob of the noise's size
+    off_axis = _rod_on_grid([(10, 16, 260, 266)])
+    check_ends_seen(*off_axis, bump_px)
+    far = 250 + int(1e3 * END_REACH) + 5
+    check_ends_seen(*_rod_on_grid([(57, 63, far, far + 6)]), bump_px)

@@ -19,7 +19,7 @@ SECOND_OBJECT = 0.05  # another blob of this share of the rod's pixels is anothe
 CLUTTER_OBJECTS = 3  # this many objects (or piles) in the pick area are clutter
 END_REACH, END_BAND = 0.05, 0.003  # pixels this far beyond an end, on the axis (m) ...
 END_PIXELS = 3  # ... this many: the rod may go on, unless each blob they are of is no
-NOISE_BUMPS = 5  # larger than one of this many or more off the axis (the table's own noise)
+# larger than the table's own noise makes (``standing.largest_bump``)
 SLICE = 0.01  # slices across the rod (m)
 ACROSS_BIN = 0.002  # the across profile's resolution (m): about one pixel on the table
 GAP_BINS = 2  # this many empty bins in a row between two pieces split a slice
@@ -91,6 +91,7 @@ def check_ends_seen(
     direction: np.ndarray,
     ends: tuple[float, float],
     p: np.ndarray,
+    bump_px: float,
 ) -> None:
     """AmbiguousObjectError when the rod may go on beyond an end it seems to have.
 
@@ -99,7 +100,11 @@ def check_ends_seen(
     lie on its axis (``direction`` (2,) through ``centroid`` (2,)) within END_REACH beyond
     one of its ``ends`` (coordinates along the axis, m): parts of the rod lost in the image's
     holes and noise. ``p``: the rod's points (N, 3), whose spread across the axis sets the
-    band.
+    band. A blob no larger than ``bump_px`` (px: the area the view's noise bumps exceed but
+    rarely, ``standing.largest_bump``; inf where too few bumps were seen to tell, and then
+    every blob counts) is the table's noise, not the rod. (That bound is fitted to all the
+    bumps of the pick area; the largest bump alone, which it replaced, moved with the area:
+    the same frame refused in one area and measured in another, issue 44.)
     """
     opened = cv2.morphologyEx(standing.astype(np.uint8), cv2.MORPH_OPEN, _KERNEL3) > 0
     others = opened & ~(cv2.dilate(blob.astype(np.uint8), _KERNEL5) > 0)
@@ -114,9 +119,8 @@ def check_ends_seen(
     corridor = beyond & (across < half_width)
     count, labels, stats, _ = cv2.connectedComponentsWithStats(others.astype(np.uint8))
     on_axis = np.unique(labels[corridor & others])
-    elsewhere = np.setdiff1d(np.arange(1, count), on_axis)
-    # a blob no larger than the table's own noise makes elsewhere is no part of the rod
-    bump = int(stats[elsewhere, cv2.CC_STAT_AREA].max()) if len(elsewhere) >= NOISE_BUMPS else 0
+    # a blob no larger than the table's own noise makes (``bump_px``) is no part of the rod
+    bump = bump_px if np.isfinite(bump_px) else 0.0
     in_corridor = np.bincount(labels[corridor & others], minlength=count)
     count = int(sum(in_corridor[k] for k in on_axis if stats[k, cv2.CC_STAT_AREA] > bump))
     if count >= END_PIXELS:

@@ -165,7 +165,8 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
     along = (p[:, :2] - centroid) @ direction
     lo, hi = np.percentile(along, [0.02, 99.98])
     if view.cleaned:
-        check_ends_seen(view.points, standing, mask, centroid, direction, (lo, hi), p)
+        check_ends_seen(view.points, standing, mask, centroid, direction, (lo, hi), p,
+                        bump_px)
     check_no_dip(view, pick_area, centroid, direction, (lo, hi), p, threshold)
     centre = centroid + 0.5 * (lo + hi) * direction
     near_centre = np.abs(along - 0.5 * (lo + hi)) < 0.01
