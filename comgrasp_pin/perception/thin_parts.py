@@ -58,9 +58,7 @@ def check_no_thin_part(heights: np.ndarray, mask: np.ndarray, table: np.ndarray,
     JOINED_SIGMAS and MIN_JOINED above it (a handle that fades into the table).
     """
     centre, reach = _reach(mask, px_per_m)
-    gap_px = max(2, int(round(GAP * px_per_m)))
-    step_px = max(3, int(round(STEP * px_per_m)))
-    longest = max(5, int(round(max(LENGTHS) * px_per_m)))
+    gap_px, step_px, longest = _lengths_px(px_per_m)
     size = (int(reach), ANGLES)  # (radius samples, angles): a row per angle
     flags = cv2.INTER_LINEAR | cv2.WARP_POLAR_LINEAR | cv2.WARP_FILL_OUTLIERS
     h = cv2.warpPolar(np.nan_to_num(heights).astype(np.float32), size, centre, reach, flags)
@@ -112,6 +110,12 @@ def check_no_thin_part(heights: np.ndarray, mask: np.ndarray, table: np.ndarray,
             _refuse(k, mean, extent, part_noise)
 
 
+def _lengths_px(px_per_m: float) -> tuple[int, int, int]:
+    """(GAP, STEP, the longest of LENGTHS) in pixels, at ``px_per_m``."""
+    return (max(2, int(round(GAP * px_per_m))), max(3, int(round(STEP * px_per_m))),
+            max(5, int(round(max(LENGTHS) * px_per_m))))  # fmt: skip
+
+
 def _reach(mask: np.ndarray, px_per_m: float) -> tuple[tuple[float, float], float]:
     """((u, v) the object's centre in the image, the rays' reach from it (px)).
 
@@ -119,9 +123,7 @@ def _reach(mask: np.ndarray, px_per_m: float) -> tuple[tuple[float, float], floa
     """
     rows, cols = np.nonzero(mask)
     centre = (float(cols.mean()), float(rows.mean()))
-    gap_px = max(2, int(round(GAP * px_per_m)))
-    step_px = max(3, int(round(STEP * px_per_m)))
-    longest = max(5, int(round(max(LENGTHS) * px_per_m)))
+    gap_px, step_px, longest = _lengths_px(px_per_m)
     reach = np.hypot(rows - centre[1], cols - centre[0]).max() + gap_px + longest + step_px + 2
     return centre, float(reach)
 
@@ -165,7 +167,7 @@ def check_no_hidden_part(length: float, width: float, heights: np.ndarray, table
     """
     if length >= ROD_ASPECT * width:
         return
-    longest = max(5, int(round(max(LENGTHS) * px_per_m)))
+    longest = _lengths_px(px_per_m)[2]
     least = SIGMAS * TableStretches(heights, table).noise(longest)
     if not least > MIN_MEAN:  # (NaN: too little table to tell, as check_no_thin_part)
         return
