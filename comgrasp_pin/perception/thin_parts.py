@@ -139,16 +139,18 @@ def around_object(height: np.ndarray, mask: np.ndarray, standing: np.ndarray,
     Only the disc around the object that ``check_no_thin_part``'s rays reach counts, wherever
     the pick area's edges are and whatever the frame the heights are in (issue 44: the same
     answer for the same scene): its bare table (within ``threshold`` of the plane, clear of
-    what stands and of the robot; ``standing.bare_table``) gives both the level the heights
-    are taken from (its median) and the noise (``TableStretches``). Returns the heights that
-    are too low to stand (NaN elsewhere: above the threshold, far below the plane, the
-    robot, outside the disc) and the bare table (H, W) bool.
+    what stands, in the pick area or beyond it, and of the robot; ``standing.bare_table``)
+    gives both the level the heights are taken from (its median) and the noise
+    (``TableStretches``). Returns the heights that are too low to stand (NaN elsewhere:
+    above the threshold, far below the plane, the robot, outside the disc) and the bare
+    table (H, W) bool.
     """
     (u, v), reach = _reach(mask, px_per_m)
     rows, cols = np.ogrid[: height.shape[0], : height.shape[1]]
     disc = ((cols - u) ** 2 + (rows - v) ** 2 <= reach**2) & ~robot
     with np.errstate(invalid="ignore"):  # NaN heights are no table
-        table = bare_table(disc & (np.abs(height) <= threshold), standing)
+        stands = standing | (height > threshold)  # in the pick area or not
+        table = bare_table(disc & (np.abs(height) <= threshold), stands)
         level = float(np.median(height[table])) if table.any() else 0.0
         low = disc & (np.abs(height - level) <= threshold)
     return np.where(low, height - level, np.nan), table
