@@ -110,16 +110,15 @@ def motion_samples(
     full = filtered_signals(robot, log, window, cutoff_hz)
     stride = max(1, int(round(full.rate_hz / (SAMPLES_PER_CUTOFF * cutoff_hz))))
     keep = (full.t >= full.t[0] + EDGE_S) & (full.t <= full.t[-1] - EDGE_S)
-    if crop and window is None:
-        t0, t1 = find_motion(full)
-        if t1 - t0 < MIN_DURATION_S:
+    if crop:
+        first, last = moving_span(full)
+        t0, t1 = _with_margins(full, first, last)
+        if window is None and t1 - t0 < MIN_DURATION_S:
             raise MotionLogError(
                 f"{log.source or 'the log'}'s motion lasts {t1 - t0:.2f} s ({t0:.2f}-{t1:.2f} "
                 f"s); at least {MIN_DURATION_S} s are needed: play an excitation motion "
                 "(comgrasp plan-motion), or give --window around the motion"
             )
-    if crop:
-        first, last = moving_span(full)
         keep &= (full.t >= first + EDGE_S) & (full.t <= last - EDGE_S)
     return _take(full, np.flatnonzero(keep)[::stride])
 
@@ -133,10 +132,13 @@ def find_motion(full: MotionSamples, speed: float = MOTION_SPEED) -> tuple[float
     Raises:
         MotionLogError: no joint reaches ``speed``.
     """
-    first, last = moving_span(full, speed)
-    t0 = max(first - MOTION_MARGIN_S, float(full.t[0]))
-    t1 = min(last + MOTION_MARGIN_S, float(full.t[-1]))
-    return t0, t1
+    return _with_margins(full, *moving_span(full, speed))
+
+
+def _with_margins(full: MotionSamples, first: float, last: float) -> tuple[float, float]:
+    """(t0, t1) s: ``first`` to ``last`` with MOTION_MARGIN_S around, within the log."""
+    return max(first - MOTION_MARGIN_S, float(full.t[0])), min(last + MOTION_MARGIN_S,
+                                                                 float(full.t[-1]))  # fmt: skip
 
 
 def moving_span(full: MotionSamples, speed: float = MOTION_SPEED) -> tuple[float, float]:
