@@ -25,10 +25,10 @@ known far worse than "the readings less the unknowns" says. Its degrees of freed
 Satterthwaite's (``share_dof``): 2 v^2 / ((dv / dkappa^2)^2 var(kappa^2)), with REML's
 var(kappa^2) = 2 / tr(P E P E) (P the GLS residual projector, E the friction's scale): the
 readings less the unknowns where the friction dominates every reading, about as many as the
-readings it dominates where it shows on few. (Paule and Mandel's moment estimator, which
-sets the residuals' chi-square per degree of freedom to 1, was used before: on franky-sim's
-sessions it left kappa to the noise of the many readings the friction does not show in,
-with Satterthwaite's dof below 1 at times.)
+readings it dominates where it shows on few. (A moment estimator, Paule and Mandel's, which
+sets the residuals' chi-square per degree of freedom to 1, would leave kappa to the noise of
+the many readings the friction does not show in, with Satterthwaite's dof below 1 at times
+on franky-sim's sessions.)
 """
 
 from __future__ import annotations

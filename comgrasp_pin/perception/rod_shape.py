@@ -102,9 +102,9 @@ def check_ends_seen(
     holes and noise. ``p``: the rod's points (N, 3), whose spread across the axis sets the
     band. A blob no larger than ``bump_px`` (px: the area the view's noise bumps exceed but
     rarely, ``standing.largest_bump``; inf where too few bumps were seen to tell, and then
-    every blob counts) is the table's noise, not the rod. (That bound is fitted to all the
-    bumps of the pick area; the largest bump alone, which it replaced, moved with the area:
-    the same frame refused in one area and measured in another, issue 44.)
+    every blob counts) is the table's noise, not the rod. The bound is fitted to all the
+    bumps of the pick area: the largest bump alone would move with the area, and the same
+    scene would be refused in one area and measured in another.
     """
     opened = cv2.morphologyEx(standing.astype(np.uint8), cv2.MORPH_OPEN, _KERNEL3) > 0
     others = opened & ~(cv2.dilate(blob.astype(np.uint8), _KERNEL5) > 0)

@@ -137,8 +137,8 @@ def around_object(height: np.ndarray, mask: np.ndarray, standing: np.ndarray,
     and the robot's own parts (``robot_parts``).
 
     Only the disc around the object that ``check_no_thin_part``'s rays reach counts, wherever
-    the pick area's edges are and whatever the frame the heights are in (issue 44: the same
-    answer for the same scene): its bare table (within ``threshold`` of the plane, clear of
+    the pick area's edges are and whatever the frame the heights are in (the same answer
+    for the same scene): its bare table (within ``threshold`` of the plane, clear of
     what stands, in the pick area or beyond it, and of the robot; ``standing.bare_table``)
     gives both the level the heights are taken from (its median) and the noise
     (``TableStretches``). Returns the heights that are too low to stand (NaN elsewhere:
