@@ -73,8 +73,10 @@ def segment(view: TableView, pick_area, rgb) -> Segments:
         colour = differs_in_colour(rgb, inside) & inside & (z < view.table_z + MAX_HEIGHT)
         if not check_registered(colour, closed(in_depth) & inside):
             raise ColourNoHelp
-        standing = standing | colour
-    if view.cleaned:
+        standing = without_marks(
+            closed(standing | colour), inside, in_depth, z - view.table_z, min_height
+        )
+    elif view.cleaned:
         standing = closed(standing)
     mask = largest_component(inside & standing, MIN_PIXELS, "top-down image")
     if view.cleaned:  # a rod broken apart by the noise, joined again
@@ -95,14 +97,9 @@ def segment(view: TableView, pick_area, rgb) -> Segments:
             "out of view, so its extent and centre are not known; move it, or the camera"
         )
     if view.cleaned and rgb is not None:
-        median = float(np.median(z[mask])) - view.table_z
-        noise = median_noise(height, mask, bare_table(inside, standing))
-        least = max(MIN_HEIGHT, DETECT_SNR * noise) if np.isfinite(noise) else min_height
-        if not median >= least:  # (noise NaN, not measured: the per-pixel threshold)
-            raise ObjectNotFoundError(
-                f"what differs from the table in colour stands {1e3 * median:.1f} mm above it "
-                f"(less than {1e3 * least:.1f} mm): a mark or a shadow, not an object"
-            )
+        median, least = _stands(height, mask, bare_table(inside, standing), min_height)
+        if not median >= least:
+            raise _mark(median, least)
     mask, rod_standing = over_the_edge(view, mask, inside, standing, in_depth, min_height)
     return mask, rod_standing, standing & ~in_depth, bool(border_pixels(mask).any()), bump_px
 
@@ -185,6 +182,54 @@ def median_noise(height: np.ndarray, blob: np.ndarray, table: np.ndarray) -> flo
             if 2 * on.sum() >= len(r):
                 medians.append(np.median(height[r[on], c[on]]))
     return noise_level(np.array(medians)) if len(medians) >= MARK_PLACES else float("nan")
+
+
+def without_marks(standing: np.ndarray, inside: np.ndarray, in_depth: np.ndarray,
+                  height: np.ndarray, min_height: float) -> np.ndarray:  # fmt: skip
+    """``standing`` less the marks: what the colour adds that does not stand.
+
+    A blob of ``inside & standing`` (of MIN_PIXELS or more) that the depth sees standing
+    (``in_depth``) in less than half of its pixels is a mark or a shadow where its median
+    ``height`` does not stand above the noise of such a median (``_stands``): a pattern on
+    the table, or the table's edge in a colour image a few pixels off the depth. It is no
+    object, to count or to measure. All (H, W); ``height`` above the table (m);
+    ``min_height``: a pixel's threshold (``stands_at``). ObjectNotFoundError when nothing
+    else as large is there.
+    """
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(
+        (inside & standing).astype(np.uint8), connectivity=8)  # fmt: skip
+    areas = stats[:, cv2.CC_STAT_AREA]
+    seen = np.bincount(labels[in_depth & standing], minlength=count)
+    large = [k for k in range(1, count) if areas[k] >= MIN_PIXELS]
+    table = bare_table(inside, standing)
+    marks = []  # (area, label, median, least)
+    for k in large:
+        if 2 * seen[k] < areas[k]:
+            median, least = _stands(height, labels == k, table, min_height)
+            if not median >= least:
+                marks.append((areas[k], k, median, least))
+    if marks and len(marks) == len(large):
+        raise _mark(*max(marks)[2:])
+    return standing & ~np.isin(labels, [k for _, k, _, _ in marks])
+
+
+def _stands(height: np.ndarray, blob: np.ndarray, table: np.ndarray,
+            min_height: float) -> tuple[float, float]:  # fmt: skip
+    """(median ``height`` over ``blob``, the least it must be to stand), m.
+
+    The least: DETECT_SNR times the noise of such a median (``median_noise`` on the bare
+    ``table``), not below MIN_HEIGHT; ``min_height`` where that noise is not measured.
+    """
+    median = float(np.median(height[blob]))
+    noise = median_noise(height, blob, table)
+    return median, max(MIN_HEIGHT, DETECT_SNR * noise) if np.isfinite(noise) else min_height
+
+
+def _mark(median: float, least: float) -> ObjectNotFoundError:
+    return ObjectNotFoundError(
+        f"what differs from the table in colour stands {1e3 * median:.1f} mm above it "
+        f"(less than {1e3 * least:.1f} mm): a mark or a shadow, not an object"
+    )
 
 
 def closed(mask: np.ndarray) -> np.ndarray:

@@ -157,16 +157,11 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
     check_one_rod(view.points[mask], centroid, direction, view.table_z, view.points_noise,
                   measured)  # fmt: skip
     threshold = stands_at(view)
-    low = (
-        _check_thin_parts(view, standing, mask, pixel, threshold)
-        if view.cleaned
-        else None
-    )
+    low = _check_thin_parts(view, standing, mask, pixel, threshold) if view.cleaned else None
     along = (p[:, :2] - centroid) @ direction
     lo, hi = np.percentile(along, [0.02, 99.98])
     if view.cleaned:
-        check_ends_seen(view.points, standing, mask, centroid, direction, (lo, hi), p,
-                        bump_px)
+        check_ends_seen(view.points, standing, mask, centroid, direction, (lo, hi), p, bump_px)
     check_no_dip(view, pick_area, centroid, direction, (lo, hi), p, threshold)
     centre = centroid + 0.5 * (lo + hi) * direction
     near_centre = np.abs(along - 0.5 * (lo + hi)) < 0.01
