@@ -39,7 +39,7 @@ def _scene(seed: int):
     return height, mask, height > THRESHOLD
 
 
-def test_the_level_is_the_bare_tables_within_the_rays_reach():
+def test_the_level_is_the_bare_tables_median_within_the_rays_reach():
     height, mask, standing = _scene(0)
     robot = np.zeros_like(mask)
     heights, table = around_object(height, mask, standing, THRESHOLD, robot, PX_PER_M)
@@ -48,11 +48,10 @@ def test_the_level_is_the_bare_tables_within_the_rays_reach():
     disc = np.hypot(cols - u, rows - v) <= reach
     expected_table = bare_table(disc & (np.abs(height) <= THRESHOLD), standing)
     np.testing.assert_array_equal(table, expected_table)
-    bare = np.sort(height[expected_table])
-    level = np.mean(bare[len(bare) // 4 : len(bare) - len(bare) // 4])  # its middle half's mean
+    level = np.median(height[expected_table])
     low = disc & (np.abs(height - level) <= THRESHOLD)
     np.testing.assert_array_equal(np.isfinite(heights), low)
-    np.testing.assert_allclose(heights[low], height[low] - level, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(heights[low], height[low] - level, rtol=0, atol=1e-15)
 
 
 @settings(max_examples=25, deadline=None)

@@ -57,7 +57,7 @@ class TableView:
     Attributes:
         points: (H, W, 3) every pixel in the world (NaN where no depth): the image's median
             when ``cleaned``.
-        table_z: height of the table plane (m), the level of the pick area (``table_level``).
+        table_z: height of the table plane (m), the median of the pick area.
         noise: the camera's depth noise on the table (m, robust std, before the median).
         points_noise: the same of ``points`` (after the median, when ``cleaned``).
         cleaned: whether flying pixels were dropped, holes filled and the median taken.
@@ -110,28 +110,8 @@ def _table(points: np.ndarray, pick_area, margin: float) -> tuple[float, float]:
     inside = in_area(points, pick_area, margin) & np.isfinite(z)
     if inside.sum() < 100:
         raise ObjectNotFoundError("the pick area is not in view of the camera")
-    table_z = table_level(z[inside])  # the rod covers a small part of it
+    table_z = float(np.median(z[inside]))  # the rod covers a small part of it
     return table_z, noise_level(z[inside] - table_z)
-
-
-def table_level(heights: np.ndarray) -> float:
-    """The table's level among ``heights`` ((n,) finite, m): the mean of their middle half.
-
-    As robust as their median to what stands on the table (up to a quarter of them), but
-    without its jumps: a depth given in mm steps (a RealSense's, a ROS depth image's) puts
-    the table's heights in clusters, and a median sits on one of them, moving by a whole
-    step when a few pixels come into the area or leave it (a pick area moved by a few cm);
-    the middle half's mean moves with them by a fraction of a step. Where the middle half
-    holds one value (a clean render), that value.
-    """
-    n = len(heights)
-    if n == 0:
-        raise ObjectNotFoundError("no pixel sees the table")
-    lo, hi = n // 4, n - n // 4  # the middle half: order statistics lo .. hi - 1
-    middle = np.partition(heights, (lo, hi - 1))[lo:hi]
-    if middle[0] == middle[-1]:
-        return float(middle[0])
-    return float(np.mean(middle))
 
 
 def differs_in_colour(rgb: np.ndarray, area: np.ndarray) -> np.ndarray:

@@ -21,7 +21,6 @@ from comgrasp_pin.errors import UntrustedImageError
 from comgrasp_pin.perception._points import noise_level
 from comgrasp_pin.perception.rod_shape import reaching_border
 from comgrasp_pin.perception.standing import MAX_HEIGHT, bare_table
-from comgrasp_pin.perception.table_view import table_level
 
 GAP = 0.01  # rays are followed from this far beyond the outline (m): its fringe and smear
 STEP = 0.01  # a part is followed along a ray in windows this long (m) up to the first
@@ -141,7 +140,7 @@ def around_object(height: np.ndarray, mask: np.ndarray, standing: np.ndarray,
     the pick area's edges are and whatever the frame the heights are in (the same answer
     for the same scene): its bare table (within ``threshold`` of the plane, clear of
     what stands, in the pick area or beyond it, and of the robot; ``standing.bare_table``)
-    gives both the level the heights are taken from (``table_level``) and the noise
+    gives both the level the heights are taken from (its median) and the noise
     (``TableStretches``). Returns the heights that are too low to stand (NaN elsewhere:
     above the threshold, far below the plane, the robot, outside the disc) and the bare
     table (H, W) bool.
@@ -152,7 +151,7 @@ def around_object(height: np.ndarray, mask: np.ndarray, standing: np.ndarray,
     with np.errstate(invalid="ignore"):  # NaN heights are no table
         stands = standing | (height > threshold)  # in the pick area or not
         table = bare_table(disc & (np.abs(height) <= threshold), stands)
-        level = table_level(height[table]) if table.any() else 0.0
+        level = float(np.median(height[table])) if table.any() else 0.0
         low = disc & (np.abs(height - level) <= threshold)
     return np.where(low, height - level, np.nan), table
 
