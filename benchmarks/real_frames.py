@@ -3,7 +3,7 @@
     python benchmarks/real_frames.py [--extra DIR ...] [--out benchmarks/results/real_frames.json]
 
 Reads the frames in ../shared/realdata/rgbd (never copied into the repository) and, with
-``--extra``, folders of other real frames (``gqcnn_frames.py`` makes the 24 of the results),
+``--extra``, folders of other real frames (``gqcnn_frames.py`` makes 24 of the results'),
 each holding ``color.png``, ``depth_mm.png`` (16-bit, mm), ``camera_info.yaml`` and, where
 known, ``segmask.png`` (the object's mask drawn in the depth image by the frame's authors).
 No camera pose is used: the table's plane is fitted and its clear rectangle is the pick
