@@ -10,9 +10,13 @@ import numpy as np
 import pytest
 
 from comgrasp_pin.camera import PinholeCamera
-from comgrasp_pin.errors import ColourDepthMismatchError, UntrustedImageError
+from comgrasp_pin.errors import (
+    AmbiguousObjectError,
+    ColourDepthMismatchError,
+    UntrustedImageError,
+)
 from comgrasp_pin.perception.registration import check_registered, cover_by_shift
-from comgrasp_pin.perception.rod_pieces import join_pieces
+from comgrasp_pin.perception.rod_pieces import check_not_broken, join_pieces
 from comgrasp_pin.perception.table_plane import fit_table_plane
 from comgrasp_pin.perception.thin_parts import (
     TableStretches,
@@ -199,11 +203,30 @@ def test_a_rod_broken_by_the_noise_is_joined_and_two_rods_end_to_end_are_not():
     rod's 20 mm in noise): one rod, joined through the gap (half the rod's height or more).
     The same two pieces with bare table between them: two objects, not joined."""
     points, standing, first = _broken_rod(0.0105)
-    joined, bridge = join_pieces(points, standing, first, 0.0)
+    joined, bridge, _ = join_pieces(points, standing, first, 0.0)
     assert joined[150, 200] and joined[150, 105] and bridge[150, 105]
     points, standing, first = _broken_rod(0.0)
-    apart, bridge = join_pieces(points, standing, first, 0.0)
+    apart, bridge, gaps = join_pieces(points, standing, first, 0.0)
     assert not apart[150, 200] and not bridge.any()
+    # named as what it may be, with the gap's length (between the pixels' centres, u = 99
+    # and 110 on the 2 mm grid) and height, not as any other object
+    with pytest.raises(AmbiguousObjectError, match="on the rod's axis 22 mm beyond its end.*"
+                                                   "stands 0.0 mm on average"):  # fmt: skip
+        check_not_broken(standing, apart, gaps)
+
+
+def test_a_piece_on_the_axis_is_named_and_other_objects_are_counted_first():
+    """A 2 cm gap standing 8 mm, under half the rod's 20 mm: not joined, and named; a box
+    elsewhere in the area is the reason to refuse first (``standing.segment``'s order)."""
+    points, standing, first = _broken_rod(0.008)
+    mask, _, gaps = join_pieces(points, standing, first, 0.0)
+    assert len(gaps) == 1 and gaps[0].length == pytest.approx(0.022)
+    assert gaps[0].mean == pytest.approx(0.008) and gaps[0].least == pytest.approx(0.01)
+    with pytest.raises(AmbiguousObjectError, match="stands 8.0 mm on average, short of the "
+                                                   "10.0 mm"):  # fmt: skip
+        check_not_broken(standing, mask, gaps)
+    small = standing & ~(gaps[0].piece & (np.arange(W) >= 114)[None, :])  # 36 px of it seen
+    check_not_broken(small, mask, gaps)  # too small to count as an object: no refusal
 
 
 @pytest.mark.parametrize("length_px", [1, 5, 12, 37, 120, 401])

@@ -7,15 +7,21 @@ on the rod's axis (its centroid within MAX_OFFSET of it), beyond one of its ends
 MAX_GAP, and the gap between them stands above the table: its pixels' mean height at least
 BRIDGE_SHARE of the lower piece's median height (the gap as wide as the rod's end that faces
 the piece, not as its head). Table seen between them is another object,
-left to be counted as such (``rod_shape.check_one_object``).
+left to be counted as such (``rod_shape.check_one_object``); a piece on the axis whose gap
+stands, but less than that, is named as what it is (``check_not_broken``): the depth cannot
+tell one rod broken by its noise from two objects end to end.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import cv2
 import numpy as np
 
+from comgrasp_pin.errors import AmbiguousObjectError
 from comgrasp_pin.perception._points import opened_blobs
+from comgrasp_pin.perception.rod_shape import MIN_OBJECT_PX, SECOND_OBJECT
 
 MAX_OFFSET = 0.015  # m: a piece's centroid this near the rod's axis lies on it ...
 MAX_GAP = 0.05  # ... and one this far at most beyond the rod's end (m) may be part of it
@@ -25,9 +31,10 @@ MIN_PIECE = 10  # px: a smaller blob is noise
 
 
 def join_pieces(points: np.ndarray, standing: np.ndarray, mask: np.ndarray,
-                table_z: float) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """(the rod's mask with the pieces joined, the gaps' pixels joined with them).
+                table_z: float) -> tuple[np.ndarray, np.ndarray, list[Gap]]:  # fmt: skip
+    """(the rod's mask, pieces joined; the gaps' pixels joined; the gaps not joined).
 
+    The last: the gaps to the pieces that lie on the rod's axis and were not joined.
     ``points``: (H, W, 3) every pixel in the world (m, NaN where none); ``standing``: (H, W)
     bool, what stands on the table in the pick area; ``mask``: the rod's largest blob;
     ``table_z``: the table's height (m). Blobs of MIN_PIECE pixels or more are looked at.
@@ -41,17 +48,62 @@ def join_pieces(points: np.ndarray, standing: np.ndarray, mask: np.ndarray,
         joined = False
         for k in pieces:
             gap = _gap_if_on_axis(points, mask, labels == k, table_z)
-            if gap is not None:
-                mask |= (labels == k) | gap
-                bridge |= gap & ~standing
+            if gap is not None and gap.stands:
+                mask |= (labels == k) | gap.pixels
+                bridge |= gap.pixels & ~standing
                 pieces.remove(k)
                 joined = True
                 break
-    return mask, bridge
+    gaps = [_gap_if_on_axis(points, mask, labels == k, table_z) for k in pieces]
+    return mask, bridge, [gap for gap in gaps if gap is not None]
 
 
-def _gap_if_on_axis(points, mask, piece, table_z) -> np.ndarray | None:
-    """The gap's pixels between ``mask`` and ``piece`` if the piece continues the rod."""
+@dataclass(frozen=True)
+class Gap:
+    """Between the rod's end and a piece on its axis beyond it (m, above the table).
+
+    Attributes:
+        pixels: (H, W) bool, the gap's.
+        piece: (H, W) bool, the piece's.
+        length: along the axis.
+        mean: the gap's mean height.
+        least: the mean at which it stands: BRIDGE_SHARE of the lower piece's median.
+    """
+
+    pixels: np.ndarray
+    piece: np.ndarray
+    length: float
+    mean: float
+    least: float
+
+    @property
+    def stands(self) -> bool:
+        """Whether the gap is the rod's: no pixel seen in it, or its mean at least least."""
+        return not self.pixels.any() or self.mean >= self.least
+
+
+def check_not_broken(objects: np.ndarray, mask: np.ndarray, gaps: list[Gap]) -> None:
+    """AmbiguousObjectError for a piece on the rod's axis, named as what it may be.
+
+    That is, for a piece of ``gaps`` that ``rod_shape.check_one_object`` would count as
+    another object among ``objects`` beside the rod's ``mask`` (both (H, W) bool).
+    """
+    least = max(MIN_OBJECT_PX, SECOND_OBJECT * int(mask.sum()))  # (as check_one_object)
+    large = [g for g in gaps if np.count_nonzero(g.piece & objects) >= least]
+    if large:
+        g = max(large, key=lambda g: int(g.piece.sum()))
+        raise AmbiguousObjectError(
+            f"a piece of {int(g.piece.sum())} px lies on the rod's axis "
+            f"{1e3 * g.length:.0f} mm beyond its end, and the depth between them stands "
+            f"{1e3 * g.mean:.1f} mm on average, short of the {1e3 * g.least:.1f} mm that "
+            "would make them one rod: two objects end to end, or one rod that the depth's "
+            "noise broke apart? The top view measures one rod alone on the table: clear the "
+            "other, or view it closer or with a less noisy camera"
+        )
+
+
+def _gap_if_on_axis(points, mask, piece, table_z) -> Gap | None:
+    """The gap between ``mask`` and ``piece`` if the piece lies on the rod's axis."""
     p_rod, p_piece = points[mask], points[piece]
     p_rod, p_piece = p_rod[np.isfinite(p_rod[:, 2])], p_piece[np.isfinite(p_piece[:, 2])]
     if len(p_rod) < 3 or len(p_piece) < 3:
@@ -78,6 +130,5 @@ def _gap_if_on_axis(points, mask, piece, table_z) -> np.ndarray | None:
     along, across = xy @ axis, xy @ normal
     gap = np.isfinite(points[..., 2]) & (along > start) & (along < end) & (np.abs(across) < half)
     lower = min(float(np.median(p_rod[:, 2])), float(np.median(p_piece[:, 2]))) - table_z
-    if gap.any() and float(np.mean(points[gap][:, 2])) - table_z < BRIDGE_SHARE * lower:
-        return None
-    return gap
+    mean = float(np.mean(points[gap][:, 2])) - table_z if gap.any() else 0.0
+    return Gap(gap, piece, end - start, mean, BRIDGE_SHARE * lower)

@@ -16,6 +16,7 @@ from comgrasp_pin.perception._points import opened_blobs
 from comgrasp_pin.perception.rod_flat import propped_ends
 
 SECOND_OBJECT = 0.05  # another blob of this share of the rod's pixels is another object
+MIN_OBJECT_PX = 40  # ... and of this many pixels at least
 CLUTTER_OBJECTS = 3  # this many objects (or piles) in the pick area are clutter
 END_REACH, END_BAND = 0.05, 0.003  # pixels this far beyond an end, on the axis (m) ...
 END_PIXELS = 3  # ... this many: the rod may go on, unless each blob they are of is no
@@ -43,7 +44,7 @@ PROFILE_VALLEY_SHARE = 0.15
 _KERNEL3, _KERNEL5 = np.ones((3, 3), np.uint8), np.ones((5, 5), np.uint8)
 
 
-def check_one_object(standing: np.ndarray, blob: np.ndarray, min_pixels: int = 40,
+def check_one_object(standing: np.ndarray, blob: np.ndarray, min_pixels: int = MIN_OBJECT_PX,
                      at_edge: np.ndarray | None = None) -> None:  # fmt: skip
     """AmbiguousObjectError for a second object in the pick area, ClutterError for more.
 

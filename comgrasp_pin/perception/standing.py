@@ -20,7 +20,7 @@ from comgrasp_pin.perception._points import (
     slice_medians,
 )
 from comgrasp_pin.perception.registration import check_registered
-from comgrasp_pin.perception.rod_pieces import join_pieces
+from comgrasp_pin.perception.rod_pieces import Gap, check_not_broken, join_pieces
 from comgrasp_pin.perception.rod_shape import check_one_object, reaching_border
 from comgrasp_pin.perception.table_view import TableView, differs_in_colour, in_area, over_the_edge
 
@@ -79,8 +79,9 @@ def segment(view: TableView, pick_area, rgb) -> Segments:
     elif view.cleaned:
         standing = closed(standing)
     mask = largest_component(inside & standing, MIN_PIXELS, "top-down image")
+    gaps: list[Gap] = []
     if view.cleaned:  # a rod broken apart by the noise, joined again
-        mask, bridge = join_pieces(view.points, inside & standing, mask, view.table_z)
+        mask, bridge, gaps = join_pieces(view.points, inside & standing, mask, view.table_z)
         standing = standing | bridge
     objects = inside & standing
     height = z - view.table_z
@@ -89,8 +90,12 @@ def segment(view: TableView, pick_area, rgb) -> Segments:
         bumps, areas = noise_bumps(objects & ~mask, height, DETECT_SNR * view.points_noise)
         objects &= ~bumps
         bump_px = largest_bump(areas)
-    check_one_object(objects, mask, at_edge=reaching_border(standing))  # other objects are
-    # the reason to refuse first
+    pieces = np.zeros_like(mask)  # of the rod, on its axis, not joined
+    for gap in gaps:
+        pieces |= gap.piece
+    # other objects are the reason to refuse first; then pieces that may be the rod's
+    check_one_object(objects & ~pieces, mask, at_edge=reaching_border(standing))
+    check_not_broken(objects, mask, gaps)
     if border_pixels(mask).any():
         raise ObjectCutByBorderError(
             "the object runs out of the top-down image (inside the pick area): part of it is "
