@@ -7,9 +7,11 @@ on the rod's axis (its centroid within MAX_OFFSET of it), beyond one of its ends
 MAX_GAP, and the gap between them stands above the table: its pixels' mean height at least
 BRIDGE_SHARE of the lower piece's median height (the gap as wide as the rod's end that faces
 the piece, not as its head). Table seen between them is another object,
-left to be counted as such (``rod_shape.check_one_object``); a piece on the axis whose gap
-stands, but less than that, is named as what it is (``check_not_broken``): the depth cannot
-tell one rod broken by its noise from two objects end to end.
+left to be counted as such (``rod_shape.check_one_object``); a piece on the axis that is
+not joined is named with the gap's length and height (``check_not_broken``): two objects end
+to end, or one rod whose gap the depth's noise holds down (the gap is where the noise broke
+the rod, so its lowest stretch: on a structured-light camera at 1.25 m, 8-10 mm of a 20 mm
+handle, 1.8-3.4 noise stds of a median over the gap's shape on bare table).
 """
 
 from __future__ import annotations
