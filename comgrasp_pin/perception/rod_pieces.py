@@ -6,12 +6,12 @@ the count of objects would take for two objects. A piece is joined to the rod wh
 on the rod's axis (its centroid within MAX_OFFSET of it), beyond one of its ends by at most
 MAX_GAP, and the gap between them stands above the table: its pixels' mean height at least
 BRIDGE_SHARE of the lower piece's median height (the gap as wide as the rod's end that faces
-the piece, not as its head). Table seen between them is another object,
-left to be counted as such (``rod_shape.check_one_object``); a piece on the axis that is
-not joined is named with the gap's length and height (``check_not_broken``): two objects end
-to end, or one rod whose gap the depth's noise holds down (the gap is where the noise broke
-the rod, so its lowest stretch: on a structured-light camera at 1.25 m, 8-10 mm of a 20 mm
-handle, 1.8-3.4 noise stds of a median over the gap's shape on bare table).
+the piece, not as its head). A piece on the axis that is not joined refuses the frame as
+another object would (``rod_shape.check_one_object``), named with the gap's length and height
+(``check_not_broken``): two objects end to end (table seen between them), or one rod whose
+gap the depth's noise holds down (the gap is where the noise broke the rod, so its lowest
+stretch: on a structured-light camera at 1.25 m, 8-10 mm of a 20 mm handle, 1.8-3.4 noise
+stds of a median over the gap's shape on bare table).
 """
 
 from __future__ import annotations
