@@ -46,8 +46,9 @@ def join_pieces(points: np.ndarray, standing: np.ndarray, mask: np.ndarray,
     pieces = [k for k in range(1, count) if stats[k, cv2.CC_STAT_AREA] >= MIN_PIECE
               and not np.any(mask[labels == k])]  # fmt: skip
     joined = True
-    while joined and pieces:
-        joined = False
+    left: list[Gap] = []
+    while joined:  # until a pass over the pieces joins none: its gaps are those left
+        joined, left = False, []
         for k in pieces:
             gap = _gap_if_on_axis(points, mask, labels == k, table_z)
             if gap is not None and gap.stands:
@@ -56,8 +57,9 @@ def join_pieces(points: np.ndarray, standing: np.ndarray, mask: np.ndarray,
                 pieces.remove(k)
                 joined = True
                 break
-    gaps = [_gap_if_on_axis(points, mask, labels == k, table_z) for k in pieces]
-    return mask, bridge, [gap for gap in gaps if gap is not None]
+            if gap is not None:
+                left.append(gap)
+    return mask, bridge, left
 
 
 @dataclass(frozen=True)

@@ -65,6 +65,7 @@ def segment(view: TableView, pick_area, rgb) -> Segments:
     ColourDepthMismatchError, and ColourNoHelp where the colour marks none of the object.
     """
     z = view.points[..., 2]
+    height = z - view.table_z
     inside = in_area(view.points, pick_area, EDGE_BAND) & np.isfinite(z)
     min_height = stands_at(view)
     standing = (z > view.table_z + min_height) & (z < view.table_z + MAX_HEIGHT)
@@ -73,9 +74,7 @@ def segment(view: TableView, pick_area, rgb) -> Segments:
         colour = differs_in_colour(rgb, inside) & inside & (z < view.table_z + MAX_HEIGHT)
         if not check_registered(colour, closed(in_depth) & inside):
             raise ColourNoHelp
-        standing = without_marks(
-            closed(standing | colour), inside, in_depth, z - view.table_z, min_height
-        )
+        standing = without_marks(closed(standing | colour), inside, in_depth, height, min_height)
     elif view.cleaned:
         standing = closed(standing)
     mask = largest_component(inside & standing, MIN_PIXELS, "top-down image")
@@ -84,7 +83,6 @@ def segment(view: TableView, pick_area, rgb) -> Segments:
         mask, bridge, gaps = join_pieces(view.points, inside & standing, mask, view.table_z)
         standing = standing | bridge
     objects = inside & standing
-    height = z - view.table_z
     bump_px = float("inf")
     if view.cleaned:
         bumps, areas = noise_bumps(objects & ~mask, height, DETECT_SNR * view.points_noise)
