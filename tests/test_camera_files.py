@@ -379,3 +379,17 @@ def test_a_real_flashlight_is_measured_from_the_depth_alone(tmp_path, capsys):
     assert 0.17 < measured["length_m"] < 0.23, measured["length_m"]
     drawn = cv2.imread(str(tmp_path / "out" / "depth_0_mm_top_view.png"))
     assert drawn.shape == (480, 640, 3)
+
+
+def test_outputs_are_named_after_the_whole_depth_file_name(scene, tmp_path):
+    depth, camera, T, rgb, *_ = scene
+    mm = np.round(depth * 1e3).astype(np.uint16)
+    paths = _save(tmp_path, mm, rgb, {**_calibration_yaml(camera), "depth_scale": 0.001})
+    dotted = tmp_path / "frame.001.png"  # a recorder's numbered frame
+    paths[1].rename(dotted)
+    pose = tmp_path / "T_world_cam.json"
+    pose.write_text(json.dumps({"T_world_cam": T.tolist()}))
+    assert _cli(tmp_path, (paths[0], dotted, paths[2]), "--T-world-cam", str(pose),
+                "--pick-area", "0.30,0.80,-0.35,0.35") == 0  # fmt: skip
+    written = sorted(p.name for p in (tmp_path / "out").iterdir())
+    assert written == ["frame.001_top_view.json", "frame.001_top_view.png"]

@@ -1,4 +1,4 @@
-"""``comgrasp views [--rgb] --depth --camera-info``: perception on the user's camera's frames.
+"""``comgrasp views [--rgb] --depth --camera-info`` or ``--bag``: perception on a user's frames.
 
 Reads the files (``perception.rgbd_files``; the depth and camera info alone where no colour
 is given: both views find the object from the depth alone and draw on the depth),
@@ -66,11 +66,33 @@ def add_arguments(views: argparse.ArgumentParser) -> None:
         dest="T_ee_cam",
         help="side view: the camera's pose in the ee frame (4x4, JSON or text)",
     )
+    b = views.add_argument_group(
+        "or the frame as a ROS 2 bag recorded it (instead of --rgb, --depth, --camera-info)",
+        "sensor_msgs Image (depth 16UC1 in mm or 32FC1 in m, REP 118; colour rgb8, bgr8, "
+        "...) or CompressedImage, and CameraInfo; topics found by type where the bag has one "
+        "of each kind",
+    )
+    b.add_argument("--bag", type=Path, metavar="BAG",
+                   help="the bag's folder, .db3 or .mcap")  # fmt: skip
+    b.add_argument("--at", type=cli_args.float_at_least(0.0), default=0.0, metavar="S",
+                   help="the depth image received nearest S s after the depth topic's first "
+                   "(%(default)s); the colour nearest it by stamp, within 50 ms")  # fmt: skip
+    b.add_argument("--depth-topic", default=None, metavar="TOPIC",
+                   help="the depth image topic (default: the bag's only one)")  # fmt: skip
+    b.add_argument("--rgb-topic", default=None, metavar="TOPIC",
+                   help="the colour image topic, registered to the depth (default: the "
+                   "bag's only other image topic, if any)")  # fmt: skip
+    b.add_argument("--camera-info-topic", default=None, metavar="TOPIC",
+                   help="the camera info (default: the depth topic's sibling camera_info, "
+                   "else the bag's only one)")  # fmt: skip
+    b.add_argument("--no-rgb", action="store_true",
+                   help="the depth alone, whatever colour the bag holds")  # fmt: skip
 
 
 def wants_files(args: argparse.Namespace) -> bool:
     """Whether ``comgrasp views`` runs on the user's files (any of them named)."""
-    return any(getattr(args, k, None) is not None for k in ("rgb", "depth", "camera_info"))
+    return any(getattr(args, k, None) is not None
+               for k in ("rgb", "depth", "camera_info", "bag"))  # fmt: skip
 
 
 def read_pose(path: Path, name: str) -> np.ndarray:
@@ -106,6 +128,41 @@ def _pick_area(text: str) -> tuple[float, float, float, float]:
         raise InvalidInputError(f"--pick-area must be X0,X1,Y0,Y1 in m with X0 < X1 and "
                                 f"Y0 < Y1, got {text!r}")  # fmt: skip
     return area
+
+
+def _from_files(args) -> tuple:
+    """(RgbdFiles, what the JSON says of them, the outputs' name) of --rgb/--depth/--camera-info."""
+    from comgrasp_pin.perception.rgbd_files import read_rgbd
+
+    missing = [f"--{k.replace('_', '-')}" for k in ("depth", "camera_info")
+               if getattr(args, k) is None]  # fmt: skip
+    if missing:
+        raise InvalidInputError(f"your own frames need --depth and --camera-info (--rgb is "
+                                f"optional), or --bag; missing {', '.join(missing)}")  # fmt: skip
+    if args.bgr and args.rgb is None:
+        raise InvalidInputError("--bgr tells the colour file's channel order: it needs --rgb")
+    order = "bgr" if args.bgr else "rgb"
+    files = read_rgbd(args.rgb, args.depth, args.camera_info, args.depth_scale, order)
+    return files, {"colour": str(args.rgb) if args.rgb is not None else False}, args.depth.stem
+
+
+def _from_bag(args) -> tuple:
+    """(RgbdFiles, what the JSON says of them, the outputs' name) of --bag."""
+    from comgrasp_pin.perception.rgbd_bag import read_rgbd_bag
+
+    given = [f"--{k.replace('_', '-')}" for k in ("rgb", "depth", "camera_info")
+             if getattr(args, k) is not None] + (["--bgr"] if args.bgr else [])  # fmt: skip
+    if given:
+        raise InvalidInputError(f"--bag reads the frame from the bag: drop {', '.join(given)} "
+                                "(the bag's topics are named with --depth-topic, --rgb-topic, "
+                                "--camera-info-topic)")  # fmt: skip
+    frame = read_rgbd_bag(args.bag, args.at, args.depth_topic, args.rgb_topic,
+                          args.camera_info_topic, not args.no_rgb, args.depth_scale)  # fmt: skip
+    source = {"colour": frame.rgb_topic or False,
+              "bag": {"path": str(args.bag), "depth_topic": frame.depth_topic,
+                      "rgb_topic": frame.rgb_topic, "camera_info_topic": frame.info_topic,
+                      "time_s": frame.time_s, "colour_skew_s": frame.skew_s}}  # fmt: skip
+    return frame.files, source, f"{args.bag.resolve().name}_at_{1e3 * frame.time_s:.0f}ms"
 
 
 def _camera_json(files, color_order: str | None) -> dict:
@@ -162,25 +219,22 @@ def run(args: argparse.Namespace) -> int:
     import cv2
 
     from comgrasp_pin.perception.camera_input import camera_frame
-    from comgrasp_pin.perception.rgbd_files import read_rgbd
 
-    missing = [f"--{k.replace('_', '-')}" for k in ("depth", "camera_info")
-               if getattr(args, k) is None]  # fmt: skip
-    if missing:
-        raise InvalidInputError(f"your own frames need --depth and --camera-info (--rgb is "
-                                f"optional); missing {', '.join(missing)}")  # fmt: skip
-    if args.bgr and args.rgb is None:
-        raise InvalidInputError("--bgr tells the colour file's channel order: it needs --rgb")
-    order = "bgr" if args.bgr else "rgb"
-    files = read_rgbd(args.rgb, args.depth, args.camera_info, args.depth_scale, order)
+    if args.bag is not None:
+        files, source, name = _from_bag(args)
+    else:
+        files, source, name = _from_files(args)
     rgb, depth, camera = camera_frame(files.rgb, files.depth, files.camera, files.depth_scale)
     image, measured = (_top if args.view == "top" else _side)(args, rgb, depth, camera)
-    measured["colour"] = str(args.rgb) if args.rgb is not None else False
-    measured["camera"] = _camera_json(files, order if args.rgb is not None else None)
+    measured.update(source)
+    in_file = (
+        ("bgr" if args.bgr else "rgb") if args.rgb is not None else None
+    )  # a bag's: its encoding
+    measured["camera"] = _camera_json(files, in_file)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    stem = out / f"{Path(args.depth).stem}_{args.view}_view"
-    png, js = stem.with_suffix(".png"), stem.with_suffix(".json")
+    stem = f"{name}_{args.view}_view"  # (a name's dots are no suffix: frame.001.png)
+    png, js = out / f"{stem}.png", out / f"{stem}.json"
     cv2.imwrite(str(png), image)
     js.write_text(json.dumps(measured, indent=2) + "\n")
     print(json.dumps({k: v for k, v in measured.items() if not k.startswith("T_")}, indent=2))

@@ -11,6 +11,7 @@ from comgrasp_pin.perception.camera_input import camera_frame
 from comgrasp_pin.perception.camera_model import CameraModel, camera_model
 from comgrasp_pin.perception.depth_frames import AGREE_TOLERANCE, average_depth_frames
 from comgrasp_pin.perception.draw import draw_side_view, draw_top_view
+from comgrasp_pin.perception.rgbd_bag import BagFrame, read_rgbd_bag
 from comgrasp_pin.perception.rgbd_files import RgbdFiles, read_camera_info, read_rgbd
 from comgrasp_pin.perception.side_view import SideView, observe_held_rod
 from comgrasp_pin.perception.slip import SlipMonitor, SlipVerdict
@@ -18,6 +19,7 @@ from comgrasp_pin.perception.top_down import RodDetection, detect_rod_top_down
 
 __all__ = [
     "AGREE_TOLERANCE",
+    "BagFrame",
     "CameraModel",
     "RgbdFiles",
     "RodDetection",
@@ -33,4 +35,5 @@ __all__ = [
     "observe_held_rod",
     "read_camera_info",
     "read_rgbd",
+    "read_rgbd_bag",
 ]
