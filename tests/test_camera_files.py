@@ -240,7 +240,7 @@ def test_bad_files_end_with_exit_2_and_say_what_is_wrong(scene, tmp_path, capsys
     mm = np.round(depth * 1e3).astype(np.uint16)
     info = {"width": 640, "height": 480, "k": camera.K.ravel().tolist(), "depth_scale": 0.001}
     expected = {
-        "8-bit depth": "single-channel 16-bit PNG",
+        "8-bit depth": "one channel of 16-bit integers",
         "size": "the camera info says 320",
         "missing k": "camera intrinsics not understood",
         "unreadable": "cannot read the colour file",
@@ -393,3 +393,50 @@ def test_outputs_are_named_after_the_whole_depth_file_name(scene, tmp_path):
                 "--pick-area", "0.30,0.80,-0.35,0.35") == 0  # fmt: skip
     written = sorted(p.name for p in (tmp_path / "out").iterdir())
     assert written == ["frame.001_top_view.json", "frame.001_top_view.png"]
+
+
+def test_dex_nets_own_files_float_metres_npy_intr_and_tf(scene, tmp_path):
+    """A frame as Dex-Net and GQ-CNN ship theirs: depth as an (H, W, 1) float .npy in
+    metres, autolab_core's .intr (JSON of _fx, _fy, _cx, _cy, _width, _height) and .tf
+    (from and to frames, translation, rotation rows); also a 32-bit float TIFF. Each gives
+    the float path's detection; a camera info's mm scale with a float depth is refused."""
+    depth, camera, T, rgb, truth, float_det = scene
+    metres = np.where(np.isfinite(depth), depth, np.nan).astype(np.float32)  # NaN: no return
+    np.save(tmp_path / "depth_0.npy", metres[..., None])
+    assert cv2.imwrite(str(tmp_path / "depth_0.tif"), metres)
+    intr = {
+        "_cy": camera.cy,
+        "_cx": camera.cx,
+        "_fy": camera.fy,
+        "_height": camera.height,
+        "_fx": camera.fx,
+        "_width": camera.width,
+        "_skew": 0.0,
+        "_K": 0,
+        "_frame": "top",
+    }
+    (tmp_path / "top.intr").write_text(json.dumps(intr))
+    rows = "\n".join(" ".join(f"{v:.17g}" for v in row) for row in (T[:3, 3], *T[:3, :3]))
+    (tmp_path / "top.tf").write_text(f"top\nworld\n{rows}\n")
+    cv2.imwrite(str(tmp_path / "rgb.png"), rgb[..., ::-1])
+    for name in ("depth_0.npy", "depth_0.tif"):
+        files = read_rgbd(tmp_path / "rgb.png", tmp_path / name, tmp_path / "top.intr")
+        assert files.depth.dtype == np.float32 and files.depth_scale == 1.0
+        assert (files.depth[~np.isfinite(metres)] == 0).all()
+        assert _cli(tmp_path, (tmp_path / "rgb.png", tmp_path / name, tmp_path / "top.intr"),
+                    "--T-world-cam", str(tmp_path / "top.tf"), "--pick-area",
+                    "0.30,0.80,-0.35,0.35") == 0  # fmt: skip
+        measured = json.loads((tmp_path / "out" / "depth_0_top_view.json").read_text())
+        np.testing.assert_allclose(measured["T_world_cam"], T, atol=1e-12)
+        x, y, _ = measured["centre_m"]
+        assert np.hypot(x - float_det.grasp.x, y - float_det.grasp.y) < 2e-4
+        assert abs(measured["length_m"] - float_det.length) < 5e-4
+    info = tmp_path / "mm.yaml"
+    info.write_text(yaml.safe_dump({**_calibration_yaml(camera), "depth_scale": 0.001}))
+    with pytest.raises(CameraFileError, match="holds floats, metres by convention"):
+        read_rgbd(None, tmp_path / "depth_0.npy", info)
+    assert read_rgbd(None, tmp_path / "depth_0.npy", info, depth_scale=1.0).depth_scale == 1.0
+    skewed = tmp_path / "skew.intr"
+    skewed.write_text(json.dumps({**intr, "_skew": 0.5}))
+    with pytest.raises(CameraFileError, match=r"K must be \[\[fx, 0, cx\]"):
+        read_rgbd(None, tmp_path / "depth_0.npy", skewed)

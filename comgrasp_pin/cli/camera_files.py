@@ -106,17 +106,35 @@ def read_pose(path: Path, name: str) -> np.ndarray:
         if isinstance(value, dict):
             value = value.get(name)
     except json.JSONDecodeError:
-        try:
-            value = np.loadtxt(text.splitlines(), ndmin=2)
-        except ValueError:
-            value = None
+        value = _autolab_tf(text) if path.suffix == ".tf" else _rows(text)
     if value is None:
         raise CameraFileError(f"{path} must hold {name} as a 4x4 matrix: JSON [[...], ...] or "
-                              f'{{"{name}": [[...], ...]}}, or 4 rows of 4 numbers')  # fmt: skip
+                              f'{{"{name}": [[...], ...]}}, 4 rows of 4 numbers, or an '
+                              "autolab_core .tf (from and to frames, translation, rotation "
+                              "rows)")  # fmt: skip
     try:
         return check_transform(value, name)
     except InvalidInputError as exc:
         raise CameraFileError(f"{path}: {exc}") from None
+
+
+def _rows(text: str) -> np.ndarray | None:
+    try:
+        return np.loadtxt(text.splitlines(), ndmin=2)
+    except ValueError:
+        return None
+
+
+def _autolab_tf(text: str) -> np.ndarray | None:
+    """autolab_core's RigidTransform file (Dex-Net's, GQ-CNN's camera poses): the from and
+    to frames, the translation, the rotation's 3 rows; the transform from -> to."""
+    lines = [line for line in text.splitlines() if line.strip()]
+    numbers = _rows("\n".join(lines[2:6])) if len(lines) >= 6 else None
+    if numbers is None or numbers.shape != (4, 3):
+        return None
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = numbers[1:], numbers[0]
+    return T
 
 
 def _pick_area(text: str) -> tuple[float, float, float, float]:

@@ -32,6 +32,7 @@ YAML_MODELS = ("none", *OPENCV_MODELS)  # the models a camera_calibration YAML m
 REALSENSE = ("fx", "fy", "ppx", "ppy", "width", "height")
 CAMERA_INFO = ("k", "width", "height")
 CALIBRATION_YAML = ("camera_matrix", "image_width", "image_height")
+AUTOLAB = ("_fx", "_fy", "_cx", "_cy", "_width", "_height")  # autolab_core's .intr (Dex-Net)
 _ATTRIBUTES = (*REALSENSE, "model", "coeffs", "k", "d", "K", "D", "distortion_model")
 
 
@@ -130,7 +131,8 @@ def camera_model(camera: object, image_shape: tuple[int, ...] | None = None) -> 
             message) with the fields of a RealSense (fx, fy, ppx, ppy, width, height[, model,
             coeffs]), of a CameraInfo (width, height, k or K[, d or D, distortion_model]) or
             of a camera_calibration YAML (image_width, image_height, camera_matrix{data}[,
-            distortion_model, distortion_coefficients{data}]).
+            distortion_model, distortion_coefficients{data}]) or of autolab_core's .intr
+            (_fx, _fy, _cx, _cy, _width, _height[, _skew]; Dex-Net's, GQ-CNN's cameras).
         image_shape: (H, W, ...) of the images, for a bare K.
 
     Raises:
@@ -153,6 +155,11 @@ def camera_model(camera: object, image_shape: tuple[int, ...] | None = None) -> 
         return _from_realsense(fields)
     if all(k in fields for k in CALIBRATION_YAML):
         return _from_calibration_yaml(fields)
+    if all(k in fields for k in AUTOLAB):  # a pinhole; a skewed pixel grid is refused (K)
+        f = fields
+        rows = [[f["_fx"], f.get("_skew", 0.0), f["_cx"]], [0.0, f["_fy"], f["_cy"]], [0, 0, 1]]
+        return CameraModel(_int(f, "_width"), _int(f, "_height"),
+                           validate.real_array(rows, "_fx, _fy, _cx, _cy, _skew"))  # fmt: skip
     lower = {k.lower(): v for k, v in fields.items()}
     if all(k in lower for k in CAMERA_INFO):
         return CameraModel(
@@ -162,8 +169,9 @@ def camera_model(camera: object, image_shape: tuple[int, ...] | None = None) -> 
     raise InvalidInputError(
         "camera intrinsics not understood: give a PinholeCamera, a (3, 3) K, or the fields of "
         f"a RealSense ({', '.join(REALSENSE)}[, model, coeffs]), a ROS CameraInfo "
-        f"({', '.join(CAMERA_INFO)}[, d, distortion_model]) or a camera_calibration YAML "
-        f"({', '.join(CALIBRATION_YAML)}[, distortion_model, distortion_coefficients]); got "
+        f"({', '.join(CAMERA_INFO)}[, d, distortion_model]), a camera_calibration YAML "
+        f"({', '.join(CALIBRATION_YAML)}[, distortion_model, distortion_coefficients]) or "
+        f"autolab_core's .intr ({', '.join(AUTOLAB)}); got "
         f"{type(camera).__name__} with fields {sorted(fields)}"
     )
 

@@ -32,7 +32,7 @@ from comgrasp_pin import validate
 from comgrasp_pin.errors import CameraFileError, ComGraspError
 from comgrasp_pin.file_checks import bag_folder
 from comgrasp_pin.perception.camera_model import camera_model
-from comgrasp_pin.perception.rgbd_files import RgbdFiles
+from comgrasp_pin.perception.rgbd_files import RgbdFiles, float_depth
 
 IMAGE = "sensor_msgs/msg/Image"
 COMPRESSED = "sensor_msgs/msg/CompressedImage"
@@ -264,9 +264,7 @@ def _depth(msg, topic: str) -> tuple[np.ndarray, float]:
     depth = _pixels(msg, DEPTH[msg.encoding], 1, topic)
     if depth.dtype.kind == "u":
         return depth, REP118_MM
-    depth = depth.astype(np.float32)
-    depth[np.isnan(depth) | (depth == -np.inf)] = 0.0
-    return depth, 1.0
+    return float_depth(depth), 1.0
 
 
 def _colour(msg, topic: str) -> np.ndarray:

@@ -1,12 +1,13 @@
-"""An RGBD frame saved as files: a 16-bit PNG depth, a colour PNG or JPEG, a camera info file.
+"""An RGBD frame saved as files: the depth, a colour PNG or JPEG, a camera info file.
 
 What a user of a depth camera saves: the depth aligned to the colour as a single-channel
-16-bit PNG in the camera's units (a RealSense's millimetres, or 0.1 mm for a D405), the
-colour image, and the camera's intrinsics as JSON or YAML in one of three layouts
-(``camera_model``): RealSense's fields (fx, fy, ppx, ppy, width, height, model, coeffs), a
-ROS CameraInfo message's (width, height, k, d, distortion_model), or ROS
-camera_calibration's YAML (image_width, image_height, camera_matrix, distortion_model,
-distortion_coefficients). The camera info may carry ``depth_scale`` (m per unit) too.
+16-bit PNG in the camera's units (a RealSense's millimetres, or 0.1 mm for a D405), or as
+floats in metres (a 32-bit TIFF, or Dex-Net's .npy), the colour image, and the camera's
+intrinsics as JSON or YAML in one of four layouts (``camera_model``): RealSense's fields
+(fx, fy, ppx, ppy, width, height, model, coeffs), a ROS CameraInfo message's (width,
+height, k, d, distortion_model), ROS camera_calibration's YAML (image_width, image_height,
+camera_matrix, distortion_model, distortion_coefficients), or autolab_core's .intr (_fx,
+_fy, _cx, _cy, _width, _height). The camera info may carry ``depth_scale`` (m per unit).
 """
 
 from __future__ import annotations
@@ -33,8 +34,9 @@ class RgbdFiles:
 
     Attributes:
         rgb: (H, W, 3) uint8 colour, RGB order; None for a depth read without colour.
-        depth: (H, W) uint16 depth in the camera's units (0: no depth).
-        depth_scale: metres per unit of ``depth``.
+        depth: (H, W) uint16 depth in the camera's units (0: no depth), or float32 metres
+            (0: no depth; inf: nothing in range).
+        depth_scale: metres per unit of ``depth`` (1 for metres).
         camera: the intrinsics with their lens model (not yet undistorted).
     """
 
@@ -115,35 +117,34 @@ def read_rgbd(
     depth_scale: float | None = None,
     color_order: str = "rgb",
 ) -> RgbdFiles:
-    """Read a colour image, a 16-bit depth PNG and the camera info (see the module).
+    """Read a colour image, the depth and the camera info (see the module).
 
     Args:
         rgb_path: 8-bit colour PNG or JPEG (grey or with alpha taken too); None: the depth
             alone (``RgbdFiles.rgb`` None).
-        depth_path: single-channel 16-bit PNG, depth aligned to the colour image.
-        camera_info_path: JSON or YAML, one of the three layouts.
+        depth_path: the depth aligned to the colour image: a single-channel 16-bit PNG in
+            the camera's units, a 32-bit float TIFF in metres, or a .npy of either.
+        camera_info_path: JSON or YAML, one of the four layouts.
         depth_scale: metres per unit of the depth PNG; else the camera info's
             ``depth_scale``; one of them is needed (never guessed), and where both are
-            given they must agree.
+            given they must agree. A float depth is metres unless ``depth_scale`` says
+            otherwise.
         color_order: the channels as stored in the colour file: "rgb" (what every image
             writer stores, OpenCV's included) or "bgr" (swapped: a BGR array saved by a
             writer that expects RGB, such as PIL or imageio).
 
     Raises:
-        CameraFileError: unreadable files, a depth that is not 16-bit single-channel, a
-            colour that is not 8-bit, sizes that disagree with each other or the camera
-            info, no depth_scale or two that differ.
+        CameraFileError: unreadable files, a depth that is not one channel of 16-bit
+            integers or of floats, a colour that is not 8-bit, sizes that disagree with
+            each other or the camera info, no depth_scale or two that differ.
     """
     validate.choice(color_order, "color_order", COLOR_ORDERS)
     camera, info_scale = read_camera_info(camera_info_path)
-    scale = _depth_scale(depth_scale, info_scale, Path(camera_info_path))
-    depth = _read_image(Path(depth_path), "depth")
-    if depth.dtype != np.uint16 or depth.ndim != 2:
-        channels = 1 if depth.ndim == 2 else depth.shape[2]
-        raise CameraFileError(
-            f"the depth file {depth_path} must be a single-channel 16-bit PNG (the camera's "
-            f"units), got {channels} channel(s) of {depth.dtype}"
-        )
+    depth = _read_depth(Path(depth_path))
+    if depth.dtype.kind == "f":
+        scale = _float_scale(depth_scale, info_scale, Path(camera_info_path))
+    else:
+        scale = _depth_scale(depth_scale, info_scale, Path(camera_info_path))
     colour = None
     if rgb_path is not None:
         colour = _read_image(Path(rgb_path), "colour")
@@ -161,6 +162,58 @@ def read_rgbd(
                 "colour camera and both saved at its size"
             )
     return RgbdFiles(colour, depth, scale, camera)
+
+
+def _read_depth(path: Path) -> np.ndarray:
+    """(H, W) uint16 in the camera's units, or float32 metres (NaN and -inf lost: 0).
+
+    From a 16-bit PNG, a 32-bit float TIFF, or a NumPy .npy of either (H, W[, 1]).
+    """
+    if path.suffix.lower() == ".npy":
+        try:
+            depth = np.load(path, allow_pickle=False)
+        except (OSError, ValueError) as exc:
+            raise CameraFileError(f"cannot read the depth file {path} as .npy: {exc}") from None
+        if depth.ndim == 3 and depth.shape[2] == 1:  # Dex-Net's (H, W, 1)
+            depth = depth[..., 0]
+    else:
+        depth = _read_image(path, "depth")
+    if depth.ndim == 2 and depth.dtype.kind == "f":
+        return float_depth(depth)
+    if depth.dtype != np.uint16 or depth.ndim != 2:
+        channels = 1 if depth.ndim == 2 else depth.shape[2]
+        raise CameraFileError(
+            f"the depth file {path} must be one channel of 16-bit integers in the camera's "
+            f"units (a PNG or .npy) or of floats in metres (a TIFF or .npy), got {channels} "
+            f"channel(s) of {depth.dtype}"
+        )
+    return depth
+
+
+def float_depth(depth: np.ndarray) -> np.ndarray:
+    """A float depth (m) as float32 with NaN and -inf lost (0); +inf stays.
+
+    As REP 117 means them: no return, too near, nothing in range.
+    """
+    depth = depth.astype(np.float32)
+    depth[np.isnan(depth) | (depth == -np.inf)] = 0.0
+    return depth
+
+
+def _float_scale(given: float | None, in_info: float | None, info_path: Path) -> float:
+    """Metres per unit of a float depth: ``given``, else 1 (REP 118's and Dex-Net's metres).
+
+    A camera info's depth_scale other than 1 is for integer units: refused.
+    """
+    if given is not None:
+        return validate.number(given, "depth_scale (m per unit)", low=0.0, low_open=True)
+    if in_info is not None and in_info != 1.0:
+        raise CameraFileError(
+            f"the depth file holds floats, metres by convention, but {info_path} says "
+            f"depth_scale {in_info} (for integer units): pass the float depth's own scale "
+            "(--depth-scale 1 for metres)"
+        )
+    return 1.0
 
 
 def _depth_scale(given: float | None, in_info: float | None, info_path: Path) -> float:
