@@ -69,6 +69,25 @@ def invert_transform(T_a_b: np.ndarray) -> np.ndarray:
     return T_b_a
 
 
+def transform_from_quaternion(translation: object, quaternion_xyzw: object) -> np.ndarray:
+    """(4, 4) transform of a translation (3,) and a unit quaternion (x, y, z, w), ROS's order.
+
+    The quaternion is normalised (a message's rounding); one of zero length is refused.
+    """
+    t = validate.finite_array(translation, "translation", (3,))
+    x, y, z, w = validate.finite_array(quaternion_xyzw, "quaternion (x, y, z, w)", (4,))
+    norm = float(np.sqrt(x * x + y * y + z * z + w * w))
+    if norm < 1e-9:
+        raise InvalidInputError("a quaternion of zero length is no rotation")
+    x, y, z, w = x / norm, y / norm, z / norm, w / norm
+    T = np.eye(4)
+    T[:3, :3] = [[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                 [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                 [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]]  # fmt: skip
+    T[:3, 3] = t
+    return T
+
+
 def rotation_angle(T: np.ndarray) -> float:
     """Angle (rad, in [0, pi]) of the rotation of the rigid transform ``T`` (4, 4)."""
     return float(np.arccos(np.clip(0.5 * (np.trace(T[:3, :3]) - 1.0), -1.0, 1.0)))

@@ -191,3 +191,23 @@ def test_property_closest_point(p1, d1, p2, d2):
     s = d2 @ (x - p2)  # the closest point of line 2 to x
     gap = x - (p2 + s * d2)
     assert abs(gap @ d1) < 1e-9 and abs(gap @ d2) < 1e-9
+
+
+@settings(max_examples=50, deadline=None)
+@given(st.lists(st.floats(-1, 1), min_size=4, max_size=4), st.floats(0.1, 10))
+def test_a_ros_quaternion_turns_as_pinocchios(q, scale):
+    """``transform_from_quaternion`` (x, y, z, w, ROS's order; normalised) against
+    Pinocchio's Quaternion, which takes (w, x, y, z)."""
+    import pinocchio as pin
+
+    from comgrasp_pin.geometry import transform_from_quaternion
+
+    if np.linalg.norm(q) < 0.1:
+        return
+    x, y, z, w = q
+    T = transform_from_quaternion([1.0, -2.0, 0.5], [scale * v for v in q])
+    expected = pin.Quaternion(w, x, y, z).normalized().toRotationMatrix()
+    np.testing.assert_allclose(T[:3, :3], expected, atol=1e-12)
+    np.testing.assert_array_equal(T[:3, 3], [1.0, -2.0, 0.5])
+    with pytest.raises(ComGraspError, match="zero length"):
+        transform_from_quaternion([0, 0, 0], [0, 0, 0, 0])

@@ -256,3 +256,75 @@ def test_a_real_primesense_frame_as_a_bag_measures_as_its_files(tmp_path):
         for key in ("centre_m", "yaw_rad", "length_m", "handle_height_m", "pick_area_m"):
             assert bag[key] == own[key], key
         assert 0.17 < bag["length_m"] < 0.23, bag["length_m"]
+
+
+def _tf_static(ns: int, chain: list[tuple[str, str, np.ndarray]]):
+    """A /tf_static TFMessage of (parent, child, T_parent_child); quaternions by Pinocchio."""
+    import pinocchio as pin
+
+    T = STORE.types
+    stamped = []
+    for parent, child, M in chain:
+        q = pin.Quaternion(M[:3, :3])
+        rotation = T["geometry_msgs/msg/Quaternion"](x=q.x, y=q.y, z=q.z, w=q.w)
+        stamped.append(T["geometry_msgs/msg/TransformStamped"](
+            header=_header(ns, parent), child_frame_id=child,
+            transform=T["geometry_msgs/msg/Transform"](
+                translation=T["geometry_msgs/msg/Vector3"](*map(float, M[:3, 3])),
+                rotation=rotation)))  # fmt: skip
+    return T["tf2_msgs/msg/TFMessage"](transforms=stamped)
+
+
+def test_the_cameras_pose_from_the_bags_static_transforms(scene, tmp_path, capsys):
+    """world -> base_link -> camera_link -> camera_color_optical_frame on /tf_static (one
+    edge written child to parent): the pose composed equals the camera's true pose, and
+    ``--world-frame`` measures as ``--T-world-cam`` does."""
+    import pinocchio as pin
+
+    depth, camera, T, rgb, truth = scene
+    T_world_base, T_base_link = pin.SE3.Random().homogeneous, pin.SE3.Random().homogeneous
+    T_link_optical = np.linalg.inv(T_world_base @ T_base_link) @ T
+    chain = [("world", "base_link", T_world_base),
+             ("camera_link", "base_link", np.linalg.inv(T_base_link)),  # written backwards
+             ("camera_link", "camera_color_optical_frame", T_link_optical)]  # fmt: skip
+    tf = {"/tf_static": [(T0 - 10**9, _tf_static(T0 - 10**9, chain))]}
+    bag = _write(tmp_path / "rs", _realsense(scene, **tf))
+    frame = read_rgbd_bag(bag)
+    assert frame.frame_id == "camera_color_optical_frame"
+    from comgrasp_pin.perception.static_tf import camera_pose
+
+    np.testing.assert_allclose(camera_pose(frame.transforms, "world", frame.frame_id), T,
+                               atol=1e-12)  # fmt: skip
+    out = tmp_path / "o"
+    area = ["--pick-area", ",".join(map(str, AREA))]
+    assert main(["views", "--bag", str(bag), "--world-frame", "world", "--out", str(out),
+                 *area]) == 0  # fmt: skip
+    by_tf = json.loads((out / "rs_at_0ms_top_view.json").read_text())
+    pose = tmp_path / "T.json"
+    pose.write_text(json.dumps({"T_world_cam": T.tolist()}))
+    assert main(["views", "--bag", str(bag), "--T-world-cam", str(pose), "--out", str(out),
+                 *area]) == 0  # fmt: skip
+    by_file = json.loads((out / "rs_at_0ms_top_view.json").read_text())
+    for key in ("centre_m", "yaw_rad", "length_m"):
+        np.testing.assert_allclose(by_tf[key], by_file[key], atol=1e-9)
+    x, y, _ = by_tf["centre_m"]
+    assert np.hypot(x - truth[0], y - truth[1]) < 3e-3
+    capsys.readouterr()
+    # What the transforms cannot give is said: an unknown frame, no link, no /tf_static.
+    twice = ["--world-frame", "world", "--T-world-cam", str(pose)]
+    side = ["--ee-frame", "tool0", "--view", "side"]
+    for extra, words in ((["--world-frame", "map"], "'map' is not in the bag's /tf_static"),
+                         (twice, "once"), (side, "'tool0' is not in")):  # fmt: skip
+        assert main(["views", "--bag", str(bag), "--out", str(out), *area, *extra]) == 2
+        assert words in capsys.readouterr().err
+    apart = [("world", "base_link", T_world_base), ("camera_link", "camera_color_optical_frame",
+                                                    T_link_optical)]  # fmt: skip
+    with pytest.raises(CameraFileError, match="does not connect 'world'"):
+        camera_pose(read_rgbd_bag(_write(tmp_path / "a", _realsense(scene, **{
+            "/tf_static": [(T0, _tf_static(T0, apart))]}))).transforms, "world",
+            "camera_color_optical_frame")  # fmt: skip
+    with pytest.raises(CameraFileError, match="no /tf_static"):
+        camera_pose(read_rgbd_bag(_write(tmp_path / "n", _realsense(scene))).transforms,
+                    "world", "camera_color_optical_frame")  # fmt: skip
+    with pytest.raises(CameraFileError, match="not an optical frame"):
+        camera_pose(frame.transforms, "world", "camera_link")

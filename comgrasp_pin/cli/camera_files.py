@@ -87,6 +87,12 @@ def add_arguments(views: argparse.ArgumentParser) -> None:
                    "else the bag's only one)")  # fmt: skip
     b.add_argument("--no-rgb", action="store_true",
                    help="the depth alone, whatever colour the bag holds")  # fmt: skip
+    b.add_argument("--world-frame", default=None, metavar="FRAME",
+                   help="top view: the camera's pose in FRAME (z up) from the bag's "
+                   "/tf_static, instead of --T-world-cam")  # fmt: skip
+    b.add_argument("--ee-frame", default=None, metavar="FRAME",
+                   help="side view: the camera's pose in FRAME (the TCP between the jaws) "
+                   "from the bag's /tf_static, instead of --T-ee-cam")  # fmt: skip
 
 
 def wants_files(args: argparse.Namespace) -> bool:
@@ -152,6 +158,12 @@ def _from_files(args) -> tuple:
     """(RgbdFiles, what the JSON says of them, the outputs' name) of --rgb/--depth/--camera-info."""
     from comgrasp_pin.perception.rgbd_files import read_rgbd
 
+    tf_only = [f"--{k.replace('_', '-')}" for k in ("world_frame", "ee_frame")
+               if getattr(args, k) is not None]  # fmt: skip
+    if tf_only:
+        raise InvalidInputError(f"{', '.join(tf_only)} reads the camera's pose from a bag's "
+                                "/tf_static: it needs --bag (else --T-world-cam, "
+                                "--T-ee-cam)")  # fmt: skip
     missing = [f"--{k.replace('_', '-')}" for k in ("depth", "camera_info")
                if getattr(args, k) is None]  # fmt: skip
     if missing:
@@ -165,8 +177,10 @@ def _from_files(args) -> tuple:
 
 
 def _from_bag(args) -> tuple:
-    """(RgbdFiles, what the JSON says of them, the outputs' name) of --bag."""
+    """(RgbdFiles, what the JSON says of them, the outputs' name, the pose from /tf_static
+    of the camera in a named frame) of --bag."""
     from comgrasp_pin.perception.rgbd_bag import read_rgbd_bag
+    from comgrasp_pin.perception.static_tf import camera_pose
 
     given = [f"--{k.replace('_', '-')}" for k in ("rgb", "depth", "camera_info")
              if getattr(args, k) is not None] + (["--bgr"] if args.bgr else [])  # fmt: skip
@@ -180,7 +194,13 @@ def _from_bag(args) -> tuple:
               "bag": {"path": str(args.bag), "depth_topic": frame.depth_topic,
                       "rgb_topic": frame.rgb_topic, "camera_info_topic": frame.info_topic,
                       "time_s": frame.time_s, "colour_skew_s": frame.skew_s}}  # fmt: skip
-    return frame.files, source, f"{args.bag.resolve().name}_at_{1e3 * frame.time_s:.0f}ms"
+    for flag, given in (("--T-world-cam", "world_frame"), ("--T-ee-cam", "ee_frame")):
+        if getattr(args, given) is not None and getattr(args, flag[2:].replace("-", "_")):
+            raise InvalidInputError(f"give the camera's pose once: {flag} or "
+                                    f"--{given.replace('_', '-')}")  # fmt: skip
+    name = f"{args.bag.resolve().name}_at_{1e3 * frame.time_s:.0f}ms"
+    return frame.files, source, name, lambda target: camera_pose(frame.transforms, target,
+                                                                  frame.frame_id)  # fmt: skip
 
 
 def _camera_json(files, color_order: str | None) -> dict:
@@ -191,12 +211,16 @@ def _camera_json(files, color_order: str | None) -> dict:
             "color_order_in_file": color_order}  # fmt: skip
 
 
-def _top(args, rgb, depth, camera) -> tuple[np.ndarray, dict]:
+def _top(args, rgb, depth, camera, tf_pose) -> tuple[np.ndarray, dict]:
     from comgrasp_pin.perception import detect_rod_top_down, draw_top_view
     from comgrasp_pin.perception.table_plane import fit_table_plane
 
-    if args.T_world_cam is not None:
-        frame, T = "world", read_pose(args.T_world_cam, "T_world_cam")
+    if args.T_world_cam is not None or args.world_frame is not None:
+        frame = "world"
+        if args.T_world_cam is not None:
+            T = read_pose(args.T_world_cam, "T_world_cam")
+        else:
+            T = tf_pose(args.world_frame)
         if args.pick_area is None:
             raise InvalidInputError("--T-world-cam needs --pick-area X0,X1,Y0,Y1 (m, in its "
                                     "frame): where on the table the rod lies")  # fmt: skip
@@ -215,13 +239,17 @@ def _top(args, rgb, depth, camera) -> tuple[np.ndarray, dict]:
     return draw_top_view(rgb, det, det.axis_px.mean(axis=0), depth=depth), measured
 
 
-def _side(args, rgb, depth, camera) -> tuple[np.ndarray, dict]:
+def _side(args, rgb, depth, camera, tf_pose) -> tuple[np.ndarray, dict]:
     from comgrasp_pin.perception import draw_side_view, observe_held_rod
 
-    if args.T_ee_cam is None:
-        raise InvalidInputError("--view side needs --T-ee-cam FILE: the camera's pose in the "
-                                "ee frame (the TCP between the jaws)")  # fmt: skip
-    T_ee_cam = read_pose(args.T_ee_cam, "T_ee_cam")
+    if args.T_ee_cam is not None:
+        T_ee_cam = read_pose(args.T_ee_cam, "T_ee_cam")
+    elif args.ee_frame is not None:
+        T_ee_cam = tf_pose(args.ee_frame)
+    else:
+        raise InvalidInputError("--view side needs --T-ee-cam FILE (or, with --bag, "
+                                "--ee-frame): the camera's pose in the ee frame (the TCP "
+                                "between the jaws)")  # fmt: skip
     view = observe_held_rod(rgb, depth, camera, T_ee_cam)
     measured = {
         "view": "side", "frame": "ee", "T_ee_cam": T_ee_cam.tolist(),
@@ -239,11 +267,12 @@ def run(args: argparse.Namespace) -> int:
     from comgrasp_pin.perception.camera_input import camera_frame
 
     if args.bag is not None:
-        files, source, name = _from_bag(args)
+        files, source, name, tf_pose = _from_bag(args)
     else:
         files, source, name = _from_files(args)
+        tf_pose = None
     rgb, depth, camera = camera_frame(files.rgb, files.depth, files.camera, files.depth_scale)
-    image, measured = (_top if args.view == "top" else _side)(args, rgb, depth, camera)
+    image, measured = (_top if args.view == "top" else _side)(args, rgb, depth, camera, tf_pose)
     measured.update(source)
     in_file = (
         ("bgr" if args.bgr else "rgb") if args.rgb is not None else None

@@ -1,29 +1,28 @@
 """An RGBD frame from a ROS 2 bag, as camera drivers record it (REP 118).
 
-What a depth camera's user on ROS 2 records (``ros2 bag record``): the depth image, the
-colour image and the camera info. Read here (``rosbags``; the bag's folder, .db3 or .mcap):
+Read with ``rosbags`` (the bag's folder, .db3 or .mcap):
 
-- the depth: ``sensor_msgs/msg/Image`` in ``16UC1`` (or ``mono16``), millimetres with 0 for
-  no depth (REP 118's raw form), or ``32FC1``, metres (REP 118's canonical form: NaN, no
-  measurement, and -Inf, too near, are lost pixels (0); +Inf, nothing in range, is inf); or
-  ``sensor_msgs/msg/CompressedImage`` of image_transport's ``compressedDepth`` of 16UC1;
-- the colour, optional: ``sensor_msgs/msg/Image`` (rgb8, bgr8, rgba8, bgra8, mono8) or
-  ``CompressedImage`` (JPEG, PNG), registered to the depth: the depth aligned to the colour
-  camera (a RealSense's ``aligned_depth_to_color``), both at the camera info's size;
+- the depth: ``sensor_msgs/msg/Image`` in ``16UC1`` (or ``mono16``), millimetres, 0 for
+  none, or ``32FC1``, metres (NaN, no return, and -Inf, too near, are lost pixels (0); +Inf,
+  nothing in range, is inf); or a ``CompressedImage`` of ``compressedDepth`` of 16UC1;
+- the colour, optional: ``Image`` (rgb8, bgr8, rgba8, bgra8, mono8) or ``CompressedImage``
+  (JPEG, PNG), registered to the depth (the depth aligned to the colour camera: a
+  RealSense's ``aligned_depth_to_color``), both at the camera info's size;
 - the camera info: ``sensor_msgs/msg/CameraInfo`` (``k``, ``d``, ``distortion_model``).
 
 Topics are named, or found by type: the depth is the image topic whose first message holds
 depth, the colour the other image topic, the camera info the depth topic's sibling
-``camera_info`` (same namespace), else the bag's only one. Where the bag holds several of
-a kind and none is named, the message lists them. The frame: the depth image received
-nearest ``at`` s after the depth topic's first, the colour image nearest it by header stamp
-(within MAX_SKEW), the camera info received nearest it.
+``camera_info``, else the bag's only one; several of a kind, none named: listed, refused.
+The frame: the depth image received nearest ``at`` s after the depth topic's first, the
+colour nearest it by stamp (within MAX_SKEW), the camera info received nearest it, and the
+static transforms (``static_tf``) that give the camera's pose.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
@@ -33,6 +32,7 @@ from comgrasp_pin.errors import CameraFileError, ComGraspError
 from comgrasp_pin.file_checks import bag_folder
 from comgrasp_pin.perception.camera_model import camera_model
 from comgrasp_pin.perception.rgbd_files import RgbdFiles, float_depth
+from comgrasp_pin.perception.static_tf import Transforms, read_static_tf
 
 IMAGE = "sensor_msgs/msg/Image"
 COMPRESSED = "sensor_msgs/msg/CompressedImage"
@@ -54,6 +54,8 @@ class BagFrame:
         depth_topic, rgb_topic, info_topic: the topics read (``rgb_topic`` None: no colour).
         time_s: the depth image's receive time, s after the depth topic's first.
         skew_s: the colour's header stamp less the depth's (s; 0 without colour).
+        frame_id: the depth image's frame (its ``header.frame_id``).
+        transforms: the bag's ``/tf_static`` (``static_tf.camera_pose``); {} without.
     """
 
     files: RgbdFiles
@@ -62,6 +64,8 @@ class BagFrame:
     info_topic: str
     time_s: float
     skew_s: float
+    frame_id: str
+    transforms: Transforms
 
 
 def read_rgbd_bag(
@@ -96,17 +100,16 @@ def read_rgbd_bag(
             rgb_conn = topics.colour(rgb_topic) if colour else None
             info_conn = topics.info(info_topic, depth_conn)
             times = _receive_times(reader, depth_conn)
-            span = (times[-1] - times[0]) / 1e9
-            if at > span + 0.5:
+            if at > (span := (times[-1] - times[0]) / 1e9) + 0.5:
                 raise CameraFileError(f"at = {at:g} s is past the depth topic "
                                       f"{depth_conn.topic!r}: it spans {span:.2f} s")  # fmt: skip
-            first = times[0]
-            t_depth, depth_msg = _received_nearest(reader, depth_conn, first + round(at * 1e9))
+            t_depth, depth_msg = _received_nearest(reader, depth_conn, times[0] + round(at * 1e9))
             rgb, skew = None, 0.0
             if rgb_conn is not None:
                 rgb_msg, skew = _paired(reader, rgb_conn, t_depth, _stamp(depth_msg), bag)
                 rgb = _colour(rgb_msg, rgb_conn.topic)
             info = _received_nearest(reader, info_conn, t_depth)[1]
+            transforms = read_static_tf(reader)
     except CameraFileError:
         raise
     except Exception as exc:  # rosbags raises its own error types for broken bags
@@ -125,7 +128,8 @@ def read_rgbd_bag(
             )
     return BagFrame(RgbdFiles(rgb, depth, scale, camera), depth_conn.topic,
                     None if rgb_conn is None else rgb_conn.topic, info_conn.topic,
-                    (t_depth - first) / 1e9, skew)  # fmt: skip
+                    (t_depth - times[0]) / 1e9, skew, depth_msg.header.frame_id,
+                    transforms)  # fmt: skip
 
 
 class _Topics:
@@ -157,10 +161,9 @@ class _Topics:
         if len(found) == 1:
             return found[0]
         names = sorted(c.topic for c in found)
-        raise CameraFileError(
-            f"bag {self.bag} has {len(found)} {what} topics {names}: name one ({option})"
-            if found else f"bag {self.bag} has no {what} topic; {self._listing()}"
-        )  # fmt: skip
+        raise CameraFileError(f"bag {self.bag} has {len(found)} {what} topics {names}: name one "
+                              f"({option})" if found else f"bag {self.bag} has no {what} topic; "
+                              f"{self._listing()}")  # fmt: skip
 
     def depth(self, topic: str | None):
         if topic is not None:
@@ -202,7 +205,7 @@ def _receive_times(reader, conn) -> list[int]:
     return times
 
 
-def _received_nearest(reader, conn, t_ns: int) -> tuple[int, object]:
+def _received_nearest(reader, conn, t_ns: int) -> tuple[int, Any]:
     """(receive time (ns), message) of the topic's message received nearest ``t_ns``."""
     times = np.array(_receive_times(reader, conn), dtype=np.int64)
     k = int(np.argmin(np.abs(times - t_ns)))
