@@ -16,7 +16,9 @@ show``). One folder per frame, named as ``benchmarks/results/real_frames.json`` 
 - ``camera_info.yaml``: ``data/calib/SENSOR/SENSOR.intr`` as a ROS camera_calibration file
   (no distortion, ``depth_scale`` 0.001);
 - ``T_world_cam.txt`` (PrimeSense only): ``data/calib/primesense/primesense.tf`` (translation
-  row, then rotation rows) as a 4x4 matrix.
+  row, then rotation rows) as a 4x4 matrix;
+- and the frame as the authors ship it, which ``real_frames.py`` runs too: ``depth.npy``
+  (float m, (H, W, 1)), ``camera.intr`` and (PrimeSense) ``camera.tf``, copied unchanged.
 """
 
 from __future__ import annotations
@@ -69,6 +71,9 @@ def main() -> None:
         (folder / "camera_info.yaml").write_text(yaml.safe_dump(info, sort_keys=False))
         if with_pose:
             np.savetxt(folder / "T_world_cam.txt", _pose(read(f"data/calib/{sensor}/{sensor}.tf")))
+            (folder / "camera.tf").write_bytes(read(f"data/calib/{sensor}/{sensor}.tf"))
+        (folder / "depth.npy").write_bytes(read(f"{prefix}/depth_{i}.npy"))
+        (folder / "camera.intr").write_bytes(read(f"data/calib/{sensor}/{sensor}.intr"))
         print(f"{name}: {shape[1]}x{shape[0]}, {100 * (1 - seen.mean()):.0f} % without depth")
 
 

@@ -16,6 +16,9 @@ also run in the world frame with ``WORLD_AREA`` and that area moved by 3 cm in x
 either way, where the authors' mask stays inside (no object enters or leaves): one answer
 per scene (issue 44), each judged against the mask in the world frame, and a frame measured
 in the table's frame must be measured in the world's within 1 cm of length and 3 deg of yaw.
+A folder that also holds the frame as its authors ship it (``depth.npy`` in float metres,
+``camera.intr``, ``camera.tf``: autolab_core's files) is run a second time from those
+("NAME (as shipped)"): the same scene given another way must not give another answer.
 The results (outcomes, errors, messages) are written; the frames are not.
 """
 
@@ -35,6 +38,7 @@ from unseen.real_failures import (  # (benchmarks/)
     same_answer,
 )
 
+from comgrasp_pin.cli.camera_files import read_pose
 from comgrasp_pin.errors import PerceptionError
 from comgrasp_pin.perception import detect_rod_top_down
 from comgrasp_pin.perception._points import points_in
@@ -83,7 +87,8 @@ def judge(found, truth, scene: str) -> dict:
             "centre_err_mm": round(1e3 * dc, 1)}  # fmt: skip
 
 
-def run(name, folder, colour, depth_file, info, scale, mask_file, scene) -> dict:
+def run(name, folder, colour, depth_file, info, scale, mask_file, scene,
+        pose_file="T_world_cam.txt") -> dict:  # fmt: skip
     files = read_rgbd(folder / colour, folder / depth_file, folder / info, scale)
     rgb, depth, camera = camera_frame(files.rgb, files.depth, files.camera, files.depth_scale)
     row = {"frame": name, "scene": scene}
@@ -104,8 +109,8 @@ def run(name, folder, colour, depth_file, info, scale, mask_file, scene) -> dict
             found = exc
         row[label] = judge(found, truth, scene)
         table_found[label] = found
-    if (folder / "T_world_cam.txt").is_file():
-        T_world = np.loadtxt(folder / "T_world_cam.txt")
+    if (folder / pose_file).is_file():
+        T_world = read_pose(folder / pose_file, "T_world_cam")
         mask = cv2.imread(str(folder / mask_file), cv2.IMREAD_GRAYSCALE) > 0
         row["world"] = in_world(rgb, depth, camera, T, T_world, mask, scene, table_found)
     return row
@@ -151,6 +156,9 @@ def main() -> None:
         scene = "clutter" if folder.name.startswith("clutter") else "one object"
         rows.append(run(folder.name, folder, "color.png", "depth_mm.png", "camera_info.yaml",
                         None, "segmask.png", scene))  # fmt: skip
+        if (folder / "depth.npy").is_file():  # the frame as its authors ship it
+            rows.append(run(f"{folder.name} (as shipped)", folder, "color.png", "depth.npy",
+                            "camera.intr", None, "segmask.png", scene, "camera.tf"))  # fmt: skip
         print(rows[-1]["frame"], rows[-1]["depth_alone"]["outcome"],
               rows[-1]["with_colour"]["outcome"], flush=True)  # fmt: skip
     totals = {label: {o: sum(r[label]["outcome"] == o for r in rows)

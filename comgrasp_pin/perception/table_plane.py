@@ -4,7 +4,7 @@ The top view measures a rod in a frame whose z is the table's normal (``T_world_
 A user who has not calibrated the camera's pose may take the table itself: the plane
 that most of the image sees, or a parallel one nearer the camera that holds MIN_SHARE of it
 too (RANSAC, then a least-squares fit to its inliers; a camera high above a table may see
-more of the floor), with the
+more of the floor), fitted again to the table's points in the pick area, with the
 frame ``table``: z along its normal towards the camera, origin below the camera's centre,
 x the camera's x laid on the plane. Lengths, widths, heights and yaw differences are then
 metric; positions are in that frame.
@@ -33,6 +33,7 @@ SEPARATION = 0.05  # a plane this much nearer the camera than the best-held one 
 PARALLEL_DEG = 5.0  # ... surface (the table above the floor) when parallel within this
 NEAR_SHARE = 0.15  # ... and holding this share of the valid pixels
 MAX_POINTS = 20_000  # points the plane is fitted to (an even subsample of the image)
+MIN_AREA_POINTS = 1000  # the table's points in the pick area the plane is fitted to again
 GRID = 0.005  # the table's cells when its clear rectangle is sought (m)
 EDGE_MARGIN = 0.02  # the clear rectangle less this on each side (m): a board's edge may be
 # bevelled or warped, and a depth camera's pixels fly at it
@@ -74,9 +75,29 @@ def fit_table_plane(
             "not in view; give the camera's pose instead"
         )
     _, normal, origin = best
-    inliers = points[np.abs((points - origin) @ normal) < band]
-    centre = inliers.mean(axis=0)
-    normal = np.linalg.svd(inliers - centre, full_matrices=False)[2][2]  # least squares
+    T_table_cam = _table_frame(points[np.abs((points - origin) @ normal) < band])
+    area = clear_rectangle(image_points, T_table_cam, band)
+    # The plane the rod lies on is the table under the pick area: a board laid on a table, or
+    # a warped top, is not one plane with all the image sees (GQ-CNN's PrimeSense frames: the
+    # board 2.8 mrad off the plane of the whole view). Fitted again to the table's points in
+    # the area.
+    in_table = points @ T_table_cam[:3, :3].T + T_table_cam[:3, 3]
+    x, y, z = in_table.T
+    under = (np.abs(z) < band) & (x > area[0]) & (x < area[1]) & (y > area[2]) & (y < area[3])
+    if np.count_nonzero(under) >= MIN_AREA_POINTS:
+        T_table_cam = _table_frame(points[under])
+        area = clear_rectangle(image_points, T_table_cam, band)
+    return T_table_cam, area
+
+
+def _table_frame(on_plane: np.ndarray) -> np.ndarray:
+    """T_table_cam of the least-squares plane of the points ``on_plane`` (N, 3) (camera, m).
+
+    z along its normal towards the camera, origin below the camera's centre, x the camera's
+    x laid on the plane.
+    """
+    centre = on_plane.mean(axis=0)
+    normal = np.linalg.svd(on_plane - centre, full_matrices=False)[2][2]
     if normal @ -centre < 0:  # towards the camera (at the origin)
         normal = -normal
     foot = -(normal @ -centre) * normal  # the camera's centre dropped onto the plane
@@ -85,8 +106,7 @@ def fit_table_plane(
     T_cam_table = np.eye(4)
     T_cam_table[:3, :3] = np.column_stack([x, np.cross(normal, x), normal])
     T_cam_table[:3, 3] = foot
-    T_table_cam = np.linalg.inv(T_cam_table)
-    return T_table_cam, clear_rectangle(image_points, T_table_cam, band)
+    return np.linalg.inv(T_cam_table)
 
 
 def _nearest_surface(planes: list, least: float) -> tuple | None:

@@ -32,6 +32,7 @@ from comgrasp_pin.errors import (
 from comgrasp_pin.geometry import GraspPose
 from comgrasp_pin.perception._points import check_images, pixel_slopes
 from comgrasp_pin.perception.camera_input import camera_frame
+from comgrasp_pin.perception.end_heights import CLEANED_PX, check_ends_stand
 from comgrasp_pin.perception.grasp_points import (  # noqa: F401 (their home before)
     nearest_graspable,
     nearest_on_handle,
@@ -157,6 +158,8 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
     check_one_rod(view.points[mask], centroid, direction, view.table_z, view.points_noise,
                   measured)  # fmt: skip
     threshold = stands_at(view)
+    check_ends_stand(view.points, mask, unmeasured, view.table_z, centroid, direction, threshold,
+                     view.points_noise, CLEANED_PX * pixel if view.cleaned else 0.0)  # fmt: skip
     low = _check_thin_parts(view, standing, mask, pixel, threshold) if view.cleaned else None
     along = (p[:, :2] - centroid) @ direction
     lo, hi = np.percentile(along, [0.02, 99.98])
