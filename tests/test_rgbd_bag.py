@@ -215,6 +215,12 @@ def test_what_the_bag_cannot_give_is_said(scene, tmp_path, capsys):
     bayer = {"/camera/color/image_raw": [(T0, _image(T0, rgb[..., 0].copy(), "bayer_rggb8"))]}
     with pytest.raises(CameraFileError, match="bayer_rggb8.*valid colour encodings"):
         read_rgbd_bag(_write(tmp_path / "b", _realsense(scene, frames=1, skew_ns=0, **bayer)))
+    cut = _image(T0, mm, "16UC1")
+    cut.data = cut.data[: len(cut.data) // 2]  # a damaged message: half its pixels
+    damaged = _write(tmp_path / "d", _realsense(scene, frames=1, skew_ns=0, **{
+        "/camera/aligned_depth_to_color/image_raw": [(T0, cut)]}))  # fmt: skip
+    with pytest.raises(CameraFileError, match=r"640 x 480 px 16UC1 image holds 307200 bytes"):
+        read_rgbd_bag(damaged)
     # On the command line: exit 2, the message, no traceback.
     assert main(["views", "--bag", str(two), "--out", str(tmp_path / "o")]) == 2
     assert "--depth-topic" in capsys.readouterr().err

@@ -1,10 +1,11 @@
 """Perception on RGBD images (OpenCV + NumPy only; no simulator): works on real cameras too.
 
 The top view (``top_down``, reporting a ``RodDetection``), the side view of the rod in the
-jaws (``side_view``), the slip monitor, camera input and files, the overlays (``draw``).
+jaws (``side_view``), the slip monitor, camera input, files and ROS 2 bags (``rgbd_files``,
+``rgbd_bag``, ``static_tf``), the overlays (``draw``).
 
 Layer: imports only the shared modules (``camera``, ``geometry``, ``validate``,
-``errors``): no estimation, no motion, no simulator.
+``errors``, ``file_checks``): no estimation, no motion, no simulator.
 """
 
 from comgrasp_pin.perception.camera_input import camera_frame
