@@ -34,6 +34,8 @@ PARALLEL_DEG = 5.0  # ... surface (the table above the floor) when parallel with
 NEAR_SHARE = 0.15  # ... and holding this share of the valid pixels
 MAX_POINTS = 20_000  # points the plane is fitted to (an even subsample of the image)
 MIN_AREA_POINTS = 1000  # the table's points in the pick area the plane is fitted to again
+CLEAR_PX = 10  # ... that far from what stands half the inlier band above it, at least,
+REFIT_GAIN = 0.1  # ... where their heights' spread about it is this share less, at least
 GRID = 0.005  # the table's cells when its clear rectangle is sought (m)
 EDGE_MARGIN = 0.02  # the clear rectangle less this on each side (m): a board's edge may be
 # bevelled or warped, and a depth camera's pixels fly at it
@@ -79,15 +81,33 @@ def fit_table_plane(
     area = clear_rectangle(image_points, T_table_cam, band)
     # The plane the rod lies on is the table under the pick area: a board laid on a table, or
     # a warped top, is not one plane with all the image sees (GQ-CNN's PrimeSense frames: the
-    # board 2.8 mrad off the plane of the whole view). Fitted again to the table's points in
-    # the area.
-    in_table = points @ T_table_cam[:3, :3].T + T_table_cam[:3, 3]
-    x, y, z = in_table.T
-    under = (np.abs(z) < band) & (x > area[0]) & (x < area[1]) & (y > area[2]) & (y < area[3])
-    if np.count_nonzero(under) >= MIN_AREA_POINTS:
-        T_table_cam = _table_frame(points[under])
-        area = clear_rectangle(image_points, T_table_cam, band)
+    # board 2.8 mrad off the plane of the whole view). Fitted again to the bare table there,
+    # where its heights spread less about that plane (a noisy camera's do not: the fewer
+    # points would only tilt the plane by their noise).
+    bare = _bare_table(image_points, T_table_cam, area, band)
+    if len(bare) >= MIN_AREA_POINTS:
+        T_refit = _table_frame(bare)
+        spread = [noise_level(bare @ T[2, :3] + T[2, 3]) for T in (T_table_cam, T_refit)]
+        if spread[1] < (1.0 - REFIT_GAIN) * spread[0]:
+            T_table_cam = T_refit
+            area = clear_rectangle(image_points, T_table_cam, band)
     return T_table_cam, area
+
+
+def _bare_table(image_points: np.ndarray, T_table_cam: np.ndarray, area, band: float):
+    """(N, 3) the camera's points of the bare table in ``area`` (table frame, m).
+
+    Within ``band`` of the plane, and CLEAR_PX or more from any pixel half that high above
+    it: a rod's low handle, which the band would take in, does not tilt the plane.
+    """
+    x, y, z = np.moveaxis(image_points @ T_table_cam[:3, :3].T + T_table_cam[:3, 3], -1, 0)
+    with np.errstate(invalid="ignore"):  # NaN where no depth
+        raised = (z >= 0.5 * band).astype(np.uint8)
+        kernel = np.ones((2 * CLEAR_PX + 1, 2 * CLEAR_PX + 1), np.uint8)
+        near = cv2.dilate(raised, kernel) > 0
+        bare = (np.abs(z) < band) & ~near
+        bare &= (x > area[0]) & (x < area[1]) & (y > area[2]) & (y < area[3])
+    return image_points[bare]
 
 
 def _table_frame(on_plane: np.ndarray) -> np.ndarray:
