@@ -4,7 +4,8 @@ The top view measures a rod in a frame whose z is the table's normal (``T_world_
 A user who has not calibrated the camera's pose may take the table itself: the plane
 that most of the image sees, or a parallel one nearer the camera that holds MIN_SHARE of it
 too (RANSAC, then a least-squares fit to its inliers; a camera high above a table may see
-more of the floor), fitted again to the table's points in the pick area, with the
+more of the floor), fitted again to the bare table in the pick area where that is another
+plane (its heights spread less about it: a board on a table), with the
 frame ``table``: z along its normal towards the camera, origin below the camera's centre,
 x the camera's x laid on the plane. Lengths, widths, heights and yaw differences are then
 metric; positions are in that frame.
