@@ -22,7 +22,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import cv2
 import numpy as np
@@ -103,7 +102,8 @@ def read_rgbd_bag(
             if at > (span := (times[-1] - times[0]) / 1e9) + 0.5:
                 raise CameraFileError(f"at = {at:g} s is past the depth topic "
                                       f"{depth_conn.topic!r}: it spans {span:.2f} s")  # fmt: skip
-            t_depth, depth_msg = _received_nearest(reader, depth_conn, times[0] + round(at * 1e9))
+            t_depth, depth_msg = _received_nearest(reader, depth_conn, times[0] + round(at * 1e9),
+                                                   times)  # fmt: skip
             rgb, skew = None, 0.0
             if rgb_conn is not None:
                 rgb_msg, skew = _paired(reader, rgb_conn, t_depth, _stamp(depth_msg), bag)
@@ -205,10 +205,10 @@ def _receive_times(reader, conn) -> list[int]:
     return times
 
 
-def _received_nearest(reader, conn, t_ns: int) -> tuple[int, Any]:
-    """(receive time (ns), message) of the topic's message received nearest ``t_ns``."""
-    times = np.array(_receive_times(reader, conn), dtype=np.int64)
-    k = int(np.argmin(np.abs(times - t_ns)))
+def _received_nearest(reader, conn, t_ns: int, times: list[int] | None = None) -> tuple:
+    """(receive time (ns), message) received nearest ``t_ns``; ``times``: the topic's, if read."""
+    times_ns = np.array(_receive_times(reader, conn) if times is None else times, np.int64)
+    k = int(np.argmin(np.abs(times_ns - t_ns)))
     for i, (c, t, raw) in enumerate(reader.messages(connections=[conn])):
         if i == k:
             return t, reader.deserialize(raw, c.msgtype)
