@@ -33,6 +33,8 @@ import cv2
 import numpy as np
 import yaml
 
+from comgrasp_pin.cli.camera_files import read_pose
+
 EXAMPLES = "data/examples"
 FRAMES = (  # (folder, source folder, index, sensor, with the camera's pose)
     [(f"single_primesense_{i}", "single_object/primesense", i, "primesense", True)
@@ -69,9 +71,9 @@ def main() -> None:
         mask = _image(read(f"{prefix}/segmask_{i}.png"), cv2.IMREAD_GRAYSCALE)
         cv2.imwrite(str(folder / "segmask.png"), np.where(mask > 0, 255, 0).astype(np.uint8))
         (folder / "camera_info.yaml").write_text(yaml.safe_dump(info, sort_keys=False))
-        if with_pose:
-            np.savetxt(folder / "T_world_cam.txt", _pose(read(f"data/calib/{sensor}/{sensor}.tf")))
+        if with_pose:  # the authors' .tf, and as a 4x4 text matrix read by the package's reader
             (folder / "camera.tf").write_bytes(read(f"data/calib/{sensor}/{sensor}.tf"))
+            np.savetxt(folder / "T_world_cam.txt", read_pose(folder / "camera.tf", "T_world_cam"))
         (folder / "depth.npy").write_bytes(read(f"{prefix}/depth_{i}.npy"))
         (folder / "camera.intr").write_bytes(read(f"data/calib/{sensor}/{sensor}.intr"))
         print(f"{name}: {shape[1]}x{shape[0]}, {100 * (1 - seen.mean()):.0f} % without depth")
@@ -103,15 +105,6 @@ def _camera_info(intr: dict) -> dict:
         "distortion_coefficients": {"rows": 1, "cols": 5, "data": [0.0] * 5},
         "depth_scale": 0.001,
     }  # fmt: skip
-
-
-def _pose(data: bytes) -> np.ndarray:
-    """autolab_core's RigidTransform text (frames, translation, rotation rows) as 4x4."""
-    lines = data.decode().splitlines()
-    T = np.eye(4)
-    T[:3, 3] = np.array(lines[2].split(), float)
-    T[:3, :3] = np.array([line.split() for line in lines[3:6]], float)
-    return T
 
 
 if __name__ == "__main__":
