@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from comgrasp_pin.perception.rod_axis import MAX_FIT_POINTS, fit_cylinder
+from comgrasp_pin.perception.side_view.rod_axis import MAX_FIT_POINTS, fit_cylinder
 
 
 def reference_fit(points, direction, point, radius=None):

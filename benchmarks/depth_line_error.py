@@ -11,7 +11,7 @@
 Why (issue 34, item 5): the trial grasp stacks its measurement poses with the rod's motion in
 the jaws between them (``procedures.rod_motion.rod_motion``), and part of that motion is the
 rod's shift along the jaw axis (ee y, the side camera's depth), measured as the change of the
-handle's depth line (``perception.side_depth.surface_line``: ``SideView.surface_y`` and
+handle's depth line (``perception.side_view.side_depth.surface_line``: ``SideView.surface_y`` and
 ``surface_slope``). The error model (``procedures.uncertainty.motion_stds``, the
 ``pos_std_shift_m`` / ``pos_std_out_of_plane_m`` parts of the accuracy CSV) gives that change
 the standard error of the slices' scatter (``rod_motion.depth_change_std``), nothing else.

@@ -42,9 +42,9 @@ from comgrasp_pin.cli.camera_files import read_pose
 from comgrasp_pin.errors import PerceptionError
 from comgrasp_pin.perception import detect_rod_top_down
 from comgrasp_pin.perception._points import points_in
-from comgrasp_pin.perception.camera_input import camera_frame
-from comgrasp_pin.perception.rgbd_files import read_rgbd
-from comgrasp_pin.perception.table_plane import fit_table_plane
+from comgrasp_pin.perception.frames.camera_input import camera_frame
+from comgrasp_pin.perception.frames.rgbd_files import read_rgbd
+from comgrasp_pin.perception.top_view.table_plane import fit_table_plane
 
 ROOT = Path(__file__).resolve().parents[1]
 RGBD = ROOT.parent / "shared" / "realdata" / "rgbd"

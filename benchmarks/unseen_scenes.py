@@ -27,7 +27,7 @@ from pathlib import Path  # noqa: E402
 
 from unseen import families as uf  # noqa: E402  (benchmarks/unseen/, beside this script)
 
-from comgrasp_pin.perception import rod_shape  # noqa: E402
+from comgrasp_pin.perception.top_view import rod_shape  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 

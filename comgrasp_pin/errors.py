@@ -73,7 +73,7 @@ class ObjectCutByBorderError(PerceptionError):
 
     ``seen``: when a rod runs out of view at one end only, the top view's measure of the
     part it sees (a ``RodDetection`` whose ``cut_end`` says which end), else None. Who
-    knows the rod's length may complete it (``perception.top_down.with_known_length``).
+    knows the rod's length may complete it (``perception.top_view.top_down.with_known_length``).
     """
 
     def __init__(self, message: str, seen=None):

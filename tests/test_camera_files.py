@@ -23,8 +23,8 @@ from _corruption import corruptions, table_scene, top_errors, top_inputs
 from comgrasp_pin.cli import main
 from comgrasp_pin.errors import CameraFileError, InvalidDepthError, InvalidInputError
 from comgrasp_pin.perception import average_depth_frames, detect_rod_top_down
-from comgrasp_pin.perception.camera_model import camera_model
-from comgrasp_pin.perception.rgbd_files import read_camera_info, read_rgbd
+from comgrasp_pin.perception.frames.camera_model import camera_model
+from comgrasp_pin.perception.frames.rgbd_files import read_camera_info, read_rgbd
 from comgrasp_pin.simulation.objects import OBJECTS
 
 ROD = ("obj2", 0.68, -0.2, 0.6)  # off the image's centre, where a lens distorts

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 from comgrasp_pin.errors import ObjectNotFoundError, PerceptionError
-from comgrasp_pin.perception.standing import without_marks
-from comgrasp_pin.perception.top_down import PICK_AREA
+from comgrasp_pin.perception.top_view.standing import without_marks
+from comgrasp_pin.perception.top_view.top_down import PICK_AREA
 from comgrasp_pin.simulation.depth_noise import DepthNoise
 
 sys.path.append(str(Path(__file__).resolve().parents[1] / "benchmarks"))

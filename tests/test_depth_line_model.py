@@ -18,8 +18,8 @@ from comgrasp_pin.config import (
     sensor_preset,
 )
 from comgrasp_pin.errors import InvalidInputError
-from comgrasp_pin.perception.side_depth import clean_side_depth, surface_line
-from comgrasp_pin.perception.side_view import SideView
+from comgrasp_pin.perception.side_view.side_depth import clean_side_depth, surface_line
+from comgrasp_pin.perception.side_view.side_view import SideView
 from comgrasp_pin.procedures.rod_motion import paired_depth_line
 from comgrasp_pin.procedures.uncertainty import depth_line_std, handle_distance, motion_stds
 

@@ -1,4 +1,4 @@
-"""A top view's object stands up to its ends, or is refused (``perception.end_heights``).
+"""A top view's object stands up to its ends, or is refused (``perception.top_view.end_heights``).
 
 The depth images are built here from a pinhole camera 0.7 m above a table and an object
 whose height is written down as a function of where it lies: the truth is the

@@ -19,7 +19,7 @@ from hypothesis import strategies as st
 
 from comgrasp_pin.config import sensor_preset
 from comgrasp_pin.perception._points import drop_flying, median, slice_medians
-from comgrasp_pin.perception.rod_axis import _cylinder_residuals
+from comgrasp_pin.perception.side_view.rod_axis import _cylinder_residuals
 from comgrasp_pin.simulation.depth_noise import DepthNoise
 
 
@@ -193,7 +193,7 @@ def test_transform_points_is_the_plain_product_to_the_bit(n, rotvec, shift, seed
 
 def plain_differs_in_colour(rgb: np.ndarray, area: np.ndarray) -> np.ndarray:
     """The colour test as it was: CIELAB distances in floats, thresholds on the norms."""
-    from comgrasp_pin.perception.table_view import COLOUR_DE, SHADOW_CHROMA
+    from comgrasp_pin.perception.top_view.table_view import COLOUR_DE, SHADOW_CHROMA
 
     lab = cv2.cvtColor(np.ascontiguousarray(rgb, dtype=np.uint8), cv2.COLOR_RGB2LAB).astype(float)
     table = np.median(lab[area], axis=0)
@@ -213,7 +213,7 @@ def plain_differs_in_colour(rgb: np.ndarray, area: np.ndarray) -> np.ndarray:
 def test_differs_in_colour_is_the_plain_norms_to_the_bit(h, w, spread, seed):
     """Integer distances in half units against the float norms: the same pixels, also
     those exactly at a threshold (small spreads put many there)."""
-    from comgrasp_pin.perception.table_view import differs_in_colour
+    from comgrasp_pin.perception.top_view.table_view import differs_in_colour
 
     rng = np.random.default_rng(seed)
     base = rng.integers(0, 256, 3)

@@ -16,8 +16,8 @@ from hypothesis import strategies as st
 
 from comgrasp_pin.camera import PinholeCamera
 from comgrasp_pin.perception._points import median, points_at, points_in, slice_percentiles
-from comgrasp_pin.perception.cylinder_fit import cylinder_residuals, fit_cylinders
-from comgrasp_pin.perception.held_region import (
+from comgrasp_pin.perception.side_view.cylinder_fit import cylinder_residuals, fit_cylinders
+from comgrasp_pin.perception.side_view.held_region import (
     REACH,
     SLAB_HALF_WIDTH,
     TABLE_MARGIN,
@@ -27,7 +27,7 @@ from comgrasp_pin.perception.held_region import (
     robot_volume,
     slab_pixels,
 )
-from comgrasp_pin.perception.rod_axis import (
+from comgrasp_pin.perception.side_view.rod_axis import (
     FIT_DAMPING,
     FIT_ITERATIONS,
     FIT_OUTLIER_MARGIN,
@@ -324,7 +324,7 @@ def test_in_capsule_measures_only_its_box_to_the_same_answer(n, ends, radius, lo
     seed=st.integers(0, 2**32 - 1),
 )
 def test_row_medians_are_each_rows_median_to_the_bit(k, n, keep, seed):
-    from comgrasp_pin.perception.cylinder_fit import _row_medians
+    from comgrasp_pin.perception.side_view.cylinder_fit import _row_medians
 
     rng = np.random.default_rng(seed)
     values = np.abs(rng.normal(0.0, 1e-3, (k, n)))

@@ -15,10 +15,10 @@ from comgrasp_pin.errors import (
     ColourDepthMismatchError,
     UntrustedImageError,
 )
-from comgrasp_pin.perception.registration import check_registered, cover_by_shift
-from comgrasp_pin.perception.rod_pieces import check_not_broken, join_pieces
-from comgrasp_pin.perception.table_plane import fit_table_plane
-from comgrasp_pin.perception.thin_parts import (
+from comgrasp_pin.perception.top_view.registration import check_registered, cover_by_shift
+from comgrasp_pin.perception.top_view.rod_pieces import check_not_broken, join_pieces
+from comgrasp_pin.perception.top_view.table_plane import fit_table_plane
+from comgrasp_pin.perception.top_view.thin_parts import (
     TableStretches,
     check_no_hidden_part,
     check_no_thin_part,

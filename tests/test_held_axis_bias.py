@@ -12,8 +12,9 @@ from _corruption import realistic
 from test_perception import _held_rod_scene, _side_view_errors
 
 from comgrasp_pin.errors import UntrustedImageError
-from comgrasp_pin.perception import held_axis, observe_held_rod
-from comgrasp_pin.perception.held_axis import MAX_SLICE_BIAS_DEG, slice_bias
+from comgrasp_pin.perception import observe_held_rod
+from comgrasp_pin.perception.side_view import held_axis
+from comgrasp_pin.perception.side_view.held_axis import MAX_SLICE_BIAS_DEG, slice_bias
 from comgrasp_pin.simulation.eyes import arm_capsules, handle_radius, side_camera_pose
 from comgrasp_pin.simulation.objects import OBJECTS
 from comgrasp_pin.simulation.world import SIDE_CAMERA
@@ -86,7 +87,7 @@ def test_a_strip_too_sparse_to_slice_is_none_without_a_warning():
     main job's console); a dense strip along 0.2 rad gives that direction."""
     import warnings
 
-    from comgrasp_pin.perception.flat_face import MIN_SLICE_POINTS, SLICE, strip_line
+    from comgrasp_pin.perception.side_view.flat_face import MIN_SLICE_POINTS, SLICE, strip_line
 
     direction = np.array([np.cos(0.2), np.sin(0.2)])
     normal = np.array([-direction[1], direction[0]])

@@ -11,7 +11,7 @@ def test_a_held_rod_fit_with_no_point_near_its_axis_is_refused_not_a_crash():
     """The side view's gap check given a fit with no pixel within the rod's radius of its
     axis (a paper-size run met it on a 1 cm stick: an IndexError, counted as an internal
     error): a refusal of the frame, which the trial grasp takes again."""
-    from comgrasp_pin.perception.held_pieces import check_no_gap
+    from comgrasp_pin.perception.side_view.held_pieces import check_no_gap
 
     mask = np.zeros((20, 30), bool)
     mask[8:12, 5:25] = True

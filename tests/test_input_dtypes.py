@@ -129,8 +129,8 @@ def test_float32_points_are_transformed_as_float64_ones():
 def _public_constructors():
     """name -> function of a converter of one array argument: the public values that take
     arrays (the estimator's prior, a robot log, a payload, a camera's intrinsics and depth)."""
-    from comgrasp_pin.perception.camera_input import metric_depth
-    from comgrasp_pin.perception.camera_model import camera_model
+    from comgrasp_pin.perception.frames.camera_input import metric_depth
+    from comgrasp_pin.perception.frames.camera_model import camera_model
     from comgrasp_pin.robot_io import JointLog, Payload
 
     t, pos = np.linspace(0.0, 1.0, 5), np.zeros((5, 2))

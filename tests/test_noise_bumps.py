@@ -16,7 +16,12 @@ import numpy as np
 import pytest
 
 from comgrasp_pin.errors import AmbiguousObjectError
-from comgrasp_pin.perception.standing import DETECT_SNR, largest_bump, median_noise, noise_bumps
+from comgrasp_pin.perception.top_view.standing import (
+    DETECT_SNR,
+    largest_bump,
+    median_noise,
+    noise_bumps,
+)
 
 sys.path.append(str(Path(__file__).resolve().parents[1] / "benchmarks"))
 from unseen import real_failures as rf  # noqa: E402  (benchmarks/unseen/)
@@ -166,7 +171,7 @@ def test_a_blob_on_the_axis_beyond_an_end_is_the_rod_unless_no_larger_than_the_n
     the rod may go on there, unless the view's noise makes bumps of 36 px (``bump_px`` at
     least 36; inf: not measured, every blob counts). The same blob off the axis, or more than
     END_REACH beyond the end, is not weighed."""
-    from comgrasp_pin.perception.rod_shape import END_REACH, check_ends_seen
+    from comgrasp_pin.perception.top_view.rod_shape import END_REACH, check_ends_seen
 
     on_axis = _rod_on_grid([(57, 63, 260, 266)])
     with pytest.raises(AmbiguousObjectError, match="36 px stand on the table on the rod's"):

@@ -309,7 +309,7 @@ def _detection_with_widths(profile):
 
 
 def test_graspable_points_keep_the_pads_off_wide_heads():
-    from comgrasp_pin.perception.top_down import nearest_graspable, nearest_on_handle
+    from comgrasp_pin.perception.top_view.top_down import nearest_graspable, nearest_on_handle
 
     # A 2 cm handle with a 6 cm head (the jaws fit around it) from 0.12 m to the end.
     torch = _detection_with_widths(lambda p: 0.06 if p > 0.12 else 0.02)
@@ -330,7 +330,7 @@ def test_depth_line_standard_error_matches_the_scatter_of_surfaces():
     """Points of one slice are one piece of surface: a handle whose surface wanders by 1 mm
     from slice to slice (point noise 0.05 mm). The stated standard error of the line's y at
     the TCP must match the spread of that y over many such handles (Monte Carlo)."""
-    from comgrasp_pin.perception.side_depth import depth_line as _depth_line
+    from comgrasp_pin.perception.side_view.side_depth import depth_line as _depth_line
 
     rng = np.random.default_rng(4)
     y0s, stds = [], []
@@ -350,7 +350,7 @@ def test_a_head_joined_by_a_thin_neck_is_one_object():
     neck, and the two pieces (one blob before it) stay one object; two blobs with a gap of
     1 px stay two."""
     from comgrasp_pin.perception._points import largest_component
-    from comgrasp_pin.perception.rod_shape import check_one_object
+    from comgrasp_pin.perception.top_view.rod_shape import check_one_object
 
     mask = np.zeros((120, 200), bool)
     mask[56:64, 20:120] = True  # the handle, 8 px wide: 800 px

@@ -118,7 +118,7 @@ def _seen(length, cut_end, yaw, x=0.6, y=0.3):
 def test_a_rod_seen_in_part_is_completed_towards_its_cut_end(cut_end):
     """0.30 m of a 0.40 m rod seen: the whole rod's centre lies 5 cm beyond the part seen's
     towards the end out of view; the ends seen stay where they were."""
-    from comgrasp_pin.perception.grasp_points import with_known_length
+    from comgrasp_pin.perception.top_view.grasp_points import with_known_length
 
     yaw = 0.3
     seen = _seen(0.30, cut_end, yaw)
@@ -134,7 +134,7 @@ def test_a_rod_seen_in_part_is_completed_towards_its_cut_end(cut_end):
 
 def test_a_rod_seen_too_little_or_whole_is_not_completed():
     from comgrasp_pin.errors import ObjectCutByBorderError
-    from comgrasp_pin.perception.grasp_points import nearest_graspable, with_known_length
+    from comgrasp_pin.perception.top_view.grasp_points import nearest_graspable, with_known_length
 
     with pytest.raises(ObjectCutByBorderError, match="too little"):
         with_known_length(_seen(0.20, 1, 0.0), 0.40, 0.6)
@@ -148,7 +148,7 @@ def test_a_rod_seen_too_little_or_whole_is_not_completed():
 
 def test_a_rod_seen_again_shorter_than_first_seen_is_refused():
     from comgrasp_pin.errors import ObjectCutByBorderError
-    from comgrasp_pin.perception.grasp_points import check_seen_whole
+    from comgrasp_pin.perception.top_view.grasp_points import check_seen_whole
 
     tol = RegraspConfig().length_tolerance
     rod = _seen(0.40, 0, 0.0)

@@ -13,9 +13,9 @@ import pytest
 
 from comgrasp_pin.errors import AmbiguousObjectError, ColourDepthMismatchError, PerceptionError
 from comgrasp_pin.perception import detect_rod_top_down
-from comgrasp_pin.perception.camera_input import camera_frame
-from comgrasp_pin.perception.rgbd_files import read_rgbd
-from comgrasp_pin.perception.table_plane import fit_table_plane
+from comgrasp_pin.perception.frames.camera_input import camera_frame
+from comgrasp_pin.perception.frames.rgbd_files import read_rgbd
+from comgrasp_pin.perception.top_view.table_plane import fit_table_plane
 
 RGBD = Path(__file__).resolve().parents[2] / "shared" / "realdata" / "rgbd"
 FLASHLIGHT = RGBD / "overhead_primesense_flashlight"

@@ -1,4 +1,4 @@
-"""RGBD frames from ROS 2 bags (``perception.rgbd_bag``, ``comgrasp views --bag``).
+"""RGBD frames from ROS 2 bags (``perception.frames.rgbd_bag``, ``comgrasp views --bag``).
 
 The bags are real ones, written here with rosbags' own Writer and the ROS 2 Humble message
 types, as a camera driver records them (REP 118: 16UC1 millimetres, 32FC1 metres with NaN
@@ -24,8 +24,8 @@ from rosbags.typesys import Stores, get_typestore
 from comgrasp_pin.cli import main
 from comgrasp_pin.errors import CameraFileError
 from comgrasp_pin.perception import detect_rod_top_down
-from comgrasp_pin.perception.rgbd_bag import read_rgbd_bag
-from comgrasp_pin.perception.rgbd_files import read_rgbd
+from comgrasp_pin.perception.frames.rgbd_bag import read_rgbd_bag
+from comgrasp_pin.perception.frames.rgbd_files import read_rgbd
 from comgrasp_pin.simulation.objects import OBJECTS
 
 ROD = ("obj2", 0.60, -0.1, 0.4)
@@ -288,6 +288,7 @@ def test_the_cameras_pose_from_the_bags_static_transforms(scene, tmp_path, capsy
     import pinocchio as pin
 
     depth, camera, T, rgb, truth = scene
+    pin.seed(3)
     T_world_base, T_base_link = pin.SE3.Random().homogeneous, pin.SE3.Random().homogeneous
     T_link_optical = np.linalg.inv(T_world_base @ T_base_link) @ T
     chain = [("world", "base_link", T_world_base),
@@ -297,7 +298,7 @@ def test_the_cameras_pose_from_the_bags_static_transforms(scene, tmp_path, capsy
     bag = _write(tmp_path / "rs", _realsense(scene, **tf))
     frame = read_rgbd_bag(bag)
     assert frame.frame_id == "camera_color_optical_frame"
-    from comgrasp_pin.perception.static_tf import camera_pose
+    from comgrasp_pin.perception.frames.static_tf import camera_pose
 
     np.testing.assert_allclose(camera_pose(frame.transforms, "world", frame.frame_id), T,
                                atol=1e-12)  # fmt: skip
@@ -311,8 +312,10 @@ def test_the_cameras_pose_from_the_bags_static_transforms(scene, tmp_path, capsy
     assert main(["views", "--bag", str(bag), "--T-world-cam", str(pose), "--out", str(out),
                  *area]) == 0  # fmt: skip
     by_file = json.loads((out / "rs_at_0ms_top_view.json").read_text())
+    # The composed pose equals T to 1e-12; a pixel on a threshold may still fall the other
+    # way (one pixel moves the centre by about 1 um), so: the same rod to 10 um.
     for key in ("centre_m", "yaw_rad", "length_m"):
-        np.testing.assert_allclose(by_tf[key], by_file[key], atol=1e-9)
+        np.testing.assert_allclose(by_tf[key], by_file[key], atol=1e-5)
     x, y, _ = by_tf["centre_m"]
     assert np.hypot(x - truth[0], y - truth[1]) < 3e-3
     capsys.readouterr()

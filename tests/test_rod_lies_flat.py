@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from comgrasp_pin.errors import AmbiguousObjectError
-from comgrasp_pin.perception.rod_flat import propped_ends
-from comgrasp_pin.perception.rod_shape import SLICE, check_one_rod
+from comgrasp_pin.perception.top_view.rod_flat import propped_ends
+from comgrasp_pin.perception.top_view.rod_shape import SLICE, check_one_rod
 
 GRID = 0.0015  # m
 NOISE = 0.0005  # m

@@ -11,7 +11,7 @@ from _payload import payload_torques
 import comgrasp_pin as cg
 from comgrasp_pin.config import RegraspConfig
 from comgrasp_pin.estimation.regressor import pose_regressor
-from comgrasp_pin.perception.side_view import SideView
+from comgrasp_pin.perception.side_view.side_view import SideView
 from comgrasp_pin.planning.holding import holding_lever
 from comgrasp_pin.planning.regrasp import needs_another_pose
 from comgrasp_pin.planning.wrist_poses import best_next_pose
@@ -135,7 +135,7 @@ def test_depth_change_std_pairs_the_slices_two_views_share():
     spread of the lines' difference, far below the two lines' errors combined."""
     from dataclasses import replace
 
-    from comgrasp_pin.perception.side_depth import depth_line as _depth_line
+    from comgrasp_pin.perception.side_view.side_depth import depth_line as _depth_line
     from comgrasp_pin.procedures.rod_motion import depth_change_std
 
     rng = np.random.default_rng(5)

@@ -16,8 +16,8 @@ import pytest
 import yaml
 
 from comgrasp_pin.errors import CameraFileError, ComGraspError
-from comgrasp_pin.perception.camera_model import OPENCV_MODELS
-from comgrasp_pin.perception.rgbd_files import read_camera_info
+from comgrasp_pin.perception.frames.camera_model import OPENCV_MODELS
+from comgrasp_pin.perception.frames.rgbd_files import read_camera_info
 
 ROOT = Path(__file__).resolve().parents[1]
 ROS_FILES = ROOT.parent / "shared" / "realdata" / "rgbd" / "ros_calibration_files"

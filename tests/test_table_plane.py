@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from comgrasp_pin.camera import PinholeCamera
-from comgrasp_pin.perception import table_plane
-from comgrasp_pin.perception.table_plane import fit_table_plane
+from comgrasp_pin.perception.top_view import table_plane
+from comgrasp_pin.perception.top_view.table_plane import fit_table_plane
 
 CAMERA = PinholeCamera.from_fovy(640, 480, 50.0)
 HEIGHT = 0.8  # m

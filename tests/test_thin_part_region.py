@@ -16,10 +16,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from comgrasp_pin.errors import PerceptionError
-from comgrasp_pin.perception.standing import bare_table
-from comgrasp_pin.perception.table_plane import fit_table_plane
-from comgrasp_pin.perception.thin_parts import _reach, around_object
-from comgrasp_pin.perception.top_down import PICK_AREA
+from comgrasp_pin.perception.top_view.standing import bare_table
+from comgrasp_pin.perception.top_view.table_plane import fit_table_plane
+from comgrasp_pin.perception.top_view.thin_parts import _reach, around_object
+from comgrasp_pin.perception.top_view.top_down import PICK_AREA
 from comgrasp_pin.simulation.depth_noise import DepthNoise
 
 sys.path.append(str(Path(__file__).resolve().parents[1] / "benchmarks"))

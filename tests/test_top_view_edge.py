@@ -11,7 +11,7 @@ from _corruption import corruptions, table_scene, top_errors, top_inputs
 from comgrasp_pin.config import RegraspConfig
 from comgrasp_pin.errors import ObjectCutByBorderError
 from comgrasp_pin.perception import detect_rod_top_down
-from comgrasp_pin.perception.grasp_points import nearest_graspable, with_known_length
+from comgrasp_pin.perception.top_view.grasp_points import nearest_graspable, with_known_length
 from comgrasp_pin.simulation.objects import OBJECTS
 from comgrasp_pin.workcell import PICK_AREA, TABLE_Z
 

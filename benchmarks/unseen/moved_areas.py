@@ -12,8 +12,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from comgrasp_pin.perception.standing import EDGE_BAND
-from comgrasp_pin.perception.top_down import PICK_AREA
+from comgrasp_pin.perception.top_view.standing import EDGE_BAND
+from comgrasp_pin.perception.top_view.top_down import PICK_AREA
 
 from .scenes import UnseenScene
 

@@ -36,7 +36,7 @@ import numpy as np
 from comgrasp_pin.config import DepthNoiseConfig
 from comgrasp_pin.errors import ObjectNotFoundError, PerceptionError
 from comgrasp_pin.perception import detect_rod_top_down
-from comgrasp_pin.perception.table_plane import fit_table_plane
+from comgrasp_pin.perception.top_view.table_plane import fit_table_plane
 from comgrasp_pin.simulation.depth_noise import DepthNoise
 
 from .families import BLACK, BROWN, GREEN, _at, judge

@@ -1,6 +1,6 @@
 """``comgrasp views [--rgb] --depth --camera-info`` or ``--bag``: perception on a user's frames.
 
-Reads the files (``perception.rgbd_files``; the depth and camera info alone where no colour
+Reads the files (``perception.frames.rgbd_files``; the depth and camera info alone where no colour
 is given: both views find the object from the depth alone and draw on the depth),
 undistorts them where the camera info's lens
 model says so, measures the rod from above (``--view top``) or held in the jaws (``--view
@@ -156,7 +156,7 @@ def _pick_area(text: str) -> tuple[float, float, float, float]:
 
 def _from_files(args) -> tuple:
     """(RgbdFiles, what the JSON says of them, the outputs' name) of --rgb/--depth/--camera-info."""
-    from comgrasp_pin.perception.rgbd_files import read_rgbd
+    from comgrasp_pin.perception.frames.rgbd_files import read_rgbd
 
     tf_only = [f"--{k.replace('_', '-')}" for k in ("world_frame", "ee_frame")
                if getattr(args, k) is not None]  # fmt: skip
@@ -179,8 +179,8 @@ def _from_files(args) -> tuple:
 def _from_bag(args) -> tuple:
     """(RgbdFiles, what the JSON says of them, the outputs' name, the pose from /tf_static
     of the camera in a named frame) of --bag."""
-    from comgrasp_pin.perception.rgbd_bag import read_rgbd_bag
-    from comgrasp_pin.perception.static_tf import camera_pose
+    from comgrasp_pin.perception.frames.rgbd_bag import read_rgbd_bag
+    from comgrasp_pin.perception.frames.static_tf import camera_pose
 
     given = [f"--{k.replace('_', '-')}" for k in ("rgb", "depth", "camera_info")
              if getattr(args, k) is not None] + (["--bgr"] if args.bgr else [])  # fmt: skip
@@ -213,7 +213,7 @@ def _camera_json(files, color_order: str | None) -> dict:
 
 def _top(args, rgb, depth, camera, tf_pose) -> tuple[np.ndarray, dict]:
     from comgrasp_pin.perception import detect_rod_top_down, draw_top_view
-    from comgrasp_pin.perception.table_plane import fit_table_plane
+    from comgrasp_pin.perception.top_view.table_plane import fit_table_plane
 
     if args.T_world_cam is not None or args.world_frame is not None:
         frame = "world"
@@ -264,7 +264,7 @@ def run(args: argparse.Namespace) -> int:
     """``comgrasp views`` on the user's files: writes OUT/<depth>_<view>_view.png and .json."""
     import cv2
 
-    from comgrasp_pin.perception.camera_input import camera_frame
+    from comgrasp_pin.perception.frames.camera_input import camera_frame
 
     if args.bag is not None:
         files, source, name, tf_pose = _from_bag(args)

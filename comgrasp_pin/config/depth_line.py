@@ -15,7 +15,7 @@ class DepthLineErrorConfig:
     """The depth line's pose-to-pose error that its slices' scatter does not show (m).
 
     The depth line is the median ee-y of the handle's visible surface, slice by slice
-    (``perception.side_depth.surface_line``); its change between two views is taken from
+    (``perception.side_view.side_depth.surface_line``); its change between two views is taken from
     the 1 cm slices both views hold (``procedures.rod_motion.paired_depth_line``), so the
     handle's profile cancels. What is left: the share of its radius by which each slice's
     median lies in front of the axis (0.86-0.90, cos 30 deg for a half-cylinder seen square

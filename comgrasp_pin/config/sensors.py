@@ -144,7 +144,7 @@ class SensorConfig:
         watch_stride: the slip watch measures every stride-th pixel of each row and column
             (it needs the tilt only).
         side_frames: frames of the wrist camera averaged in time for a side view while the
-            arm holds still (``perception.depth_frames.average_depth_frames``, per pixel the
+            arm holds still (``perception.frames.depth_frames.average_depth_frames``, per pixel the
             mean of the valid values near their median, as a RealSense's temporal filter
             does; each simulated frame has its own noise, holes and flying pixels, the
             calibration error is the episode's). Used only for a camera with errors (a clean

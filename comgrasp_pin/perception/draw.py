@@ -11,8 +11,8 @@ import numpy as np
 
 from comgrasp_pin.errors import InvalidInputError
 from comgrasp_pin.geometry import tilt_from_level_deg
-from comgrasp_pin.perception.rod_detection import RodDetection
-from comgrasp_pin.perception.side_view import SideView
+from comgrasp_pin.perception.side_view.side_view import SideView
+from comgrasp_pin.perception.top_view.rod_detection import RodDetection
 
 OUTLINE, RECT, AXIS, POINT = (0, 255, 255), (255, 255, 0), (255, 80, 0), (255, 0, 255)
 ESTIMATE, TRUTH = (0, 140, 255), (0, 220, 0)

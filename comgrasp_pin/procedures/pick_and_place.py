@@ -15,7 +15,7 @@ from comgrasp_pin.config import EpisodeConfig
 from comgrasp_pin.errors import ObjectCutByBorderError, RodDroppedError
 from comgrasp_pin.motion.ik import solve_ik
 from comgrasp_pin.perception import RodDetection
-from comgrasp_pin.perception.grasp_points import (
+from comgrasp_pin.perception.top_view.grasp_points import (
     check_seen_whole,
     nearest_graspable,
     nearest_on_handle,

@@ -15,9 +15,9 @@ import numpy as np
 
 from comgrasp_pin.errors import ObjectNotFoundError, UntrustedImageError
 from comgrasp_pin.perception._points import blobs
-from comgrasp_pin.perception.flat_face import face_points, looks_flat, strip_line
-from comgrasp_pin.perception.held_pieces import rod_line
-from comgrasp_pin.perception.rod_axis import (
+from comgrasp_pin.perception.side_view.flat_face import face_points, looks_flat, strip_line
+from comgrasp_pin.perception.side_view.held_pieces import rod_line
+from comgrasp_pin.perception.side_view.rod_axis import (
     MAX_REFINE_SHIFT,
     MAX_REFINE_TURN_DEG,
     refine_axis,

@@ -13,7 +13,7 @@ import numpy as np
 
 from comgrasp_pin.errors import AmbiguousObjectError, ClutterError
 from comgrasp_pin.perception._points import opened_blobs
-from comgrasp_pin.perception.rod_flat import propped_ends
+from comgrasp_pin.perception.top_view.rod_flat import propped_ends
 
 SECOND_OBJECT = 0.05  # another blob of this share of the rod's pixels is another object
 MIN_OBJECT_PX = 40  # ... and of this many pixels at least

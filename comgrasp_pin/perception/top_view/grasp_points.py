@@ -12,7 +12,7 @@ import numpy as np
 
 from comgrasp_pin.errors import ObjectCutByBorderError, ObjectNotFoundError
 from comgrasp_pin.geometry import GraspPose
-from comgrasp_pin.perception.rod_detection import RodDetection
+from comgrasp_pin.perception.top_view.rod_detection import RodDetection
 
 
 def nearest_graspable(

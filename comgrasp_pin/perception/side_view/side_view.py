@@ -22,17 +22,17 @@ from comgrasp_pin import validate
 from comgrasp_pin.camera import PinholeCamera
 from comgrasp_pin.geometry import check_transform
 from comgrasp_pin.perception._points import check_images
-from comgrasp_pin.perception.camera_input import camera_frame
-from comgrasp_pin.perception.held_axis import RodPoints, rod_along_axis, rod_in_jaws
-from comgrasp_pin.perception.held_pieces import (
+from comgrasp_pin.perception.frames.camera_input import camera_frame
+from comgrasp_pin.perception.side_view.held_axis import RodPoints, rod_along_axis, rod_in_jaws
+from comgrasp_pin.perception.side_view.held_pieces import (
     OFF_AXIS_MARGIN,
     check_length,
     check_no_gap,
     check_width,
 )
-from comgrasp_pin.perception.held_region import held_candidates, robot_volume
-from comgrasp_pin.perception.rod_ends import centre_along, end_profile
-from comgrasp_pin.perception.side_depth import clean_side_depth, surface_line
+from comgrasp_pin.perception.side_view.held_region import held_candidates, robot_volume
+from comgrasp_pin.perception.side_view.rod_ends import centre_along, end_profile
+from comgrasp_pin.perception.side_view.side_depth import clean_side_depth, surface_line
 
 OFF_AXIS_PERCENTILE = 99.0  # SideView.off_axis: nearly the farthest point, robust to a stray
 

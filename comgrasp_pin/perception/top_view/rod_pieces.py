@@ -23,7 +23,7 @@ import numpy as np
 
 from comgrasp_pin.errors import AmbiguousObjectError
 from comgrasp_pin.perception._points import opened_blobs
-from comgrasp_pin.perception.rod_shape import MIN_OBJECT_PX, SECOND_OBJECT
+from comgrasp_pin.perception.top_view.rod_shape import MIN_OBJECT_PX, SECOND_OBJECT
 
 MAX_OFFSET = 0.015  # m: a piece's centroid this near the rod's axis lies on it ...
 MAX_GAP = 0.05  # ... and one this far at most beyond the rod's end (m) may be part of it

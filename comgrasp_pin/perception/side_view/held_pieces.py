@@ -40,7 +40,7 @@ import numpy as np
 from comgrasp_pin.camera import PinholeCamera
 from comgrasp_pin.errors import AmbiguousObjectError, UntrustedImageError
 from comgrasp_pin.perception._points import slice_percentiles
-from comgrasp_pin.perception.rod_axis import centre_line
+from comgrasp_pin.perception.side_view.rod_axis import centre_line
 
 OFF_AXIS_MIN_SHARE = 0.2  # smaller blobs are left as they were: the slice medians ignore them
 OFF_AXIS_MARGIN = 0.015  # m beyond the jaws' half gap (the widest, when it is not known)

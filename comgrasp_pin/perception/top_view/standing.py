@@ -19,10 +19,15 @@ from comgrasp_pin.perception._points import (
     noise_level,
     slice_medians,
 )
-from comgrasp_pin.perception.registration import check_registered
-from comgrasp_pin.perception.rod_pieces import Gap, check_not_broken, join_pieces
-from comgrasp_pin.perception.rod_shape import check_one_object, reaching_border
-from comgrasp_pin.perception.table_view import TableView, differs_in_colour, in_area, over_the_edge
+from comgrasp_pin.perception.top_view.registration import check_registered
+from comgrasp_pin.perception.top_view.rod_pieces import Gap, check_not_broken, join_pieces
+from comgrasp_pin.perception.top_view.rod_shape import check_one_object, reaching_border
+from comgrasp_pin.perception.top_view.table_view import (
+    TableView,
+    differs_in_colour,
+    in_area,
+    over_the_edge,
+)
 
 MIN_HEIGHT = 0.003  # a pixel counts as object if it stands this far above the table (m)
 MAX_HEIGHT = 0.15  # ... and no higher than this (the robot above the table is not the rod)

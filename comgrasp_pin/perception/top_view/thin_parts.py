@@ -19,8 +19,8 @@ import numpy as np
 
 from comgrasp_pin.errors import UntrustedImageError
 from comgrasp_pin.perception._points import noise_level
-from comgrasp_pin.perception.rod_shape import reaching_border
-from comgrasp_pin.perception.standing import MAX_HEIGHT, bare_table
+from comgrasp_pin.perception.top_view.rod_shape import reaching_border
+from comgrasp_pin.perception.top_view.standing import MAX_HEIGHT, bare_table
 
 GAP = 0.01  # rays are followed from this far beyond the outline (m): its fringe and smear
 STEP = 0.01  # a part is followed along a ray in windows this long (m) up to the first

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from comgrasp_pin.perception._points import median, slice_medians, slice_percentiles
-from comgrasp_pin.perception.rod_axis import slope_std
+from comgrasp_pin.perception.side_view.rod_axis import slope_std
 
 FLAT_WIDTH_SHARE = 0.6  # a handle seen less wide than this share of the jaws' gap is flat
 FACE_BAND = 0.0015  # the face's points lie within this of its plane (m) ...

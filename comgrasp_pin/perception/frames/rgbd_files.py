@@ -22,8 +22,8 @@ import yaml
 
 from comgrasp_pin import validate
 from comgrasp_pin.errors import CameraFileError, InvalidInputError
-from comgrasp_pin.perception.camera_input import COLOR_ORDERS
-from comgrasp_pin.perception.camera_model import CameraModel, camera_model
+from comgrasp_pin.perception.frames.camera_input import COLOR_ORDERS
+from comgrasp_pin.perception.frames.camera_model import CameraModel, camera_model
 
 MAX_INFO_BYTES = 1_000_000  # a camera info file is a few hundred bytes
 

@@ -16,7 +16,7 @@ import numpy as np
 
 from comgrasp_pin import validate
 from comgrasp_pin.errors import InvalidDepthError
-from comgrasp_pin.perception.camera_input import metric_depth
+from comgrasp_pin.perception.frames.camera_input import metric_depth
 
 AGREE_TOLERANCE = 0.005
 """A frame's depth this far (m) from the pixel's median over the frames is a flyer."""

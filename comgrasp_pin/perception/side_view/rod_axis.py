@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from comgrasp_pin.perception._points import fit_line, slice_medians
-from comgrasp_pin.perception.cylinder_fit import (  # noqa: F401 - the fit's constants
+from comgrasp_pin.perception.side_view.cylinder_fit import (  # noqa: F401 - the fit's constants
     FIT_DAMPING,
     FIT_ITERATIONS,
     FIT_OUTLIER_MARGIN,

@@ -31,15 +31,15 @@ from comgrasp_pin.errors import (
 )
 from comgrasp_pin.geometry import GraspPose
 from comgrasp_pin.perception._points import check_images, pixel_slopes
-from comgrasp_pin.perception.camera_input import camera_frame
-from comgrasp_pin.perception.end_heights import CLEANED_PX, check_ends_stand
-from comgrasp_pin.perception.grasp_points import (  # noqa: F401 (their home before)
+from comgrasp_pin.perception.frames.camera_input import camera_frame
+from comgrasp_pin.perception.top_view.end_heights import CLEANED_PX, check_ends_stand
+from comgrasp_pin.perception.top_view.grasp_points import (  # noqa: F401 (their home before)
     nearest_graspable,
     nearest_on_handle,
 )
-from comgrasp_pin.perception.rod_detection import RodDetection
-from comgrasp_pin.perception.rod_shape import check_ends_seen, check_one_rod
-from comgrasp_pin.perception.standing import (  # noqa: F401 (the thresholds' names here too)
+from comgrasp_pin.perception.top_view.rod_detection import RodDetection
+from comgrasp_pin.perception.top_view.rod_shape import check_ends_seen, check_one_rod
+from comgrasp_pin.perception.top_view.standing import (  # noqa: F401 (the thresholds' names here too)
     DETECT_SNR,
     EDGE_BAND,
     HEIGHT_SIGMAS,
@@ -50,14 +50,14 @@ from comgrasp_pin.perception.standing import (  # noqa: F401 (the thresholds' na
     segment,
     stands_at,
 )
-from comgrasp_pin.perception.table_view import (
+from comgrasp_pin.perception.top_view.table_view import (
     TableView,
     check_no_dip,
     cut_end_of,
     overhang,
     view_table,
 )
-from comgrasp_pin.perception.thin_parts import (
+from comgrasp_pin.perception.top_view.thin_parts import (
     around_object,
     check_no_hidden_part,
     check_no_thin_part,

@@ -18,7 +18,7 @@ import numpy as np
 from comgrasp_pin import validate
 from comgrasp_pin.camera import PinholeCamera
 from comgrasp_pin.errors import InvalidDepthError, InvalidInputError
-from comgrasp_pin.perception.camera_model import camera_model
+from comgrasp_pin.perception.frames.camera_model import camera_model
 
 COLOR_ORDERS = ("rgb", "bgr")
 

@@ -29,9 +29,9 @@ import numpy as np
 from comgrasp_pin import validate
 from comgrasp_pin.errors import CameraFileError, ComGraspError
 from comgrasp_pin.file_checks import bag_folder
-from comgrasp_pin.perception.camera_model import camera_model
-from comgrasp_pin.perception.rgbd_files import RgbdFiles, float_depth
-from comgrasp_pin.perception.static_tf import Transforms, read_static_tf
+from comgrasp_pin.perception.frames.camera_model import camera_model
+from comgrasp_pin.perception.frames.rgbd_files import RgbdFiles, float_depth
+from comgrasp_pin.perception.frames.static_tf import Transforms, read_static_tf
 
 IMAGE = "sensor_msgs/msg/Image"
 COMPRESSED = "sensor_msgs/msg/CompressedImage"
