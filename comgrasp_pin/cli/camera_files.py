@@ -67,13 +67,14 @@ def add_arguments(views: argparse.ArgumentParser) -> None:
         help="side view: the camera's pose in the ee frame (4x4, JSON or text)",
     )
     b = views.add_argument_group(
-        "or the frame as a ROS 2 bag recorded it (instead of --rgb, --depth, --camera-info)",
+        "or the frame as a ROS bag recorded it (instead of --rgb, --depth, --camera-info)",
         "sensor_msgs Image (depth 16UC1 in mm or 32FC1 in m, REP 118; colour rgb8, bgr8, "
         "...) or CompressedImage, and CameraInfo; topics found by type where the bag has one "
         "of each kind",
     )
     b.add_argument("--bag", type=Path, metavar="BAG",
-                   help="the bag's folder, .db3 or .mcap")  # fmt: skip
+                   help="a ROS 2 bag's folder, .db3 or .mcap, or a ROS 1 .bag file "
+                   "(rosbag record's, a RealSense Viewer recording's)")  # fmt: skip
     b.add_argument("--at", type=cli_args.float_at_least(0.0), default=0.0, metavar="S",
                    help="the depth image received nearest S s after the depth topic's first "
                    "(%(default)s); the colour nearest it by stamp, within 50 ms")  # fmt: skip

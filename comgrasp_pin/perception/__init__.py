@@ -1,6 +1,6 @@
 """Perception on RGBD images (OpenCV + NumPy only; no simulator): works on real cameras too.
 
-In folders by concept: ``frames`` (what a camera gives: files, ROS 2 bags, intrinsics,
+In folders by concept: ``frames`` (what a camera gives: files, ROS bags, intrinsics,
 the camera's pose), ``top_view`` (the rod on the table, reported as a ``RodDetection``),
 ``side_view`` (the rod held in the jaws, a ``SideView``); beside them the slip monitor
 (``slip``), the overlays (``draw``) and the steps both views share (``_points``). Every

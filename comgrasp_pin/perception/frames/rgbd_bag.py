@@ -1,21 +1,23 @@
-"""An RGBD frame from a ROS 2 bag, as camera drivers record it (REP 118).
+"""An RGBD frame from a ROS bag, as camera drivers record it (REP 118).
 
-Read with ``rosbags`` (the bag's folder, .db3 or .mcap):
+Read with ``rosbags``: a ROS 2 bag (its folder, .db3 or .mcap) or a ROS 1 ``.bag`` file
+(``rosbag record``'s, or a RealSense Viewer recording's):
 
 - the depth: ``sensor_msgs/msg/Image`` in ``16UC1`` (or ``mono16``), millimetres, 0 for
-  none, or ``32FC1``, metres (NaN, no return, and -Inf, too near, are lost pixels (0); +Inf,
-  nothing in range, is inf); or a ``CompressedImage`` of ``compressedDepth`` of 16UC1;
+  none (a RealSense recording's own ``Depth_Units`` where it holds them), or ``32FC1``,
+  metres (NaN, no return, and -Inf, too near, are lost pixels (0); +Inf, nothing in
+  range, is inf); or a ``CompressedImage`` of ``compressedDepth`` of 16UC1;
 - the colour, optional: ``Image`` (rgb8, bgr8, rgba8, bgra8, mono8) or ``CompressedImage``
   (JPEG, PNG), registered to the depth (the depth aligned to the colour camera: a
-  RealSense's ``aligned_depth_to_color``), both at the camera info's size;
-- the camera info: ``sensor_msgs/msg/CameraInfo`` (``k``, ``d``, ``distortion_model``).
+  RealSense's ``aligned_depth_to_color``), both at the camera info's size; a colour
+  topic whose own camera info differs from the depth's is not registered: refused;
+- the camera info: ``sensor_msgs/msg/CameraInfo`` (``k``, ``d``, ``distortion_model``;
+  ROS 1's ``K``, ``D``).
 
-Topics are named, or found by type: the depth is the image topic whose first message holds
-depth, the colour the other image topic, the camera info the depth topic's sibling
-``camera_info``, else the bag's only one; several of a kind, none named: listed, refused.
-The frame: the depth image received nearest ``at`` s after the depth topic's first, the
-colour nearest it by stamp (within MAX_SKEW), the camera info received nearest it, and the
-static transforms (``static_tf``) that give the camera's pose.
+Which topic is which: ``bag_topics``. The frame: the depth image received nearest ``at`` s
+after the depth topic's first, the colour nearest it by stamp (within MAX_SKEW), the
+camera info received nearest it, and the static transforms (``static_tf``) that give the
+camera's pose.
 """
 
 from __future__ import annotations
@@ -28,17 +30,16 @@ import numpy as np
 
 from comgrasp_pin import validate
 from comgrasp_pin.errors import CameraFileError, ComGraspError
-from comgrasp_pin.file_checks import bag_folder
+from comgrasp_pin.file_checks import bag_folder, regular_file
+from comgrasp_pin.perception.frames.bag_topics import BagTopics
 from comgrasp_pin.perception.frames.camera_model import camera_model
 from comgrasp_pin.perception.frames.rgbd_files import RgbdFiles, float_depth
 from comgrasp_pin.perception.frames.static_tf import Transforms, read_static_tf
 
-IMAGE = "sensor_msgs/msg/Image"
-COMPRESSED = "sensor_msgs/msg/CompressedImage"
-CAMERA_INFO = "sensor_msgs/msg/CameraInfo"
 MAX_SKEW = 0.05  # s: the colour image's stamp at most this far from the depth's
 REP118_MM = 0.001  # m per unit of a 16UC1 depth (REP 118)
 DEPTH = {"16UC1": "u2", "mono16": "u2", "32FC1": "f4"}  # encoding: its pixels' type
+ROS1_MAGIC = b"#ROSBAG V2.0\n"  # the first line of a ROS 1 bag file
 COLOUR = {"rgb8": 3, "bgr8": 3, "rgba8": 4, "bgra8": 4, "mono8": 1}  # encoding: channels
 _COMPRESSED_DEPTH_HEADER = 12  # bytes before the PNG (image_transport's ConfigHeader)
 
@@ -49,7 +50,8 @@ class BagFrame:
 
     Attributes:
         files: the frame (``RgbdFiles``): a 16UC1 depth in millimetres (``depth_scale``
-            0.001), a 32FC1 depth as float32 metres (``depth_scale`` 1).
+            0.001, or a RealSense recording's ``Depth_Units``), a 32FC1 depth as float32
+            metres (``depth_scale`` 1).
         depth_topic, rgb_topic, info_topic: the topics read (``rgb_topic`` None: no colour).
         time_s: the depth image's receive time, s after the depth topic's first.
         skew_s: the colour's header stamp less the depth's (s; 0 without colour).
@@ -91,13 +93,14 @@ def read_rgbd_bag(
     at = validate.number(at, "at (s)", low=0.0)
     from rosbags.highlevel import AnyReader
 
-    bag = bag_folder(path, CameraFileError)
+    bag = _bag(path)
     try:
         with AnyReader([bag]) as reader:
-            topics = _Topics(reader, bag)
+            topics = BagTopics(reader, bag)
             depth_conn = topics.depth(depth_topic)
             rgb_conn = topics.colour(rgb_topic) if colour else None
             info_conn = topics.info(info_topic, depth_conn)
+            units = topics.depth_units(depth_conn)
             times = _receive_times(reader, depth_conn)
             if at > (span := (times[-1] - times[0]) / 1e9) + 0.5:
                 raise CameraFileError(f"at = {at:g} s is past the depth topic "
@@ -109,12 +112,19 @@ def read_rgbd_bag(
                 rgb_msg, skew = _paired(reader, rgb_conn, t_depth, _stamp(depth_msg), bag)
                 rgb = _colour(rgb_msg, rgb_conn.topic)
             info = _received_nearest(reader, info_conn, t_depth)[1]
+            own = None if rgb_conn is None else topics.info_near(rgb_conn)
+            if own is not None and own.topic != info_conn.topic:
+                _check_registered(_received_nearest(reader, own, t_depth)[1], own.topic, info,
+                                  info_conn.topic)  # fmt: skip
             transforms = read_static_tf(reader)
     except CameraFileError:
         raise
     except Exception as exc:  # rosbags raises its own error types for broken bags
         raise CameraFileError(f"cannot read the bag {bag}: {type(exc).__name__}: {exc}") from None
     depth, scale = _depth(depth_msg, depth_conn.topic)
+    if units is not None and depth.dtype.kind == "u":
+        scale = validate.number(units, f"{depth_conn.topic}'s Depth_Units (m per unit)",
+                                low=0.0, low_open=True)  # fmt: skip
     if depth_scale is not None:
         scale = validate.number(depth_scale, "depth_scale (m per unit)", low=0.0, low_open=True)
     camera = _camera(info, info_conn.topic)
@@ -132,69 +142,37 @@ def read_rgbd_bag(
                     transforms)  # fmt: skip
 
 
-class _Topics:
-    """The bag's image and camera-info topics, named or found by type."""
-
-    def __init__(self, reader, bag: Path):
-        self.reader, self.bag = reader, bag
-        self.images = [c for c in reader.connections if c.msgtype in (IMAGE, COMPRESSED)]
-        self._holds_depth = {c.topic: _is_depth(self._first(c)) for c in self.images}
-
-    def _first(self, conn):
-        for c, _, raw in self.reader.messages(connections=[conn]):
-            return self.reader.deserialize(raw, c.msgtype)
-        return None
-
-    def _named(self, topic: str, types: tuple[str, ...]):
-        conns = [c for c in self.reader.connections if c.topic == topic]
-        if not conns:
-            raise CameraFileError(f"bag {self.bag} has no topic {topic!r}; {self._listing()}")
-        if conns[0].msgtype not in types:
-            raise CameraFileError(f"topic {topic!r} is {conns[0].msgtype}, not {types}")
-        return conns[0]
-
-    def _listing(self) -> str:
-        topics = {f"{c.topic} ({c.msgtype})" for c in self.reader.connections}
-        return f"its topics are {sorted(topics)}"
-
-    def _only(self, found: list, what: str, option: str):
-        if len(found) == 1:
-            return found[0]
-        names = sorted(c.topic for c in found)
-        raise CameraFileError(f"bag {self.bag} has {len(found)} {what} topics {names}: name one "
-                              f"({option})" if found else f"bag {self.bag} has no {what} topic; "
-                              f"{self._listing()}")  # fmt: skip
-
-    def depth(self, topic: str | None):
-        if topic is not None:
-            conn = self._named(topic, (IMAGE, COMPRESSED))
-            if not self._holds_depth[conn.topic]:
-                raise CameraFileError(f"topic {topic!r} holds no depth image (16UC1, 32FC1, "
-                                      "compressedDepth)")  # fmt: skip
-            return conn
-        found = [c for c in self.images if self._holds_depth[c.topic]]
-        return self._only(found, "depth image", "--depth-topic, depth_topic=")
-
-    def colour(self, topic: str | None):
-        if topic is not None:
-            return self._named(topic, (IMAGE, COMPRESSED))
-        found = [c for c in self.images if not self._holds_depth[c.topic]]
-        return None if not found else self._only(found, "colour image", "--rgb-topic, rgb_topic=")
-
-    def info(self, topic: str | None, depth):
-        if topic is not None:
-            return self._named(topic, (CAMERA_INFO,))
-        found = [c for c in self.reader.connections if c.msgtype == CAMERA_INFO]
-        sibling = depth.topic.rsplit("/", 1)[0] + "/camera_info"
-        beside = [c for c in found if c.topic == sibling]
-        return beside[0] if beside else self._only(found, "camera info",
-                                                   "--camera-info-topic, info_topic=")  # fmt: skip
+def _bag(path: str | Path) -> Path:
+    """The bag to read: a ROS 1 ``.bag`` file, or a ROS 2 bag's folder (``bag_folder``)."""
+    path = Path(path)
+    if path.suffix != ".bag":
+        return bag_folder(path, CameraFileError)
+    regular_file(path, "ROS 1 bag", 1 << 62, CameraFileError)
+    with path.open("rb") as f:
+        if f.read(len(ROS1_MAGIC)) != ROS1_MAGIC:
+            raise CameraFileError(f"{path} is not a ROS 1 bag (version 2.0): give a ROS 1 .bag "
+                                  "file, or a ROS 2 bag's folder, .db3 or .mcap")  # fmt: skip
+    return path
 
 
-def _is_depth(msg) -> bool:
-    if msg is None or hasattr(msg, "encoding"):  # (None: a topic without messages)
-        return msg is not None and msg.encoding in DEPTH
-    return "compresseddepth" in msg.format.lower()
+def _check_registered(own, own_topic: str, info, info_topic: str) -> None:
+    """Refuse a colour image whose own camera info ``own`` differs from the depth's."""
+    sizes = (own.width, own.height) == (info.width, info.height)
+    if not (sizes and np.allclose(_field(own, "k"), _field(info, "k"), rtol=1e-6, atol=1e-9)):
+        raise CameraFileError(
+            f"the colour image's camera ({own_topic}: {own.width} x {own.height} px, fx "
+            f"{_field(own, 'k')[0]:.1f}) is not the depth's ({info_topic}: {info.width} x "
+            f"{info.height} px, fx {_field(info, 'k')[0]:.1f}): the depth is not registered to "
+            "the colour. Record the depth aligned to the colour camera (a RealSense's "
+            "aligned_depth_to_color), name the topics (--rgb-topic, --camera-info-topic), or "
+            "measure from the depth alone (--no-rgb)"
+        )
+
+
+def _field(msg, name: str) -> list[float]:
+    """A CameraInfo's ``k`` or ``d`` (ROS 2), or ``K`` or ``D`` (ROS 1), as floats."""
+    values = getattr(msg, name) if hasattr(msg, name) else getattr(msg, name.upper())
+    return [float(v) for v in values]
 
 
 def _receive_times(reader, conn) -> list[int]:
@@ -292,8 +270,8 @@ def _camera(msg, topic: str):
     if max(msg.binning_x, msg.binning_y) > 1 or (roi.width and roi.height):
         raise CameraFileError(f"{topic}: a binned or cropped camera info (binning, roi) is not "
                               "read; record the full-size images")  # fmt: skip
-    fields = {"width": int(msg.width), "height": int(msg.height), "k": list(map(float, msg.k)),
-              "d": list(map(float, msg.d)), "distortion_model": msg.distortion_model}  # fmt: skip
+    fields = {"width": int(msg.width), "height": int(msg.height), "k": _field(msg, "k"),
+              "d": _field(msg, "d"), "distortion_model": msg.distortion_model}  # fmt: skip
     try:
         return camera_model(fields)
     except ComGraspError as exc:  # a zero focal length, a bad lens model: said as the bag's
