@@ -45,6 +45,7 @@ FILE_ATTRIBUTES = (
     ("skin", "file"), ("include", "file"), ("model", "file"),
 )  # fmt: skip
 """(element, attribute) naming a file: URDF ``<mesh filename>``; MJCF assets and includes."""
+ROS1_MAGIC = b"#ROSBAG V2.0\n"  # the first line of a ROS 1 bag file
 MJCF_DIRS = ("meshdir", "texturedir", "assetdir")  # <compiler> folders MJCF files resolve in
 
 
@@ -247,13 +248,15 @@ def first_line(path: str | Path, what: str, max_bytes: int, max_line_bytes: int,
         raise error(f"{what} {path} is not UTF-8 text (byte {exc.start}): {exc.reason}") from None
 
 
-def bag_folder(path: str | Path, error: type[ComGraspError] = InvalidInputError) -> Path:
-    """The folder of a ROS 2 bag (``path``, or its .db3/.mcap file's), checked for rosbags.
+def ros_bag(path: str | Path, error: type[ComGraspError] = InvalidInputError) -> Path:
+    """What rosbags opens: a ROS 1 ``.bag`` file, or a ROS 2 bag's folder (or its file's).
 
-    Checked: ``metadata.yaml`` a regular file of at most MAX_SETTINGS_BYTES, YAML; the
-    storage files it lists (``rosbags`` looks for them in the folder by name) regular files
-    (a FIFO would block the reader); the bag not compressed (decompressing writes a whole
-    file, of any size, to a temporary folder: decompress it first, ``ros2 bag decompress``).
+    A ROS 1 bag: a regular file that starts as one (its chunks, compressed or not, are read
+    one at a time). A ROS 2 bag: ``metadata.yaml`` a regular file of at most
+    MAX_SETTINGS_BYTES, YAML; the storage files it lists (``rosbags`` looks for them in the
+    folder by name) regular files (a FIFO would block the reader); the bag not compressed
+    (decompressing writes a whole file, of any size, to a temporary folder: decompress it
+    first, ``ros2 bag decompress``).
 
     Raises:
         error: what is wrong, and what is valid.
@@ -265,11 +268,16 @@ def bag_folder(path: str | Path, error: type[ComGraspError] = InvalidInputError)
         raise error(f"bag not found: {path}") from None
     except (OSError, ValueError) as exc:
         raise error(f"cannot open the bag {path}: {exc}") from None
+    if stat.S_ISREG(info.st_mode) and path.suffix == ".bag":
+        if _read_start(path, "ROS 1 bag", 1 << 62, error, 12, line=True)[1] != ROS1_MAGIC:
+            raise error(f"{path} is not a ROS 1 bag (version 2.0): give a ROS 1 .bag file, or "
+                        "a ROS 2 bag's folder, .db3 or .mcap")  # fmt: skip
+        return path
     if stat.S_ISREG(info.st_mode) and path.suffix in (".db3", ".mcap"):
         path = path.parent
     elif not stat.S_ISDIR(info.st_mode):
-        raise error(f"bag {path} is {_kind(info.st_mode)}: give a ROS 2 bag's folder, or its "
-                    ".db3 or .mcap file")  # fmt: skip
+        raise error(f"bag {path} is {_kind(info.st_mode)}: give a ROS 2 bag's folder, its "
+                    ".db3 or .mcap file, or a ROS 1 .bag file")  # fmt: skip
     from ruamel.yaml import YAML
     from ruamel.yaml.error import YAMLError
 

@@ -146,3 +146,42 @@ def test_a_file_named_bag_that_is_not_one_is_refused(tmp_path, capsys):
     assert "not a ROS 1 bag" in capsys.readouterr().err
     with pytest.raises(CameraFileError, match="not found"):
         read_rgbd_bag(tmp_path / "missing.bag")
+
+
+def _to_ros1(ros2_bag, dst, compress: str | None = None):
+    """``ros2_bag`` converted to a ROS 1 bag by rosbags' own converter (rosbags-convert)."""
+    from rosbags.convert import convert
+
+    noetic = get_typestore(Stores.ROS1_NOETIC)
+    convert([ros2_bag], dst, "", 2, compress, "", noetic, None, [], [], [], [])
+    return dst
+
+
+@pytest.mark.parametrize("compress", [None, "bz2"])
+def test_a_robots_ros1_bag_gives_the_same_log_as_its_ros2_bag(tmp_path, compress):
+    """Joint states and a wrist sensor's wrenches, written as a ROS 2 bag by the package and
+    converted to ROS 1 (chunks plain or bz2-compressed): read back the same, sample by sample."""
+    from _logs import rnea_torques, session
+    from _payload import panda
+
+    from comgrasp_pin.robot_io import read_log, write_bag
+    from comgrasp_pin.robot_io.log_files import WrenchLog, write_wrench_bag
+    from comgrasp_pin.robot_io.log_files.wrench_files import read_wrench_bag
+
+    robot = panda()
+    Q = np.array([[0.0, -0.3, 0.0, -2.2, 0.0, 2.0, 0.8], [0.5, -0.6, 0.3, -1.8, 1.2, 1.2, -0.6]])
+    log = session(Q, rnea_torques(robot, 0.8, np.array([0.02, -0.01, 0.05])),
+                  robot.joint_names)[0]  # fmt: skip
+    ros2 = write_bag(log, tmp_path / "joints")
+    ros1 = _to_ros1(ros2, tmp_path / "joints.bag", compress)
+    for back in (read_log(ros1, robot.joint_names), read_log(ros2, robot.joint_names)):
+        np.testing.assert_array_equal(back.position, log.position)
+        np.testing.assert_array_equal(back.effort, log.effort)
+        np.testing.assert_allclose(back.time, log.time, atol=1e-6)
+    wrench = np.random.default_rng(1).normal(0, 5, (len(log.time), 6))
+    wlog = WrenchLog(log.time, tuple(robot.joint_names), log.position, wrench, "ft_sensor")
+    ros1 = _to_ros1(write_wrench_bag(tmp_path / "ft", wlog), tmp_path / "ft.bag", compress)
+    back = read_wrench_bag(ros1, robot.joint_names)
+    assert back.sensor_frame == "ft_sensor"
+    np.testing.assert_array_equal(back.wrench, wrench)
+    np.testing.assert_array_equal(back.position, log.position)

@@ -143,7 +143,7 @@ def add_arm_subcommands(sub: argparse._SubParsersAction) -> None:
     _common(ident, ee_required=False)
     run = ident.add_mutually_exclusive_group(required=True)  # the empty arm's run
     run.add_argument("--csv", default=None, help="the empty arm's run: CSV or UR recording")
-    run.add_argument("--bag", default=None, help="the empty arm's run: ROS 2 bag")
+    run.add_argument("--bag", default=None, help="the empty arm's run: ROS 2 bag or ROS 1 .bag")
     ident.add_argument("--topic", default=DEFAULT_TOPIC, help="JointState topic of --bag")
     ident.add_argument("--window", default=None, help="T0:T1, the part of the log to use (s)")
     ident.add_argument("--out", default="ARM.json", help="the arm model JSON")

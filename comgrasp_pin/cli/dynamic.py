@@ -25,8 +25,9 @@ def add_dynamic_args(est: argparse.ArgumentParser) -> None:
                    "and velocities where logged)")  # fmt: skip
     empty = g.add_mutually_exclusive_group()  # the empty run: one of them, or none
     empty.add_argument("--empty-bag", default=None,
-                   help="the same motion with the empty arm (ROS 2 bag); subtracted sample "
-                   "by sample. Without it the URDF's model stands for the arm")  # fmt: skip
+                   help="the same motion with the empty arm (ROS 2 bag or ROS 1 .bag); "
+                   "subtracted sample by sample. Without it the URDF's model stands for the "
+                   "arm")  # fmt: skip
     empty.add_argument("--empty-csv", default=None, help="the empty-arm motion as a CSV")
     g.add_argument("--window", default=None, help="T0:T1, the motion's part of the log (s)")
     g.add_argument("--empty-window", default=None, help="T0:T1 of the empty-arm log (s)")

@@ -178,7 +178,7 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     )
     add_robot_args(est)
     log = est.add_mutually_exclusive_group(required=True)  # the log: one of them
-    log.add_argument("--bag", default=None, help="ROS 2 bag (folder, .db3 or .mcap)")
+    log.add_argument("--bag", default=None, help="ROS 2 bag (folder, .db3 or .mcap) or ROS 1 .bag")
     log.add_argument("--csv", default=None,
                      help="CSV with time, J.position, J.effort columns, or a UR recording as "
                      "RTDE's record.py or ur_rtde writes it (timestamp, actual_q_i, "

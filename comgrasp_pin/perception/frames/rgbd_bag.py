@@ -30,7 +30,7 @@ import numpy as np
 
 from comgrasp_pin import validate
 from comgrasp_pin.errors import CameraFileError, ComGraspError
-from comgrasp_pin.file_checks import bag_folder, regular_file
+from comgrasp_pin.file_checks import ros_bag
 from comgrasp_pin.perception.frames.bag_topics import BagTopics
 from comgrasp_pin.perception.frames.camera_model import camera_model
 from comgrasp_pin.perception.frames.rgbd_files import RgbdFiles, float_depth
@@ -39,7 +39,6 @@ from comgrasp_pin.perception.frames.static_tf import Transforms, read_static_tf
 MAX_SKEW = 0.05  # s: the colour image's stamp at most this far from the depth's
 REP118_MM = 0.001  # m per unit of a 16UC1 depth (REP 118)
 DEPTH = {"16UC1": "u2", "mono16": "u2", "32FC1": "f4"}  # encoding: its pixels' type
-ROS1_MAGIC = b"#ROSBAG V2.0\n"  # the first line of a ROS 1 bag file
 COLOUR = {"rgb8": 3, "bgr8": 3, "rgba8": 4, "bgra8": 4, "mono8": 1}  # encoding: channels
 _COMPRESSED_DEPTH_HEADER = 12  # bytes before the PNG (image_transport's ConfigHeader)
 
@@ -93,7 +92,7 @@ def read_rgbd_bag(
     at = validate.number(at, "at (s)", low=0.0)
     from rosbags.highlevel import AnyReader
 
-    bag = _bag(path)
+    bag = ros_bag(path, CameraFileError)
     try:
         with AnyReader([bag]) as reader:
             topics = BagTopics(reader, bag)
@@ -140,19 +139,6 @@ def read_rgbd_bag(
                     None if rgb_conn is None else rgb_conn.topic, info_conn.topic,
                     (t_depth - times[0]) / 1e9, skew, depth_msg.header.frame_id,
                     transforms)  # fmt: skip
-
-
-def _bag(path: str | Path) -> Path:
-    """The bag to read: a ROS 1 ``.bag`` file, or a ROS 2 bag's folder (``bag_folder``)."""
-    path = Path(path)
-    if path.suffix != ".bag":
-        return bag_folder(path, CameraFileError)
-    regular_file(path, "ROS 1 bag", 1 << 62, CameraFileError)
-    with path.open("rb") as f:
-        if f.read(len(ROS1_MAGIC)) != ROS1_MAGIC:
-            raise CameraFileError(f"{path} is not a ROS 1 bag (version 2.0): give a ROS 1 .bag "
-                                  "file, or a ROS 2 bag's folder, .db3 or .mcap")  # fmt: skip
-    return path
 
 
 def _check_registered(own, own_topic: str, info, info_topic: str) -> None:

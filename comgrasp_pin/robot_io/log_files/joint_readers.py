@@ -47,7 +47,7 @@ def read_log(
     windows: list[tuple[float, float]] | None = None,
     gains: Gains | None = None,
 ) -> JointLog:
-    """A bag (a folder, or a ``.db3`` / ``.mcap`` file) or a ``.csv`` file, by its name.
+    """A bag (a ROS 2 folder, ``.db3`` or ``.mcap``; a ROS 1 ``.bag``) or a ``.csv``, by its name.
 
     ``gains``: the drive gains that turn the log's motor currents into joint torques (see
     ``read_csv`` and ``read_bag``), or None where it logs torques.
@@ -65,7 +65,7 @@ def read_bag(
     windows: list[tuple[float, float]] | None = None,
     gains: Gains | None = None,
 ) -> JointLog:
-    """Read the ``joint_names`` columns of a ROS 2 bag's JointState topic.
+    """Read the ``joint_names`` columns of a ROS 2 or ROS 1 bag's JointState topic.
 
     ``windows`` ((t0, t1), s from the first message): read only the messages within a second
     of them (and the last, so the log's length stays known); deserializing every message of
@@ -74,7 +74,7 @@ def read_bag(
     them (``apply_gains``); None: the efforts are the joint torques.
 
     Raises:
-        LogError: the bag cannot be opened or fails ``file_checks.bag_folder`` (a FIFO, a
+        LogError: the bag cannot be opened or fails ``file_checks.ros_bag`` (a FIFO, a
             compressed bag), has no such topic or type, no message holds all
             the joints (the missing ones are named), the messages carry no efforts, or a
             value that is NaN, inf or past any sensor's range (``log_values``: its message's
@@ -83,7 +83,7 @@ def read_bag(
     from rosbags.highlevel import AnyReader
 
     path = Path(path)
-    bag = file_checks.bag_folder(path, LogError)  # a FIFO, a compressed bag: refused
+    bag = file_checks.ros_bag(path, LogError)  # a FIFO, a compressed bag: refused
     names = tuple(joint_names)
     try:
         with AnyReader([bag]) as reader:

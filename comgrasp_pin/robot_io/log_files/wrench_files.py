@@ -67,7 +67,7 @@ def read_wrench_bag(
     """Read a bag's WrenchStamped topic with the arm's joint positions at its times.
 
     Args:
-        path: the bag's folder, or its .db3 / .mcap file.
+        path: the bag's folder, its .db3 / .mcap file, or a ROS 1 .bag file.
         joint_names: the arm's joints (JointState names).
         wrench_topic: the WrenchStamped topic; None: the bag's only one.
         joint_topic: the JointState topic.
@@ -76,7 +76,7 @@ def read_wrench_bag(
             must be the same.
 
     Raises:
-        LogError: the bag cannot be opened or fails ``file_checks.bag_folder``; no
+        LogError: the bag cannot be opened or fails ``file_checks.ros_bag``; no
             WrenchStamped topic, or several and none named (listed); no such topic or
             another type; no JointState message holds all the joints; the messages name
             different frames, an empty one (and ``sensor_frame`` is None), or another one
@@ -86,7 +86,7 @@ def read_wrench_bag(
     """
     from rosbags.highlevel import AnyReader
 
-    bag = file_checks.bag_folder(path, LogError)
+    bag = file_checks.ros_bag(path, LogError)
     names = tuple(joint_names)
     try:
         with AnyReader([bag]) as reader:
