@@ -9,6 +9,8 @@ read is held to is the arrays written and the simulator's rod.
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 from _corruption import table_scene, top_inputs
@@ -146,6 +148,10 @@ def test_a_file_named_bag_that_is_not_one_is_refused(tmp_path, capsys):
     assert "not a ROS 1 bag" in capsys.readouterr().err
     with pytest.raises(CameraFileError, match="not found"):
         read_rgbd_bag(tmp_path / "missing.bag")
+    fifo = tmp_path / "pipe.bag"  # would block a reader: refused before it is opened
+    os.mkfifo(fifo)
+    with pytest.raises(CameraFileError, match="FIFO"):
+        read_rgbd_bag(fifo)
 
 
 def _to_ros1(ros2_bag, dst, compress: str | None = None):
