@@ -16,7 +16,7 @@ from comgrasp_pin.errors import CameraFileError
 IMAGE = "sensor_msgs/msg/Image"
 COMPRESSED = "sensor_msgs/msg/CompressedImage"
 CAMERA_INFO = "sensor_msgs/msg/CameraInfo"
-DEPTH_ENCODINGS = ("16UC1", "mono16", "32FC1")
+DEPTH = {"16UC1": "u2", "mono16": "u2", "32FC1": "f4"}  # a depth image's encoding: its pixels
 DEPTH_UNITS = "option/Depth_Units/value"  # a RealSense recording's depth scale (m per unit)
 
 
@@ -123,5 +123,5 @@ def _nearest(found: list, topic: str):
 
 def _is_depth(msg) -> bool:
     if msg is None or hasattr(msg, "encoding"):  # (None: a topic without messages)
-        return msg is not None and msg.encoding in DEPTH_ENCODINGS
+        return msg is not None and msg.encoding in DEPTH
     return "compresseddepth" in msg.format.lower()

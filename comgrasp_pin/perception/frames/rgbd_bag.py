@@ -31,14 +31,13 @@ import numpy as np
 from comgrasp_pin import validate
 from comgrasp_pin.errors import CameraFileError, ComGraspError
 from comgrasp_pin.file_checks import ros_bag
-from comgrasp_pin.perception.frames.bag_topics import BagTopics
+from comgrasp_pin.perception.frames.bag_topics import DEPTH, BagTopics
 from comgrasp_pin.perception.frames.camera_model import camera_model
 from comgrasp_pin.perception.frames.rgbd_files import RgbdFiles, float_depth
 from comgrasp_pin.perception.frames.static_tf import Transforms, read_static_tf
 
 MAX_SKEW = 0.05  # s: the colour image's stamp at most this far from the depth's
 REP118_MM = 0.001  # m per unit of a 16UC1 depth (REP 118)
-DEPTH = {"16UC1": "u2", "mono16": "u2", "32FC1": "f4"}  # encoding: its pixels' type
 COLOUR = {"rgb8": 3, "bgr8": 3, "rgba8": 4, "bgra8": 4, "mono8": 1}  # encoding: channels
 _COMPRESSED_DEPTH_HEADER = 12  # bytes before the PNG (image_transport's ConfigHeader)
 
