@@ -39,7 +39,7 @@ def test_the_bias_bound_is_pi_over_4_r_over_the_camera_distance():
 
 @pytest.fixture
 def no_cylinder_fits(monkeypatch):
-    monkeypatch.setattr(held_axis, "refine_axis", lambda points, d, p, r, noise: (d, p))
+    monkeypatch.setattr(held_axis, "refine_axis", lambda points, d, p, r, noise, quantum: (d, p))
 
 
 def _views(ur5, name, seeds):

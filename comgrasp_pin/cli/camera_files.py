@@ -212,7 +212,7 @@ def _camera_json(files, color_order: str | None) -> dict:
             "color_order_in_file": color_order}  # fmt: skip
 
 
-def _top(args, rgb, depth, camera, tf_pose) -> tuple[np.ndarray, dict]:
+def _top(args, files, rgb, depth, camera, tf_pose) -> tuple[np.ndarray, dict]:
     from comgrasp_pin.perception import detect_rod_top_down, draw_top_view
     from comgrasp_pin.perception.top_view.table_plane import fit_table_plane
 
@@ -240,7 +240,7 @@ def _top(args, rgb, depth, camera, tf_pose) -> tuple[np.ndarray, dict]:
     return draw_top_view(rgb, det, det.axis_px.mean(axis=0), depth=depth), measured
 
 
-def _side(args, rgb, depth, camera, tf_pose) -> tuple[np.ndarray, dict]:
+def _side(args, files, rgb, depth, camera, tf_pose) -> tuple[np.ndarray, dict]:
     from comgrasp_pin.perception import draw_side_view, observe_held_rod
 
     if args.T_ee_cam is not None:
@@ -251,7 +251,9 @@ def _side(args, rgb, depth, camera, tf_pose) -> tuple[np.ndarray, dict]:
         raise InvalidInputError("--view side needs --T-ee-cam FILE (or, with --bag, "
                                 "--ee-frame): the camera's pose in the ee frame (the TCP "
                                 "between the jaws)")  # fmt: skip
-    view = observe_held_rod(rgb, depth, camera, T_ee_cam)
+    # the frame as read: an integer depth's rounding is an error the side view allows for
+    view = observe_held_rod(files.rgb, files.depth, files.camera, T_ee_cam,
+                            depth_scale=files.depth_scale)  # fmt: skip
     measured = {
         "view": "side", "frame": "ee", "T_ee_cam": T_ee_cam.tolist(),
         "T_ee_obj": view.T_ee_obj.tolist(), "tilt_rad": view.theta,
@@ -273,7 +275,8 @@ def run(args: argparse.Namespace) -> int:
         files, source, name = _from_files(args)
         tf_pose = None
     rgb, depth, camera = camera_frame(files.rgb, files.depth, files.camera, files.depth_scale)
-    image, measured = (_top if args.view == "top" else _side)(args, rgb, depth, camera, tf_pose)
+    view = _top if args.view == "top" else _side
+    image, measured = view(args, files, rgb, depth, camera, tf_pose)
     measured.update(source)
     in_file = (
         ("bgr" if args.bgr else "rgb") if args.rgb is not None else None

@@ -64,6 +64,7 @@ def rod_in_jaws(
     noise: float,
     strict: bool,
     camera_ee: np.ndarray,
+    quantum: float = 0.0,
 ) -> tuple:
     """The held rod in the ``candidate`` pixels between the jaws, and its axis.
 
@@ -82,7 +83,14 @@ def rod_in_jaws(
     points = p[mask]
     _check_held(points, x_axis, offset_xz)  # before judging the image: is anything held?
     x_axis, offset_xz, tilt_std = _axis_in_jaws(
-        points, handle, (x_axis, offset_xz, tilt_std), handle_radius, noise, strict, camera_ee
+        points,
+        handle,
+        (x_axis, offset_xz, tilt_std),
+        handle_radius,
+        noise,
+        strict,
+        camera_ee,
+        quantum,
     )
     return mask, handle, (x_axis, offset_xz), tilt_std
 
@@ -131,6 +139,7 @@ def _axis_in_jaws(
     noise: float,
     strict: bool,
     camera_ee: np.ndarray,
+    quantum: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray, float]:
     """The rod's axis in the x-z plane, from the slice line ``slice_line``.
 
@@ -157,15 +166,20 @@ def _axis_in_jaws(
             and np.linalg.norm(strip[1] - offset_xz) < MAX_REFINE_SHIFT
         ):
             return strip
-    refined = refine_axis(points[handle], x_axis, offset_xz, radius, noise)
+    refined = refine_axis(points[handle], x_axis, offset_xz, radius, noise, quantum)
     if strict and refined[0] is x_axis:  # refine_axis hands the slice line back as it was
         bias = slice_bias(radius, camera_ee, x_axis, offset_xz)
         if bias > np.radians(MAX_SLICE_BIAS_DEG):
+            why = (
+                f"may bias the tilt by about {np.degrees(bias):.1f} deg for a handle this "
+                f"thick (at most {MAX_SLICE_BIAS_DEG:g} deg is taken)"
+                if np.isfinite(bias)
+                else "bias the tilt by an amount that only the handle's radius bounds (give "
+                "handle_radius: half the jaws' opening)"
+            )
             raise UntrustedImageError(
                 "no cylinder fits the held handle's points in this image with holes or "
-                f"noise, and the slice centres alone may bias the tilt by about "
-                f"{np.degrees(bias):.1f} deg for a handle this thick (at most "
-                f"{MAX_SLICE_BIAS_DEG:g} deg is taken): a round handle, seen with fewer "
+                f"noise, and the slice centres alone {why}: a round handle, seen with fewer "
                 "holes or less noise, is needed"
             )
         return x_axis, offset_xz, float(np.hypot(tilt_std, bias))

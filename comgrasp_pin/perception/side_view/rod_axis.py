@@ -27,6 +27,7 @@ round handles' cylinders that misfit by 1.0-1.35 times the noise (obj4, obj5, 4-
 within 0.2 deg of the truth; at about 2 times, other parts are among the handle's points
 (obj2's head: 3 deg off). At 1.0 obj4 lost 3 of 50 grasps, obj5 2, to refused views;
 at 1.5, 1 and 1, with the same accuracy below 30 deg (paired: +0.03 +- 0.05 points)."""
+QUANTUM_STD = 1 / np.sqrt(12)  # a depth rounded to units of q: errors of std q/sqrt(12)
 MAX_REFINE_TURN_DEG = 8.0  # a cylinder this far from the slice line locked on a wrong side
 MAX_REFINE_SHIFT = 0.01  # the same, for its offset (m)
 RADIUS_GIVE = np.arange(0.25, 2.01, 0.25) * 1e-3  # the handle's radius above the fingers' (m)
@@ -143,6 +144,7 @@ def refine_axis(
     point: np.ndarray,
     radius: float | None,
     noise: float = 0.0,
+    quantum: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The slice line refined by a cylinder fitted to the handle, where it is round.
 
@@ -154,13 +156,16 @@ def refine_axis(
     radii up to ``RADIUS_GIVE`` larger are tried (a free radius is ill-posed from the points
     of one side) and the best fit is kept. The fit is trusted only near the slice line (it
     can lock on a wrong side) and where the points lie on it (a flat bar is no cylinder).
+    ``quantum``: the step of a depth given in integer units (m; ROS's 16UC1 millimetres):
+    its rounding, an error the image's noise does not show (a clean surface's steps),
+    widens the misfit allowed in quadrature, as MISFIT_NOISE times its std.
     """
     fits = [fit_cylinder(points, direction, point, radius)]
     if radius and fits[0][2] >= MAX_MISFIT:
         fits += fit_cylinders(points, direction, point, [radius + dr for dr in RADIUS_GIVE])
     x_fit, offset_fit, misfit = min(fits, key=lambda fit: fit[2])
     limit = max(MAX_MISFIT, MAX_MISFIT_PER_RADIUS * radius) if radius else MAX_MISFIT
-    limit = max(limit, MISFIT_NOISE * noise)
+    limit = float(np.hypot(max(limit, MISFIT_NOISE * noise), MISFIT_NOISE * QUANTUM_STD * quantum))
     if radius and misfit >= limit:  # the camera's pose may be off: the axis off y = 0
         radii = [radius + dr for dr in (0.0, *RADIUS_GIVE)]
         x_fit, offset_fit, misfit = min(

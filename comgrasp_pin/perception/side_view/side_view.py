@@ -158,13 +158,18 @@ def observe_held_rod(
     table_z, rod_length, centre_hint, handle_radius = _checked_numbers(
         table_z, rod_length, centre_hint, handle_radius
     )
+    try:  # rounded to units of depth_scale; what is no array, camera_frame refuses
+        integer = np.asarray(depth).dtype.kind in "ui"
+    except (TypeError, ValueError):
+        integer = False
     colour, depth, camera = camera_frame(rgb, depth, camera, depth_scale, color_order)
     rgb = colour() if callable(colour) else colour
     depth, noise, cleaned, measured = clean_side_depth(check_images(rgb, depth, camera))
     excluded = robot_volume(exclude_capsules)
     p, candidate = held_candidates(depth, camera, T_ee_cam, T_world_ee, table_z, excluded)
+    quantum = float(depth_scale or 0.0) if integer else 0.0
     mask, handle, (x_axis, offset_xz), tilt_std = rod_in_jaws(
-        p, candidate, handle_radius, noise, cleaned and not tilt_only, T_ee_cam[:3, 3]
+        p, candidate, handle_radius, noise, cleaned and not tilt_only, T_ee_cam[:3, 3], quantum
     )
     frame = _Frame(depth, camera, p, candidate, mask, np.linalg.inv(T_ee_cam), excluded,
                    measured)  # fmt: skip
