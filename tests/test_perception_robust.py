@@ -232,3 +232,25 @@ def test_a_slip_watch_reads_the_tilt_where_a_measurement_is_refused(side_results
     watched = [r for r in side_results if r[4] is not None]
     assert watched, "no frame was refused as untrusted: nothing to test"
     assert all(r[4] < 3.0 for r in watched), watched
+
+
+@pytest.mark.parametrize("lost", [0.3, 0.7, 0.9])
+def test_a_rod_whose_depth_the_camera_mostly_lost_is_measured_or_refused(lost):
+    """A dark or shiny rod in an active stereo camera: most of its pixels come back 0 (lost)
+    in a noisy frame, and the cleaning fills them from their neighbours. The rod's size in
+    pixels comes from what was filled, not from the lost zeros (which crashed the top view
+    with an OverflowError from 55 % lost): measured within the realistic bounds, or refused."""
+    from comgrasp_pin.config import DepthNoiseConfig
+    from comgrasp_pin.simulation.depth_noise import DepthNoise
+
+    sim, rig, truths = table_scene([("obj2", 0.6, -0.1, 0.4)])
+    depth, camera, T, _ = top_inputs(sim, rig)
+    rig.close()
+    noisy = DepthNoise(DepthNoiseConfig(), 1).apply(depth)
+    rod = depth < np.median(depth) - 0.005  # the render's rod, 5 mm above the table and up
+    noisy[rod & (np.random.default_rng(0).random(depth.shape) < lost)] = 0.0
+    found = _outcome(detect_rod_top_down, None, noisy, camera, T, (0.3, 0.8, -0.35, 0.35))
+    if not isinstance(found, PerceptionError):
+        centre, yaw_deg = top_errors(found, truths[0], T, np.eye(4))
+        assert centre < REALISTIC_TOP_CENTRE_BOUND and yaw_deg < TOP_YAW_BOUND_DEG
+        assert abs(found.length - OBJECTS["obj2"].length) < 0.01

@@ -2,14 +2,13 @@
 
 The result is a ``RodDetection`` (``rod_detection``). Segmentation uses depth first: the rod
 is what stands above the table plane inside the pick area, whatever its colour and whatever
-shadows fall on it. A real camera's depth (noise,
-holes, flying pixels: ``view.cleaned``) cannot tell a rod 1 cm thick from the table at its
-ends; there, given the colour image, the rod is what differs from the table in colour
-(``table_view.differs_in_colour``) and the depth measures its height and its points. As in
-the paper, the mask's smallest enclosing rectangle (OpenCV ``minAreaRect``) represents the
-rod; for metric accuracy the rod's direction and extent are then taken from
-the mask's pixels lifted to 3-D (perspective makes the 2-D rectangle's centre drift by
-millimetres towards the image edges).
+shadows fall on it. A real camera's depth (noise, holes, flying pixels: ``view.cleaned``)
+cannot tell a rod 1 cm thick from the table at its ends; there, given the colour image, the
+rod is what differs from the table in colour (``table_view.differs_in_colour``) and the
+depth measures its height and its points. As in the paper, the mask's smallest enclosing
+rectangle (OpenCV ``minAreaRect``) represents the rod; for metric accuracy its direction and
+extent are taken from the mask's pixels lifted to 3-D (perspective makes the 2-D
+rectangle's centre drift by millimetres towards the image edges).
 """
 
 from __future__ import annotations
@@ -149,7 +148,7 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
     if unmeasured.any():
         view = _on_the_rods_axis(view, mask, unmeasured, camera, T_world_cam)
     measured = ~unmeasured[mask]
-    pixel = float(np.median(depth[mask & np.isfinite(depth)])) / camera.fx  # at the rod (m)
+    pixel = _pixel_size(depth, mask, view, camera, T_world_cam)
     core, eroded_px = _core(view, mask) if view.cleaned else (mask, 0)
     p = view.points[core]
     centroid = p[:, :2].mean(axis=0)
@@ -213,6 +212,16 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
         too_low, table = low
         check_no_hidden_part(length, float(np.median(widths[:, 1])), too_low, table, 1.0 / pixel)
     return det
+
+
+def _pixel_size(depth, mask, view: TableView, camera, T_world_cam) -> float:
+    """A pixel's size at the rod (m): its median depth (lost pixels, 0, counted) over fx."""
+    z = float(np.median(depth[mask & np.isfinite(depth)]))
+    if not z > 0:  # the camera lost most of the rod (filled by the cleaning): its points
+        T_cam_world = np.linalg.inv(T_world_cam)
+        z_points = view.points[mask] @ T_cam_world[2, :3] + T_cam_world[2, 3]
+        z = float(np.median(z_points[np.isfinite(z_points)]))
+    return z / camera.fx
 
 
 def _check_thin_parts(view: TableView, standing, mask, pixel: float,
