@@ -84,6 +84,15 @@ def top_inputs(sim, rig):
             rig.T_world_cam(sim.data, TOP_CAMERA), rig.rgb(sim.data, TOP_CAMERA))  # fmt: skip
 
 
+def one_rod_frame(rod: tuple[str, float, float, float]):
+    """(depth (m), camera, T_world_cam, rgb, truth (x, y, yaw)) of one ``rod`` on the table,
+    rendered by the top camera."""
+    sim, rig, truths = table_scene([rod])
+    depth, camera, T, rgb = top_inputs(sim, rig)
+    rig.close()
+    return depth, camera, T, rgb, truths[0]
+
+
 def wrap_half_turn(angle: float) -> float:
     return (angle + np.pi / 2) % np.pi - np.pi / 2
 

@@ -330,21 +330,12 @@ def test_the_side_view_runs_on_the_depth_alone(tmp_path, capsys):
     truth, and draws on the depth. (Given only T_ee_cam, as here, the side view cannot tell
     the arm from what lies beyond the rod at most poses and refuses: the simulation passes
     the arm's capsules, which a file does not carry.)"""
-    from test_perception import _held_rod_scene
+    from test_perception import _wrist_frame
 
     from comgrasp_pin.geometry import tilt_from_level_deg
     from comgrasp_pin.perception import observe_held_rod
-    from comgrasp_pin.robot import RobotModel
-    from comgrasp_pin.simulation.eyes import side_camera_pose
-    from comgrasp_pin.simulation.world import SIDE_CAMERA
 
-    ur5 = RobotModel.ur5()
-    sim, rig, place = _held_rod_scene(ur5, "obj2")
-    T_ee_obj = place(10.0, 0.0)
-    _, T_ee_cam = side_camera_pose(ur5, sim.q)
-    camera = rig.intrinsics(SIDE_CAMERA)
-    depth = rig.depth(sim.data, SIDE_CAMERA)
-    rig.close()
+    T_ee_obj, T_ee_cam, camera, depth = _wrist_frame("obj2", 10.0)
     library = observe_held_rod(None, depth, camera, T_ee_cam)
     units = np.where(np.isfinite(depth), np.round(depth * 1e4), 0).astype(np.uint16)
     info = {**_calibration_yaml(camera), "depth_scale": 1e-4}

@@ -105,6 +105,22 @@ def _held_rod_scene(ur5, name):
     return sim, CameraRig(model), place
 
 
+def _wrist_frame(name="obj2", tilt_deg=10.0):
+    """(T_ee_obj, T_ee_cam, camera, depth): the wrist camera's render (m, float) of
+    ``OBJECTS[name]`` held at ``tilt_deg`` at the measurement pose, and the truth."""
+    from comgrasp_pin.robot import RobotModel
+    from comgrasp_pin.simulation.eyes import side_camera_pose
+    from comgrasp_pin.simulation.world import SIDE_CAMERA
+
+    ur5 = RobotModel.ur5()
+    sim, rig, place = _held_rod_scene(ur5, name)
+    T_ee_obj = place(tilt_deg, 0.0)
+    _, T_ee_cam = side_camera_pose(ur5, sim.q)
+    camera, depth = rig.intrinsics(SIDE_CAMERA), rig.depth(sim.data, SIDE_CAMERA)
+    rig.close()
+    return T_ee_obj, T_ee_cam, camera, depth
+
+
 def _side_view_errors(view, T_ee_obj, offset):
     """(tilt error (rad), axis error (m), grasp-position error (m)) against the truth."""
     R = T_ee_obj[:3, :3]

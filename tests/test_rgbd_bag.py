@@ -17,7 +17,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
-from _corruption import table_scene, top_inputs
+from _corruption import one_rod_frame
 from rosbags.rosbag2 import StoragePlugin, Writer
 from rosbags.typesys import Stores, get_typestore
 
@@ -37,10 +37,7 @@ STORE = get_typestore(Stores.ROS2_HUMBLE)
 @pytest.fixture(scope="module")
 def scene():
     """(depth (m), PinholeCamera, T_world_cam, rgb, truth (x, y, yaw))."""
-    sim, rig, truths = table_scene([ROD])
-    depth, camera, T, rgb = top_inputs(sim, rig)
-    rig.close()
-    return depth, camera, T, rgb, truths[0]
+    return one_rod_frame(ROD)
 
 
 def _header(ns: int, frame: str = "camera_color_optical_frame"):

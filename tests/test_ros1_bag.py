@@ -13,7 +13,7 @@ import os
 
 import numpy as np
 import pytest
-from _corruption import table_scene, top_inputs
+from _corruption import one_rod_frame
 from rosbags.rosbag1 import Writer
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
@@ -35,10 +35,7 @@ RS_COLOUR = "/device_0/sensor_1/Color_0"
 @pytest.fixture(scope="module")
 def scene():
     """(depth (m), PinholeCamera, T_world_cam, rgb, truth (x, y, yaw))."""
-    sim, rig, truths = table_scene([ROD])
-    depth, camera, T, rgb = top_inputs(sim, rig)
-    rig.close()
-    return depth, camera, T, rgb, truths[0]
+    return one_rod_frame(ROD)
 
 
 def _header(ns: int, frame: str = "camera_color_optical_frame"):
@@ -224,21 +221,12 @@ def test_a_wrist_cameras_ros1_bag_gives_the_side_view_with_its_pose_from_tf_stat
     import json
 
     import pinocchio as pin
-    from test_perception import _held_rod_scene
+    from test_perception import _wrist_frame
 
     from comgrasp_pin.geometry import tilt_from_level_deg
     from comgrasp_pin.perception import observe_held_rod
-    from comgrasp_pin.robot import RobotModel
-    from comgrasp_pin.simulation.eyes import side_camera_pose
-    from comgrasp_pin.simulation.world import SIDE_CAMERA
 
-    ur5 = RobotModel.ur5()
-    sim, rig, place = _held_rod_scene(ur5, "obj2")
-    T_ee_obj = place(10.0, 0.0)
-    _, T_ee_cam = side_camera_pose(ur5, sim.q)
-    camera = rig.intrinsics(SIDE_CAMERA)
-    depth = rig.depth(sim.data, SIDE_CAMERA)
-    rig.close()
+    T_ee_obj, T_ee_cam, camera, depth = _wrist_frame("obj2", 10.0)
     library = observe_held_rod(None, depth, camera, T_ee_cam)
     pin.seed(5)
     T_ee_link = pin.SE3.Random().homogeneous  # the mount: any pose; the chain gives T_ee_cam
