@@ -250,3 +250,25 @@ def test_a_wrist_cameras_ros1_bag_gives_the_side_view_with_its_pose_from_tf_stat
     assert abs(measured["tilt_from_level_deg"] - true_tilt) < 1.0
     assert abs(measured["tilt_from_level_deg"] - tilt_from_level_deg(library.theta)) < 0.2
     assert abs(measured["grasp_offset_m"] - library.grasp_offset) < 2e-3
+
+
+@pytest.mark.parametrize(
+    ("image", "infos", "chosen"),
+    [
+        ("/camera/aligned_depth_to_color/image_raw",  # ROS drivers: the sibling
+         ["/camera/aligned_depth_to_color/camera_info", "/camera/color/camera_info"],
+         "/camera/aligned_depth_to_color/camera_info"),
+        ("/device_0/sensor_0/Depth_0/image/data",  # a RealSense recording: beside it
+         [f"{RS}/info/camera_info", f"{RS_COLOUR}/info/camera_info"], f"{RS}/info/camera_info"),
+        ("/a/b/image", ["/a/x/camera_info", "/a/y/camera_info"], None),  # two as near: none
+        ("/a/b/image", ["/a/x/camera_info"], "/a/x/camera_info"),
+        ("/depth/image", ["/color/camera_info"], None),  # only the bag's root in common
+    ],
+)  # fmt: skip
+def test_the_camera_info_nearest_an_image_in_the_topics_tree(image, infos, chosen):
+    from types import SimpleNamespace
+
+    from comgrasp_pin.perception.frames.bag_topics import _nearest
+
+    found = _nearest([SimpleNamespace(topic=t) for t in infos], image)
+    assert (found.topic if found else None) == chosen

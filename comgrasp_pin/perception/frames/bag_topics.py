@@ -113,8 +113,10 @@ def _nearest(found: list, topic: str):
     sibling = [c for c in found if c.topic == "/".join([*folders, "camera_info"])]
     if sibling:
         return sibling[0]
-    for depth in range(len(folders), max(len(folders) - 2, 1), -1):
-        prefix = "/".join(folders[:depth]) + "/"
+    for up in (0, 1):  # under its parent, then under its parent's parent
+        prefix = "/".join(folders[: len(folders) - up]) + "/"
+        if prefix == "/":  # the whole bag: no nearer than any other
+            return None
         near = [c for c in found if c.topic.startswith(prefix)]
         if near:
             return near[0] if len(near) == 1 else None
