@@ -26,6 +26,7 @@ class BagTopics:
     def __init__(self, reader, bag: Path):
         self.reader, self.bag = reader, bag
         self.images = [c for c in reader.connections if c.msgtype in (IMAGE, COMPRESSED)]
+        self.infos = [c for c in reader.connections if c.msgtype == CAMERA_INFO]
         self._holds_depth = {c.topic: _is_depth(self.first(c)) for c in self.images}
 
     def first(self, conn):
@@ -76,14 +77,12 @@ class BagTopics:
         """The camera info of ``image``'s topic: ``topic``, or the nearest (see the module)."""
         if topic is not None:
             return self._named(topic, (CAMERA_INFO,))
-        found = [c for c in self.reader.connections if c.msgtype == CAMERA_INFO]
-        nearest = _nearest(found, image.topic)
-        return nearest or self._only(found, "camera info", "--camera-info-topic, info_topic=")
+        return self.info_near(image) or self._only(self.infos, "camera info",
+                                                   "--camera-info-topic, info_topic=")  # fmt: skip
 
     def info_near(self, image):
         """The camera info nearest ``image``'s topic (see the module), or None."""
-        found = [c for c in self.reader.connections if c.msgtype == CAMERA_INFO]
-        return _nearest(found, image.topic)
+        return _nearest(self.infos, image.topic)
 
     def depth_units(self, depth) -> float | None:
         """A RealSense recording's depth scale for the ``depth`` topic's sensor (m per unit).
