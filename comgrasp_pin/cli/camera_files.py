@@ -212,7 +212,7 @@ def _camera_json(files, color_order: str | None) -> dict:
             "color_order_in_file": color_order}  # fmt: skip
 
 
-def _top(args, files, rgb, depth, camera, tf_pose) -> tuple[np.ndarray, dict]:
+def _top(args, rgb, depth, camera, tf_pose) -> tuple[np.ndarray, dict]:
     from comgrasp_pin.perception import detect_rod_top_down, draw_top_view
     from comgrasp_pin.perception.top_view.table_plane import fit_table_plane
 
@@ -275,8 +275,10 @@ def run(args: argparse.Namespace) -> int:
         files, source, name = _from_files(args)
         tf_pose = None
     rgb, depth, camera = camera_frame(files.rgb, files.depth, files.camera, files.depth_scale)
-    view = _top if args.view == "top" else _side
-    image, measured = view(args, files, rgb, depth, camera, tf_pose)
+    if args.view == "top":
+        image, measured = _top(args, rgb, depth, camera, tf_pose)
+    else:  # the side view reads the frame as read too: an integer depth's steps
+        image, measured = _side(args, files, rgb, depth, camera, tf_pose)
     measured.update(source)
     in_file = (
         ("bgr" if args.bgr else "rgb") if args.rgb is not None else None
