@@ -250,15 +250,19 @@ def _profile_two_tops(p, centroid, direction, table_z, noise, measured) -> bool:
     rows = np.count_nonzero(np.isfinite(grid).any(axis=1))
     if rows < MIN_SPLIT_SLICES:
         return False
-    profile = np.nanmedian(grid[:, seen >= 0.5 * rows], axis=0)  # the bins most slices see
-    profile = profile[PROFILE_EDGE_BINS:-PROFILE_EDGE_BINS]  # (the outline: flying pixels)
+    kept = seen >= 0.5 * rows  # the bins most slices see
+    profile = np.nanmedian(grid[:, kept], axis=0)
+    edge = slice(PROFILE_EDGE_BINS, -PROFILE_EDGE_BINS)  # (the outline: flying pixels)
+    profile, counts = profile[edge], seen[kept][edge]
     if len(profile) < 3:
         return False
     left = np.maximum.accumulate(profile)
     right = np.maximum.accumulate(profile[::-1])[::-1]
     lower_top = np.minimum(left, right)
-    need = np.maximum(np.maximum(MIN_VALLEY, PROFILE_VALLEY_SHARE * lower_top),
-                      VALLEY_SIGMAS * noise / np.sqrt(rows))  # fmt: skip
+    need = np.maximum(
+        np.maximum(MIN_VALLEY, PROFILE_VALLEY_SHARE * lower_top),
+        VALLEY_SIGMAS * noise / np.sqrt(counts),
+    )  # fmt: skip (each bin's own)
     return bool(np.any((lower_top - profile)[1:-1] > need[1:-1]))
 
 

@@ -14,6 +14,8 @@ the image's edge) are never taken for a handle, and other objects are counted as
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import cv2
 import numpy as np
 
@@ -40,9 +42,32 @@ ROD_ASPECT = 3.0  # an object shorter than this many times its width is not a ro
 _KERNEL5 = np.ones((5, 5), np.uint8)
 
 
+@dataclass(frozen=True)
+class ThinPart:
+    """A thin part found going on from the object.
+
+    Along the ray at ``angle_deg`` (in the image from the object's centre, u to v),
+    ``mean`` (m) high on average over ``length`` (m) joined to it, where the table's noise
+    over the same stretch is ``noise`` (m).
+    """
+
+    angle_deg: float
+    mean: float
+    length: float
+    noise: float
+
+
 def check_no_thin_part(heights: np.ndarray, mask: np.ndarray, table: np.ndarray,
                        px_per_m: float) -> None:  # fmt: skip
-    """UntrustedImageError when a thin part lower than the threshold goes on from ``mask``.
+    """UntrustedImageError when a thin part goes on from ``mask`` (``find_thin_part``)."""
+    part = find_thin_part(heights, mask, table, px_per_m)
+    if part is not None:
+        refuse_thin_part(part)
+
+
+def find_thin_part(heights: np.ndarray, mask: np.ndarray, table: np.ndarray,
+                   px_per_m: float) -> ThinPart | None:  # fmt: skip
+    """The thin part lower than the threshold that goes on from ``mask``, or None.
 
     ``heights``: (H, W) heights above the table (m, NaN where none); ``mask``: (H, W) bool,
     the object found; ``table``: (H, W) bool, the pixels that see the empty table (where the
@@ -75,7 +100,7 @@ def check_no_thin_part(heights: np.ndarray, mask: np.ndarray, table: np.ndarray,
     stretches = TableStretches(heights, table)
     step_px, noise = _bare_window(stretches, step_px)
     if not np.isfinite(noise):
-        return
+        return None
     seen = seen > 0.5
     means = _window_means(h, seen, step_px)  # per ray, the window at each radius
     beyond = radius >= start[:, None]
@@ -95,11 +120,11 @@ def check_no_thin_part(heights: np.ndarray, mask: np.ndarray, table: np.ndarray,
             continue
         stretch_noise = stretches.noise(length_px)
         if np.isfinite(stretch_noise) and means[k] > SIGMAS * stretch_noise:
-            _refuse(k, float(means[k]), length, stretch_noise)
+            return ThinPart(360.0 * k / ANGLES, float(means[k]), length, stretch_noise)
     for k in np.argsort(extent_px)[::-1][: ANGLES // 8]:
         extent = extent_px[k] / px_per_m
         if extent < MIN_EXTENT:
-            return
+            return None
         if not joined[k].any():  # the ray's part is not seen (beyond the area, the robot)
             continue
         mean = float(h[k, joined[k]].mean())
@@ -107,7 +132,8 @@ def check_no_thin_part(heights: np.ndarray, mask: np.ndarray, table: np.ndarray,
             continue
         part_noise = stretches.noise(int(extent_px[k]))
         if np.isfinite(part_noise) and mean > JOINED_SIGMAS * part_noise:
-            _refuse(k, mean, extent, part_noise)
+            return ThinPart(360.0 * k / ANGLES, mean, extent, part_noise)
+    return None
 
 
 def _lengths_px(px_per_m: float) -> tuple[int, int, int]:
@@ -198,13 +224,15 @@ def robot_parts(height: np.ndarray, threshold: float, pixel: float) -> np.ndarra
     return cv2.dilate(robot.astype(np.uint8), kernel).astype(bool)
 
 
-def _refuse(ray: int, mean: float, length: float, noise: float) -> None:
+def refuse_thin_part(part: ThinPart, how: str = "") -> None:
+    """Raise UntrustedImageError for ``part``, whose extent is not known (``how``: why)."""
     raise UntrustedImageError(
         f"a thin part lower than the depth can tell pixel by pixel goes on from the object "
-        f"(at {360.0 * ray / ANGLES:.0f} deg in the image from its centre, u to v: "
-        f"{1e3 * mean:.1f} mm high on average over {1e2 * length:.0f} cm, joined to it; the "
-        f"table's noise over the same stretch {1e3 * noise:.2f} mm): a handle? Its extent is "
-        "not known from this depth; view it closer or with a less noisy camera"
+        f"(at {part.angle_deg:.0f} deg in the image from its centre, u to v: "
+        f"{1e3 * part.mean:.1f} mm high on average over {1e2 * part.length:.0f} cm, joined to "
+        f"it; the table's noise over the same stretch {1e3 * part.noise:.2f} mm): a handle? "
+        f"Its extent is not known from this depth{'; ' + how if how else ''}; view it closer "
+        "or with a less noisy camera"
     )
 
 

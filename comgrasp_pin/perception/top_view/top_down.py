@@ -36,6 +36,7 @@ from comgrasp_pin.perception.top_view.grasp_points import (  # noqa: F401 (their
     nearest_graspable,
     nearest_on_handle,
 )
+from comgrasp_pin.perception.top_view.joined_part import follow_thin_part, thin_part_around
 from comgrasp_pin.perception.top_view.rod_detection import RodDetection
 from comgrasp_pin.perception.top_view.rod_shape import check_ends_seen, check_one_rod
 from comgrasp_pin.perception.top_view.standing import (  # noqa: F401 (the thresholds' names here too)
@@ -56,12 +57,7 @@ from comgrasp_pin.perception.top_view.table_view import (
     overhang,
     view_table,
 )
-from comgrasp_pin.perception.top_view.thin_parts import (
-    around_object,
-    check_no_hidden_part,
-    check_no_thin_part,
-    robot_parts,
-)
+from comgrasp_pin.perception.top_view.thin_parts import check_no_hidden_part, refuse_thin_part
 
 PICK_AREA = (0.30, 0.80, -0.35, 0.35)  # x_min, x_max, y_min, y_max of the table (m, world)
 # In a cleaned image (``table_view``) the rod is measured without its 1 px fringe
@@ -137,14 +133,18 @@ def detect_rod_top_down(
 
 
 def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
-            colour_to_come: bool = False) -> RodDetection:  # fmt: skip
+            colour_to_come: bool = False, part=None) -> RodDetection:  # fmt: skip
     """``detect_rod_top_down`` in ``view``, with the colour's help when ``rgb`` is given.
 
     ``colour_to_come``: the depth is measured alone first, and a colour image is there to
     help if it fails: a rod lower than END_SNR noise stds is then left to the colour (its
-    ends), rather than measured from the depth down to DETECT_SNR.
+    ends), rather than measured from the depth down to DETECT_SNR. ``part``: (H, W) bool, a
+    thin part too low to stand that goes on from the object, followed to its end
+    (``joined_part``: the depth alone measures a tool whose handle no pixel shows).
     """
     mask, standing, unmeasured, cut, bump_px = segment(view, pick_area, rgb)
+    if part is not None:  # its pixels' height is not measured, as the colour's
+        mask, standing, unmeasured = mask | part, standing | part, unmeasured | part
     if unmeasured.any():
         view = _on_the_rods_axis(view, mask, unmeasured, camera, T_world_cam)
     measured = ~unmeasured[mask]
@@ -159,7 +159,12 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
     threshold = stands_at(view)
     check_ends_stand(view.points, mask, unmeasured, view.table_z, centroid, direction, threshold,
                      view.points_noise, CLEANED_PX * pixel if view.cleaned else 0.0)  # fmt: skip
-    low = _check_thin_parts(view, standing, mask, pixel, threshold) if view.cleaned else None
+    low = thin_part_around(view, standing, mask, pixel, threshold) if view.cleaned else None
+    if low is not None and low[2] is not None:  # a thin part: followed once, from depth alone
+        if rgb is not None or part is not None:
+            refuse_thin_part(low[2])
+        part = follow_thin_part(view, standing, mask, pixel, threshold, low[2])
+        return _detect(view, rgb, depth, camera, T_world_cam, pick_area, colour_to_come, part)
     along = (p[:, :2] - centroid) @ direction
     lo, hi = np.percentile(along, [0.02, 99.98])
     if view.cleaned:
@@ -172,17 +177,12 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
     least = END_SNR if colour_to_come else DETECT_SNR
     told = not colour_to_come and mask.sum() > bump_px  # larger than the noise's bumps grow
     if view.cleaned and rgb is None and handle_height < least * view.points_noise and not told:
+        bumps = (f" and covers {mask.sum()} px, no more than the noise's bumps reach "
+                 f"({bump_px:.0f} px)") if np.isfinite(bump_px) else ""  # fmt: skip
         raise (_LeftToColour if colour_to_come else ObjectNotFoundError)(
-            f"the rod stands {1e3 * handle_height:.0f} mm above the table, less than "
-            f"{least:g} times the filtered depth noise ({1e3 * view.points_noise:.1f} mm)"
-            + (
-                f" and covers {mask.sum()} px, no more than the noise's bumps reach "
-                f"({bump_px:.0f} px)"
-                if np.isfinite(bump_px)
-                else ""
-            )  # fmt: skip
-            + ": it cannot be told from the noise's own bumps; view it closer or with a less "
-            "noisy camera"
+            f"the rod stands {1e3 * handle_height:.0f} mm above the table, less than {least:g} "
+            f"times the filtered depth noise ({1e3 * view.points_noise:.1f} mm){bumps}: it "
+            "cannot be told from the noise's own bumps; view it closer or with a less noisy camera"
         )
     yaw = float(np.arctan2(direction[1], direction[0]))
     yaw = (yaw + np.pi / 2) % np.pi - np.pi / 2  # (-pi/2, pi/2]
@@ -209,7 +209,7 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
             seen=det,
         )
     if low is not None:  # a short object: a head whose handle the noise hides?
-        too_low, table = low
+        too_low, table, _ = low
         check_no_hidden_part(length, float(np.median(widths[:, 1])), too_low, table, 1.0 / pixel)
     return det
 
@@ -222,22 +222,6 @@ def _pixel_size(depth, mask, view: TableView, camera, T_world_cam) -> float:
         z_points = view.points[mask] @ T_cam_world[2, :3] + T_cam_world[2, 3]
         z = float(np.median(z_points[np.isfinite(z_points)]))
     return z / camera.fx
-
-
-def _check_thin_parts(view: TableView, standing, mask, pixel: float,
-                      threshold: float) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """``thin_parts.check_no_thin_part`` on what is too low to stand around the object.
-
-    What stands (above ``threshold``, m) is the object or another one; the robot's own parts
-    are left out (``robot_parts``); the heights' level and the table's noise come from the
-    bare table around the object (``around_object``), not from the pick area.
-    Returns (those heights, the table's pixels) for ``check_no_hidden_part``.
-    """
-    height = view.points[..., 2] - view.table_z
-    robot = robot_parts(height, threshold, pixel)
-    heights, table = around_object(height, mask, standing, threshold, robot, 1.0 / pixel)
-    check_no_thin_part(heights, mask, table, 1.0 / pixel)
-    return heights, table
 
 
 def _core(view: TableView, mask: np.ndarray) -> tuple[np.ndarray, int]:

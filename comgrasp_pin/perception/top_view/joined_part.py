@@ -1,0 +1,248 @@
+"""A thin part that goes on from the object, followed to its end: a tool's handle from depth.
+
+``thin_parts`` finds that a part too low for the height threshold goes on from the object:
+a mallet's or obj1's 1 cm handle in a structured-light camera's depth at 1.25 m, whose
+head alone stands. No pixel of the handle stands out of the noise, but its line does: the
+heights along it, one pixel wide, are a step from the handle's mean height down to the
+table's at its end. The line is the ray the check found, turned and shifted to where the
+part's mean is highest; its end is where that step fits the heights best (least squares,
+the heights beyond the end at the table's level). The fit says how well the end is known:
+every end whose fit is worse by less than END_CHI2 of the noise's variance could be it. A
+part whose end is not known within END_TOLERANCE, that runs into another object, the robot
+or the image's edge, or whose line shows no bare table beyond its end, is refused (as
+``thin_parts`` refuses it). Otherwise its pixels (a band as wide as its heights' profile
+across the line) join the object as pixels whose height the depth did not measure (as the
+colour's are), and the rod is measured whole. World frame, m; pixels as (u, v).
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import cv2
+import numpy as np
+
+from comgrasp_pin.perception._points import opened_blobs
+from comgrasp_pin.perception.top_view.rod_shape import MIN_OBJECT_PX, SECOND_OBJECT
+from comgrasp_pin.perception.top_view.standing import MAX_HEIGHT
+from comgrasp_pin.perception.top_view.thin_parts import (
+    GAP,
+    TableStretches,
+    ThinPart,
+    around_object,
+    find_thin_part,
+    refuse_thin_part,
+    robot_parts,
+)
+
+MAX_REACH = 0.6  # a part is followed this far from the object's centre (m)
+TURN_DEG, TURN_STEP_DEG = 3.0, 0.25  # the line: the ray turned by up to this (deg) ...
+SHIFT_PX = 2  # ... and shifted across by up to this (px), to the highest mean over ...
+FIT_LENGTH = 0.08  # ... this much of it beyond the object's fringe (m), then over the part
+END_CHI2 = 4.0  # the ends whose fit is worse by less than this many noise variances ...
+END_TOLERANCE = 0.03  # ... spread over more than this (m): the end is not known
+MIN_BARE = 0.03  # the line must show this much table beyond the end (m)
+FALL_SHARE = 0.2  # a part whose second half stands this share lower than its first fades
+MAX_HALF_WIDTH_PX = 6  # the part's profile across its line is taken this far each side
+
+
+def thin_part_around(view, standing: np.ndarray, mask: np.ndarray, pixel: float,
+                     threshold: float) -> tuple:  # fmt: skip
+    """(heights, table, the thin part found or None) around the object ``mask``.
+
+    What stands (``standing``, above ``threshold``, m) is the object or another one; the
+    robot's own parts are left out (``robot_parts``); the heights' level and the table's
+    noise come from the bare table around the object (``thin_parts.around_object``), not
+    from the pick area. ``view``: the ``TableView``; ``pixel``: a pixel's size at the
+    object (m). The heights and table are ``thin_parts.check_no_hidden_part``'s.
+    """
+    height = view.points[..., 2] - view.table_z
+    robot = robot_parts(height, threshold, pixel)
+    heights, table = around_object(height, mask, standing, threshold, robot, 1.0 / pixel)
+    return heights, table, find_thin_part(heights, mask, table, 1.0 / pixel)
+
+
+def follow_thin_part(view, standing: np.ndarray, mask: np.ndarray, pixel: float,
+                     threshold: float, part: ThinPart) -> np.ndarray:  # fmt: skip
+    """(H, W) bool: the pixels of the thin ``part`` that goes on from ``mask`` (its band).
+
+    The arguments are ``thin_part_around``'s, and what it found. Raises UntrustedImageError
+    (``thin_parts``' refusal, with why) where the part's end is not known.
+    """
+    height = view.points[..., 2] - view.table_z
+    robot = robot_parts(height, threshold, pixel)
+    _, table = around_object(height, mask, standing, threshold, robot, 1.0 / pixel)
+    level = float(np.median(height[table]))
+    with np.errstate(invalid="ignore"):  # NaN: no depth
+        low = np.where(np.abs(height - level) <= threshold, height - level, np.nan)
+        line = np.where(height < MAX_HEIGHT, height - level, np.nan)  # the noise's bumps too
+    off_table = np.abs(np.nan_to_num(height - level)) >= MAX_HEIGHT  # beyond its edge
+    blocked = _other_objects(standing, mask) | robot | off_table
+    rows, cols = np.nonzero(mask)
+    lines = _Lines(line, blocked, mask, np.array([cols.mean(), rows.mean()]), 1.0 / pixel)
+    theta, shift = lines.best(np.radians(part.angle_deg))
+    radii, samples, _ = lines.along(theta, [shift])
+    first_end = _end(radii, samples, 0.0)[0] or radii[-1]
+    offsets = _band(line, lines, theta, shift, np.arange(radii[0], first_end))
+    radii, samples, stop = lines.along(theta, offsets)
+    n = max(3, int(round(END_TOLERANCE / pixel)))  # the noise's variance per sample, as the
+    end, spread = _end(radii, samples, n * _band_noise(low, table, len(offsets), n) ** 2)
+    if end is None or spread > END_TOLERANCE / pixel or stop - end < MIN_BARE / pixel:
+        where = "no end within the line" if end is None else (
+            f"its end within {spread * pixel * 1e2:.1f} cm, with "
+            f"{max(stop - end, 0) * pixel * 1e2:.0f} cm of table seen beyond it")  # fmt: skip
+        refuse_thin_part(part, f"followed along its line: {where}")
+    fall = _fall(radii[radii < end], samples[radii < end], low, table, len(offsets))
+    if fall is not None:
+        refuse_thin_part(part, f"followed along its line: its height falls from {fall[0]:.1f} to "
+                         f"{fall[1]:.1f} mm, the depth losing it short of its end")  # fmt: skip
+    band = np.zeros(mask.shape, np.uint8)
+    middle = float(np.mean(offsets))
+    cv2.line(band, lines.pixel(theta, middle, 0.0), lines.pixel(theta, middle, end), 1,
+             thickness=len(offsets))  # fmt: skip
+    return band.astype(bool) & ~mask
+
+
+class _Lines:
+    """Lines from the object's ``centre`` (u, v), at an angle (rad, u to v), shifted across.
+
+    ``image``'s pixels along them, from beyond the object's fringe (GAP from ``mask``) to
+    MAX_REACH, the image's edge or what is ``blocked``, whichever comes first.
+    """
+
+    def __init__(self, image, blocked, mask, centre, px_per_m):
+        self.image, self.blocked, self.centre = image, blocked.astype(float), centre
+        self.dist = cv2.distanceTransform((~mask).astype(np.uint8), cv2.DIST_L2, 5)
+        self.gap, self.radii = max(2.0, GAP * px_per_m), np.arange(int(MAX_REACH * px_per_m))
+
+    def pixel(self, theta, shift, radius) -> tuple[int, int]:
+        u = self.centre[0] + radius * np.cos(theta) - shift * np.sin(theta)
+        v = self.centre[1] + radius * np.sin(theta) + shift * np.cos(theta)
+        return int(np.rint(u)), int(np.rint(v))
+
+    def sample(self, image, theta, shift, radii) -> np.ndarray:
+        """``image`` at the pixels nearest the line's ``radii`` (NaN outside the image)."""
+        u = self.centre[0] + radii * np.cos(theta) - shift * np.sin(theta)
+        v = self.centre[1] + radii * np.sin(theta) + shift * np.cos(theta)
+        ui, vi = np.rint(u).astype(int), np.rint(v).astype(int)
+        inside = (ui >= 0) & (ui < image.shape[1]) & (vi >= 0) & (vi < image.shape[0])
+        out = np.full(len(radii), np.nan)
+        out[inside] = image[vi[inside], ui[inside]]
+        return out
+
+    def along(self, theta, shifts):
+        """(radii (px), heights, the radius the band stops at (px)).
+
+        The band's seen samples: the mean across the lines shifted by each of ``shifts`` (px).
+        """
+        near = self.sample(self.dist, theta, float(np.mean(shifts)), self.radii) < self.gap
+        radii = self.radii[int(np.nonzero(near)[0].max()) + 1 if near.any() else 0 :]
+        stops = np.sum([self.sample(self.blocked, theta, s, radii) for s in shifts], axis=0)
+        ends = ~(stops == 0.0)  # blocked, or outside the image (NaN)
+        stop = int(radii[np.argmax(ends)]) if ends.any() else int(radii[-1]) + 1
+        radii = radii[radii < stop]
+        with warnings.catch_warnings():  # (a radius none of whose pixels has a depth: NaN)
+            warnings.simplefilter("ignore", RuntimeWarning)
+            h = np.nanmean([self.sample(self.image, theta, s, radii) for s in shifts], axis=0)
+        seen = np.isfinite(h)
+        return radii[seen], h[seen], stop
+
+    def best(self, theta0) -> tuple[float, float]:
+        """(angle, shift): the line near the ray ``theta0`` a step to the table fits best.
+
+        ``_step_fit``'s best, over the ray turned by up to TURN_DEG and shifted up to SHIFT_PX.
+        """
+        best = (-np.inf, theta0, 0.0)
+        for turn in np.radians(np.arange(-TURN_DEG, TURN_DEG + 1e-9, TURN_STEP_DEG)):
+            for shift in range(-SHIFT_PX, SHIFT_PX + 1):
+                fit = _step_fit(self.along(theta0 + turn, [float(shift)])[1])
+                if len(fit) and fit.max() > best[0]:
+                    best = (float(fit.max()), theta0 + turn, float(shift))
+        return best[1], best[2]
+
+
+def _other_objects(standing: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """(H, W) bool: what stands apart from the object ``mask`` and is no bump of the noise.
+
+    Blobs as ``rod_shape.check_one_object`` counts objects (MIN_OBJECT_PX, SECOND_OBJECT).
+    """
+    count, labels, stats = opened_blobs(standing & ~mask)
+    least = max(MIN_OBJECT_PX, SECOND_OBJECT * int(mask.sum()))
+    big = np.zeros(count, bool)
+    big[1:] = stats[1:, cv2.CC_STAT_AREA] >= least
+    return big[labels]
+
+
+def _step_fit(h: np.ndarray) -> np.ndarray:
+    """Per end (after each sample of ``h``): the step model's least-squares improvement.
+
+    The step model: the part's mean up to the end, the table's level (0) beyond it. Its
+    improvement over no part is the sum of the heights up to the end, squared, over their
+    count (0 where the sum is negative).
+    """
+    total = np.cumsum(h)
+    return np.where(total > 0, total**2 / np.arange(1, len(h) + 1), 0.0)
+
+
+def _end(radii, h, variance) -> tuple[float | None, float]:
+    """(the end's radius (px), the spread of the ends that fit within END_CHI2 (px)).
+
+    The ends whose fit (``_step_fit``) is worse than the best by less than END_CHI2 times
+    the noise's ``variance`` per sample; None where no end gives a part above the table.
+    """
+    fit = _step_fit(h)
+    if len(h) < 3 or fit.max() <= 0:
+        return None, np.inf
+    best = int(np.argmax(fit))
+    near = radii[fit >= fit[best] - END_CHI2 * variance]
+    return float(radii[best]) + 0.5, float(near.max() - near.min())
+
+
+def _fall(radii, h, low, table, width_px: int) -> tuple[float, float] | None:
+    """(first half's, second half's mean height, mm) of a part the depth loses gradually.
+
+    That is, of the part's samples ``h``, where the second half stands lower than the first
+    by FALL_SHARE of it and by more than END_CHI2 ** 0.5 stds of their difference
+    (``_band_noise`` over a half); else None.
+    """
+    half = len(h) // 2
+    if half < 3:
+        return None
+    first, second = float(np.mean(h[:half])), float(np.mean(h[half:]))
+    noise = _band_noise(low, table, width_px, half)
+    if first - second > max(FALL_SHARE * first, np.sqrt(2.0 * END_CHI2) * noise):
+        return 1e3 * first, 1e3 * second
+    return None
+
+
+def _band(line, lines: _Lines, theta, shift, radii) -> np.ndarray:
+    """The shifts (px) across the line that the part covers (2 at least).
+
+    Where its mean heights' profile across the line, over ``radii``, is at least half its
+    highest.
+    """
+    offsets = np.arange(-MAX_HALF_WIDTH_PX, MAX_HALF_WIDTH_PX + 1)
+    with warnings.catch_warnings():  # (a shift with no depth: NaN)
+        warnings.simplefilter("ignore", RuntimeWarning)
+        profile = np.array([np.nanmean(lines.sample(line, theta, shift + o, radii))
+                            for o in offsets])  # fmt: skip
+    peak = int(np.nanargmax(profile))
+    above = np.nan_to_num(profile, nan=0.0) >= 0.5 * profile[peak]
+    lo = peak - np.argmin(above[peak::-1]) + 1 if not above[: peak + 1].all() else 0
+    hi = peak + np.argmin(above[peak:]) if not above[peak:].all() else len(above)
+    if hi - lo < 2:
+        lo, hi = peak, peak + 2
+    return shift + offsets[lo:hi].astype(float)
+
+
+def _band_noise(low, table, width_px: int, length_px: int) -> float:
+    """The noise (m) of a band's mean height ``width_px`` wide and ``length_px`` long.
+
+    On the bare ``table``: its strips (``TableStretches``) of the heights averaged over
+    ``width_px`` x ``width_px`` squares wholly on the table.
+    """
+    seen = table & np.isfinite(low)
+    k = (width_px, width_px)
+    mean = cv2.blur(np.where(seen, low, 0.0).astype(np.float32), k)
+    whole = cv2.blur(seen.astype(np.float32), k) > 1.0 - 1e-6
+    return TableStretches(np.where(whole, mean, np.nan), whole).noise(length_px)
