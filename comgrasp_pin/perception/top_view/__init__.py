@@ -6,7 +6,8 @@
   ``table_view``: its height, noise and the cleaned image);
 - what stands on it, height first (``standing``; ``registration``: is the colour usable);
 - is it one rod (``rod_shape``, ``rod_pieces``, ``rod_flat``, ``thin_parts``,
-  ``end_heights``), refused with the reason where it is not;
+  ``end_heights``), refused with the reason where it is not; a thin part too low to stand
+  followed to its end (``joined_part``);
 - where the jaws can grasp it (``grasp_points``), reported as a ``rod_detection.RodDetection``.
 
 The public names are ``comgrasp_pin.perception``'s.

@@ -88,3 +88,16 @@ def check_seen_whole(rod: RodDetection, length: float, tolerance: float) -> RodD
             "when first seen: part of it is out of sight (hanging over the table's edge?)"
         )
     return rod
+
+
+def rod_widths(p, centroid, direction, s_rel, yaw) -> np.ndarray:
+    """(K, 2) the rod's width across its axis in 1 cm slices (m).
+
+    Rows: (position along the rod from its centre towards +yaw, width).
+    """
+    across = (p[:, :2] - centroid) @ np.array([-direction[1], direction[0]])
+    bins = np.floor(s_rel / 0.01).astype(int)
+    widths = np.array([((b + 0.5) * 0.01, np.ptp(across[bins == b])) for b in np.unique(bins)])
+    if direction @ np.array([np.cos(yaw), np.sin(yaw)]) < 0:  # rows towards +yaw
+        widths = widths[::-1] * np.array([-1.0, 1.0])
+    return widths

@@ -35,6 +35,7 @@ from comgrasp_pin.perception.top_view.end_heights import CLEANED_PX, check_ends_
 from comgrasp_pin.perception.top_view.grasp_points import (  # noqa: F401 (their home before)
     nearest_graspable,
     nearest_on_handle,
+    rod_widths,
 )
 from comgrasp_pin.perception.top_view.joined_part import follow_thin_part, thin_part_around
 from comgrasp_pin.perception.top_view.rod_detection import RodDetection
@@ -161,10 +162,9 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
                      view.points_noise, CLEANED_PX * pixel if view.cleaned else 0.0)  # fmt: skip
     low = thin_part_around(view, standing, mask, pixel, threshold) if view.cleaned else None
     if low is not None and low[2] is not None:  # a thin part: followed once, from depth alone
-        if rgb is not None or part is not None:
-            refuse_thin_part(low[2])
-        part = follow_thin_part(view, standing, mask, pixel, threshold, low[2])
-        return _detect(view, rgb, depth, camera, T_world_cam, pick_area, colour_to_come, part)
+        around = (standing, mask, pixel, threshold)
+        return _followed(view, rgb, depth, camera, T_world_cam, pick_area, colour_to_come,
+                         part, low[2], around)  # fmt: skip
     along = (p[:, :2] - centroid) @ direction
     lo, hi = np.percentile(along, [0.02, 99.98])
     if view.cleaned:
@@ -191,7 +191,7 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
     length = float(hi - lo)
     if eroded_px:  # the erosion took pixels off each end
         length += 2 * eroded_px * pixel
-    widths = _widths(p, centroid, direction, along - 0.5 * (lo + hi), yaw)
+    widths = rod_widths(p, centroid, direction, along - 0.5 * (lo + hi), yaw)
     contours, _ = cv2.findContours(mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     rect = cv2.minAreaRect(max(contours, key=cv2.contourArea))
     # (lo, hi are along the axis from the centroid)
@@ -212,6 +212,28 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
         too_low, table, _ = low
         check_no_hidden_part(length, float(np.median(widths[:, 1])), too_low, table, 1.0 / pixel)
     return det
+
+
+def _followed(view, rgb, depth, camera, T_world_cam, pick_area, colour_to_come, part, found,
+              around) -> RodDetection:  # fmt: skip
+    """The rod with the thin part ``found`` joined (``joined_part.follow_thin_part``).
+
+    Refused as the thin part (UntrustedImageError, with why) where there is colour to ask
+    (``rgb``), a part was already joined (``part``), its end is not known, or the whole is
+    refused (but for a cut by the image's border); ``around``: (standing, mask, pixel,
+    threshold) as ``_detect`` has them.
+    """
+    if rgb is not None or part is not None:
+        refuse_thin_part(found)
+    standing, mask, pixel, threshold = around
+    part = follow_thin_part(view, standing, mask, pixel, threshold, found)
+    try:
+        return _detect(view, rgb, depth, camera, T_world_cam, pick_area, colour_to_come, part)
+    except ObjectCutByBorderError:
+        raise
+    except PerceptionError as whole:
+        refuse_thin_part(found, f"followed to its end, the whole is refused: {whole}")
+        raise  # (refuse_thin_part raises)
 
 
 def _pixel_size(depth, mask, view: TableView, camera, T_world_cam) -> float:
@@ -269,16 +291,3 @@ def _on_the_rods_axis(view: TableView, mask, unmeasured, camera, T_world_cam) ->
 
 class _LeftToColour(ObjectNotFoundError):
     """A rod lower than END_SNR noise stds, whose ends are left to the colour image."""
-
-
-def _widths(p, centroid, direction, s_rel, yaw) -> np.ndarray:
-    """(K, 2) the rod's width across its axis in 1 cm slices (m).
-
-    Rows: (position along the rod from its centre towards +yaw, width).
-    """
-    across = (p[:, :2] - centroid) @ np.array([-direction[1], direction[0]])
-    bins = np.floor(s_rel / 0.01).astype(int)
-    widths = np.array([((b + 0.5) * 0.01, np.ptp(across[bins == b])) for b in np.unique(bins)])
-    if direction @ np.array([np.cos(yaw), np.sin(yaw)]) < 0:  # rows towards +yaw
-        widths = widths[::-1] * np.array([-1.0, 1.0])
-    return widths
