@@ -38,6 +38,7 @@ from comgrasp_pin.perception.top_view.grasp_points import (  # noqa: F401 (their
     rod_widths,
 )
 from comgrasp_pin.perception.top_view.joined_part import follow_thin_part, thin_part_around
+from comgrasp_pin.perception.top_view.rod_alongside import check_no_rod_alongside
 from comgrasp_pin.perception.top_view.rod_detection import RodDetection
 from comgrasp_pin.perception.top_view.rod_shape import check_ends_seen, check_one_rod
 from comgrasp_pin.perception.top_view.standing import (  # noqa: F401 (the thresholds' names here too)
@@ -157,6 +158,7 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
     direction = vt[0]
     check_one_rod(view.points[mask], centroid, direction, view.table_z, view.points_noise,
                   measured)  # fmt: skip
+    check_no_rod_alongside(view.points[mask], centroid, direction)
     threshold = stands_at(view)
     check_ends_stand(view.points, mask, unmeasured, view.table_z, centroid, direction, threshold,
                      view.points_noise, CLEANED_PX * pixel if view.cleaned else 0.0)  # fmt: skip
