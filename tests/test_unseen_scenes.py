@@ -29,6 +29,8 @@ SUBSET = {
         "thin_shifted_0mm",
         "thin_shifted_2mm",
         "hammer_and_cylinder_touching",
+        "shorter_alongside",
+        "thin_shorter_alongside",
     ),  # fmt: skip
     "second_rod_touching": None,
     "second_rod_crossing": None,
@@ -85,8 +87,10 @@ def test_scenes_it_should_measure_are_measured(outcomes, label):
 
 
 def test_two_rods_lying_against_each_other_are_refused(outcomes):
-    """The issue's silent error: two rods against each other measured as one between them."""
-    touching = ("same_0mm", "same_1mm", "thin_shifted_0mm", "hammer_and_cylinder_touching")
+    """The issue's silent error: two rods against each other measured as one between them;
+    and a shorter one alongside over two thirds, measured as the longer (issue 44)."""
+    touching = ("same_0mm", "same_1mm", "thin_shifted_0mm", "hammer_and_cylinder_touching",
+                "shorter_alongside", "thin_shorter_alongside")  # fmt: skip
     views = [(s.name, label, j) for s, label, j in outcomes if s.name in touching]
     assert len(views) == 2 * len(touching)
     assert all(j["outcome"] == "refused" for _, _, j in views), views

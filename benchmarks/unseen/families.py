@@ -150,6 +150,11 @@ def _second_rod(rods: list[Rod]) -> list[UnseenScene]:
                         rgba=GREEN)  # fmt: skip
         out.append(UnseenScene("second_rod_parallel", f"thin_shifted_{1e3 * gap:g}mm",
                                (plain, other)))  # fmt: skip
+    for name, radius in (("shorter_alongside", plain.radius), ("thin_shorter_alongside", 0.005)):
+        first = replace(plain, radius=radius)  # touching along two thirds, from one end
+        second = _beside(first, 2 * radius, -plain.length / 6, length=2 * plain.length / 3,
+                         rgba=GREEN)  # fmt: skip
+        out.append(UnseenScene("second_rod_parallel", name, (first, second)))
     hammer = rods[0]
     beside = _beside(hammer, 0.01 + plain.radius, -0.03, shape="cylinder",
                      radius=plain.radius, length=0.26, rgba=BROWN)  # fmt: skip
