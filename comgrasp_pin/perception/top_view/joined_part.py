@@ -42,6 +42,7 @@ FIT_LENGTH = 0.08  # ... this much of it beyond the object's fringe (m), then ov
 END_CHI2 = 4.0  # the ends whose fit is worse by less than this many noise variances ...
 END_TOLERANCE = 0.03  # ... spread over more than this (m): the end is not known
 MIN_BARE = 0.03  # the line must show this much table beyond the end (m)
+UNKNOWN = "Its extent is not known from this depth"
 FALL_SHARE = 0.2  # a part whose second half stands this share lower than its first fades
 MAX_HALF_WIDTH_PX = 6  # the part's profile across its line is taken this far each side
 
@@ -85,17 +86,20 @@ def follow_thin_part(view, standing: np.ndarray, mask: np.ndarray, pixel: float,
     first_end = _end(radii, samples, 0.0)[0] or radii[-1]
     offsets = _band(line, lines, theta, shift, np.arange(radii[0], first_end))
     radii, samples, stop = lines.along(theta, offsets)
-    n = max(3, int(round(END_TOLERANCE / pixel)))  # the noise's variance per sample, as the
+    # the noise's variance per sample as the band's sums over END_TOLERANCE have it (the
+    # noise is correlated)
+    n = max(3, int(round(END_TOLERANCE / pixel)))
     end, spread = _end(radii, samples, n * _band_noise(low, table, len(offsets), n) ** 2)
     if end is None or spread > END_TOLERANCE / pixel or stop - end < MIN_BARE / pixel:
         where = "no end within the line" if end is None else (
             f"its end within {spread * pixel * 1e2:.1f} cm, with "
             f"{max(stop - end, 0) * pixel * 1e2:.0f} cm of table seen beyond it")  # fmt: skip
-        refuse_thin_part(part, f"followed along its line: {where}")
+        refuse_thin_part(part, f"{UNKNOWN}: followed along its line, {where}")
     fall = _fall(radii[radii < end], samples[radii < end], low, table, len(offsets))
     if fall is not None:
-        refuse_thin_part(part, f"followed along its line: its height falls from {fall[0]:.1f} to "
-                         f"{fall[1]:.1f} mm, the depth losing it short of its end")  # fmt: skip
+        refuse_thin_part(part, f"{UNKNOWN}: followed along its line, its height falls from "
+                         f"{fall[0]:.1f} to {fall[1]:.1f} mm, the depth losing it short of "
+                         "its end")  # fmt: skip
     band = np.zeros(mask.shape, np.uint8)
     middle = float(np.mean(offsets))
     cv2.line(band, lines.pixel(theta, middle, 0.0), lines.pixel(theta, middle, end), 1,

@@ -224,15 +224,14 @@ def robot_parts(height: np.ndarray, threshold: float, pixel: float) -> np.ndarra
     return cv2.dilate(robot.astype(np.uint8), kernel).astype(bool)
 
 
-def refuse_thin_part(part: ThinPart, how: str = "") -> None:
-    """Raise UntrustedImageError for ``part``, whose extent is not known (``how``: why)."""
+def refuse_thin_part(part: ThinPart, why: str = "Its extent is not known from this depth") -> None:
+    """Raise UntrustedImageError for ``part``, saying ``why`` the rod is not measured."""
     raise UntrustedImageError(
         f"a thin part lower than the depth can tell pixel by pixel goes on from the object "
         f"(at {part.angle_deg:.0f} deg in the image from its centre, u to v: "
         f"{1e3 * part.mean:.1f} mm high on average over {1e2 * part.length:.0f} cm, joined to "
         f"it; the table's noise over the same stretch {1e3 * part.noise:.2f} mm): a handle? "
-        f"Its extent is not known from this depth{'; ' + how if how else ''}; view it closer "
-        "or with a less noisy camera"
+        f"{why}; view it closer or with a less noisy camera"
     )
 
 

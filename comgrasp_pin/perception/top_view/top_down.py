@@ -234,7 +234,7 @@ def _followed(view, rgb, depth, camera, T_world_cam, pick_area, colour_to_come, 
     except ObjectCutByBorderError:
         raise
     except PerceptionError as whole:
-        refuse_thin_part(found, f"followed to its end, the whole is refused: {whole}")
+        refuse_thin_part(found, f"Followed to its end, the whole is refused: {whole}")
         raise  # (refuse_thin_part raises)
 
 
