@@ -27,19 +27,20 @@ from pathlib import Path  # noqa: E402
 
 from unseen import families as uf  # noqa: E402  (benchmarks/unseen/, beside this script)
 
-from comgrasp_pin.perception.top_view import rod_shape  # noqa: E402
+from comgrasp_pin.perception.top_view import rod_alongside, rod_shape  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def thresholds() -> dict:
     """The one-rod checks' tuning numbers and the judge's bounds, as run."""
-    names = [n for n in dir(rod_shape) if n.isupper() and not n.startswith("_")]
-    checks = {n: getattr(rod_shape, n) for n in names}
+    checks = {m.__name__.rsplit(".", 1)[1]: {n: getattr(m, n) for n in dir(m)
+                                             if n.isupper() and not n.startswith("_")}
+              for m in (rod_shape, rod_alongside)}  # fmt: skip
     bounds = {"centre_m": uf.CENTRE_BOUND, "yaw_deg": uf.YAW_BOUND_DEG,
               "length_m": uf.LENGTH_BOUND,
               "realistic_centre_m": uf.REALISTIC_CENTRE_BOUND}  # fmt: skip
-    return {"rod_shape": checks, "judge": bounds}
+    return {**checks, "judge": bounds}
 
 
 def main() -> None:
