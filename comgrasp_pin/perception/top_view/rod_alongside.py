@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from comgrasp_pin.errors import AmbiguousObjectError
+from comgrasp_pin.perception._points import slice_percentiles
 from comgrasp_pin.perception.top_view.rod_shape import MIN_SPLIT_SLICES, SLICE, SPLIT_SLICES
 
 EDGE_PERCENTILE = 2.0  # a slice's edges across the axis: this percentile and 100 minus it
@@ -37,13 +38,13 @@ def check_no_rod_alongside(p: np.ndarray, centroid: np.ndarray, direction: np.nd
     along = rel @ direction
     across = rel @ np.array([-direction[1], direction[0]])
     slices = np.floor(along / SLICE).astype(int)
-    kept = [s for s in np.unique(slices) if np.count_nonzero(slices == s) >= 10]
+    numbers, counts = np.unique(slices, return_counts=True)
+    kept = numbers[counts >= 10]
     if len(kept) < 2 * MIN_SPLIT_SLICES:
         return
-    edges = np.array([np.percentile(across[slices == s], [EDGE_PERCENTILE,
-                                                          100.0 - EDGE_PERCENTILE])
-                      for s in kept])  # fmt: skip
-    x = np.asarray(kept, float)
+    edge = (EDGE_PERCENTILE, 100.0 - EDGE_PERCENTILE)  # np.percentile's, per kept slice
+    edges = slice_percentiles(slices, across, edge, 10)[1]
+    x = kept.astype(float)
     edges -= _shared_slope(x, edges) * x[:, None]
     width = edges[:, 1] - edges[:, 0]
     # the width most slices have (within ON_LINE of each other), and each edge's line there
