@@ -4,15 +4,16 @@
 a mallet's or obj1's 1 cm handle in a structured-light camera's depth at 1.25 m, whose
 head alone stands. No pixel of the handle stands out of the noise, but its line does: the
 heights along it, one pixel wide, are a step from the handle's mean height down to the
-table's at its end. The line is the ray the check found, turned and shifted to where the
-part's mean is highest; its end is where that step fits the heights best (least squares,
-the heights beyond the end at the table's level). The fit says how well the end is known:
-every end whose fit is worse by less than END_CHI2 of the noise's variance could be it. A
-part whose end is not known within END_TOLERANCE, that runs into another object, the robot
-or the image's edge, or whose line shows no bare table beyond its end, is refused (as
-``thin_parts`` refuses it). Otherwise its pixels (a band as wide as its heights' profile
-across the line) join the object as pixels whose height the depth did not measure (as the
-colour's are), and the rod is measured whole. World frame, m; pixels as (u, v).
+table's at its end. The line is the ray the check found, turned and shifted to where that
+step fits its heights best (least squares, the heights beyond the end at the table's
+level); the band is as wide as the part's mean heights' profile across it; the end is the
+band's best step. The fit says how well the end is known: every end whose fit is worse by
+less than END_CHI2 of the noise's variance could be it. A part whose end is not known
+within END_TOLERANCE, whose line runs into another object, the robot, the table's or the
+image's edge with no bare table beyond its end, or whose height falls along it (FALL_SHARE:
+the depth losing it, or two parts) is refused (as ``thin_parts`` refuses it, saying why).
+Otherwise its band's pixels join the object as pixels whose height the depth did not measure
+(as the colour's are), and the rod is measured whole. World frame, m; pixels as (u, v).
 """
 
 from __future__ import annotations
@@ -37,8 +38,7 @@ from comgrasp_pin.perception.top_view.thin_parts import (
 
 MAX_REACH = 0.6  # a part is followed this far from the object's centre (m)
 TURN_DEG, TURN_STEP_DEG = 3.0, 0.25  # the line: the ray turned by up to this (deg) ...
-SHIFT_PX = 2  # ... and shifted across by up to this (px), to the highest mean over ...
-FIT_LENGTH = 0.08  # ... this much of it beyond the object's fringe (m), then over the part
+SHIFT_PX = 2  # ... and shifted across by up to this (px), to where a step fits it best
 END_CHI2 = 4.0  # the ends whose fit is worse by less than this many noise variances ...
 END_TOLERANCE = 0.03  # ... spread over more than this (m): the end is not known
 MIN_BARE = 0.03  # the line must show this much table beyond the end (m)
@@ -95,7 +95,7 @@ def follow_thin_part(view, standing: np.ndarray, mask: np.ndarray, pixel: float,
             f"its end within {spread * pixel * 1e2:.1f} cm, with "
             f"{max(stop - end, 0) * pixel * 1e2:.0f} cm of table seen beyond it")  # fmt: skip
         refuse_thin_part(part, f"{UNKNOWN}: followed along its line, {where}")
-    fall = _fall(radii[radii < end], samples[radii < end], low, table, len(offsets))
+    fall = _fall(samples[radii < end], low, table, len(offsets))
     if fall is not None:
         refuse_thin_part(part, f"{UNKNOWN}: followed along its line, its height falls from "
                          f"{fall[0]:.1f} to {fall[1]:.1f} mm, the depth losing it short of "
@@ -120,6 +120,7 @@ class _Lines:
         self.gap, self.radii = max(2.0, GAP * px_per_m), np.arange(int(MAX_REACH * px_per_m))
 
     def pixel(self, theta, shift, radius) -> tuple[int, int]:
+        """The (u, v) pixel at ``radius`` (px) along the line."""
         u = self.centre[0] + radius * np.cos(theta) - shift * np.sin(theta)
         v = self.centre[1] + radius * np.sin(theta) + shift * np.cos(theta)
         return int(np.rint(u)), int(np.rint(v))
@@ -202,7 +203,7 @@ def _end(radii, h, variance) -> tuple[float | None, float]:
     return float(radii[best]) + 0.5, float(near.max() - near.min())
 
 
-def _fall(radii, h, low, table, width_px: int) -> tuple[float, float] | None:
+def _fall(h, low, table, width_px: int) -> tuple[float, float] | None:
     """(first half's, second half's mean height, mm) of a part the depth loses gradually.
 
     That is, of the part's samples ``h``, where the second half stands lower than the first

@@ -7,8 +7,9 @@ towards it: the pair was measured as one rod the length of the longer (MuJoCo re
 head (a hammer's, a weight, a lamp) widens the outline on both sides of the axis, a rod
 alongside on one side only. Along the blob one edge of the outline then runs straight on,
 while the other steps out by the second rod's width where it lies (or in, where it ends).
-Each edge's line is the one most slices' edges lie on (Theil-Sen); what stands out of it is
-the step. World frame, m.
+The edges are straightened by the slope they share (Theil-Sen); the slices of the width
+most have give each edge's line; a slice of another width with one edge on its line is the
+step. World frame, m.
 """
 
 from __future__ import annotations
@@ -55,11 +56,11 @@ def check_no_rod_alongside(p: np.ndarray, centroid: np.ndarray, direction: np.nd
     step = np.abs(width - np.median(width[common]))
     one_sided = (step >= STEPPED) & stays.any(axis=1)
     if np.count_nonzero(one_sided) >= max(MIN_SPLIT_SLICES, SPLIT_SLICES * len(kept)):
-        step = float(np.median(step[one_sided]))
+        typical = float(np.median(step[one_sided]))
         raise AmbiguousObjectError(
             f"what lies on the table is not one rod: along {np.count_nonzero(one_sided)} of "
             f"its {len(kept)} slices one side of its outline runs straight on while the other "
-            f"steps out or in by about {1e3 * step:.0f} mm (a second rod alongside over part of "
+            f"steps out or in by about {1e3 * typical:.0f} mm (a second rod alongside over part of "
             "its length?); the top view measures one rod alone on the table: move the others away"
         )
 
