@@ -39,10 +39,10 @@ def _scene(handle_px: int, fade_px: int = 0, seed: int = 0):
 
 
 def _follow(view, standing, head):
-    _, _, part = thin_part_around(view, standing, head, PIXEL, THRESHOLD)
+    _, table, part = thin_part_around(view, standing, head, PIXEL, THRESHOLD)
     assert part is not None, "the handle was not found: nothing to follow"
     assert abs(part.angle_deg) < 5 or abs(part.angle_deg - 360) < 5  # along +u
-    return follow_thin_part(view, standing, head, PIXEL, THRESHOLD, part)
+    return follow_thin_part(view, standing, head, PIXEL, THRESHOLD, part, table)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])

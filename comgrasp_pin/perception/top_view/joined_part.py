@@ -63,16 +63,16 @@ def thin_part_around(view, standing: np.ndarray, mask: np.ndarray, pixel: float,
     return heights, table, find_thin_part(heights, mask, table, 1.0 / pixel)
 
 
-def follow_thin_part(view, standing: np.ndarray, mask: np.ndarray, pixel: float,
-                     threshold: float, part: ThinPart) -> np.ndarray:  # fmt: skip
+def follow_thin_part(view, standing: np.ndarray, mask: np.ndarray, pixel: float, threshold: float,
+                     part: ThinPart, table: np.ndarray) -> np.ndarray:  # fmt: skip
     """(H, W) bool: the pixels of the thin ``part`` that goes on from ``mask`` (its band).
 
-    The arguments are ``thin_part_around``'s, and what it found. Raises UntrustedImageError
-    (``thin_parts``' refusal, with why) where the part's end is not known.
+    The arguments are ``thin_part_around``'s, and what it found: the ``part`` and the bare
+    ``table`` around the object. Raises UntrustedImageError (``thin_parts``' refusal, with
+    why) where the part's end is not known.
     """
     height = view.points[..., 2] - view.table_z
     robot = robot_parts(height, threshold, pixel)
-    _, table = around_object(height, mask, standing, threshold, robot, 1.0 / pixel)
     level = float(np.median(height[table]))
     with np.errstate(invalid="ignore"):  # NaN: no depth
         low = np.where(np.abs(height - level) <= threshold, height - level, np.nan)

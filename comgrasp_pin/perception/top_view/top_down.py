@@ -164,7 +164,7 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
                      view.points_noise, CLEANED_PX * pixel if view.cleaned else 0.0)  # fmt: skip
     low = thin_part_around(view, standing, mask, pixel, threshold) if view.cleaned else None
     if low is not None and low[2] is not None:  # a thin part: followed once, from depth alone
-        around = (standing, mask, pixel, threshold)
+        around = (standing, mask, pixel, threshold, low[1])
         return _followed(view, rgb, depth, camera, T_world_cam, pick_area, colour_to_come,
                          part, low[2], around)  # fmt: skip
     along = (p[:, :2] - centroid) @ direction
@@ -223,12 +223,12 @@ def _followed(view, rgb, depth, camera, T_world_cam, pick_area, colour_to_come, 
     Refused as the thin part (UntrustedImageError, with why) where there is colour to ask
     (``rgb``), a part was already joined (``part``), its end is not known, or the whole is
     refused (but for a cut by the image's border); ``around``: (standing, mask, pixel,
-    threshold) as ``_detect`` has them.
+    threshold, the bare table around the object) as ``_detect`` has them.
     """
     if rgb is not None or part is not None:
         refuse_thin_part(found)
-    standing, mask, pixel, threshold = around
-    part = follow_thin_part(view, standing, mask, pixel, threshold, found)
+    standing, mask, pixel, threshold, table = around
+    part = follow_thin_part(view, standing, mask, pixel, threshold, found, table)
     try:
         return _detect(view, rgb, depth, camera, T_world_cam, pick_area, colour_to_come, part)
     except ObjectCutByBorderError:
