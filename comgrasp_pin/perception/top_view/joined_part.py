@@ -3,17 +3,18 @@
 ``thin_parts`` finds that a part too low for the height threshold goes on from the object:
 a mallet's or obj1's 1 cm handle in a structured-light camera's depth at 1.25 m, whose
 head alone stands. No pixel of the handle stands out of the noise, but its line does: the
-heights along it, one pixel wide, are a step from the handle's mean height down to the
-table's at its end. The line is the ray the check found, turned and shifted to where that
-step fits its heights best (least squares, the heights beyond the end at the table's
-level); the band is as wide as the part's mean heights' profile across it; the end is the
-band's best step. The fit says how well the end is known: every end whose fit is worse by
-less than END_CHI2 of the noise's variance could be it. A part whose end is not known
-within END_TOLERANCE, whose line runs into another object, the robot, the table's or the
-image's edge with no bare table beyond its end, or whose height falls along it (FALL_SHARE:
-the depth losing it, or two parts) is refused (as ``thin_parts`` refuses it, saying why).
-Otherwise its band's pixels join the object as pixels whose height the depth did not measure
-(as the colour's are), and the rod is measured whole. World frame, m; pixels as (u, v).
+heights along it are a step from the handle's mean height down to the table's at its end.
+The line is the ray the check found, turned and shifted to where that step fits its heights
+best (least squares); the band is as wide as the part's mean heights' profile across it;
+the end is the band's best step, and every end whose fit is worse by less than END_CHI2 of
+the noise's variance could be it. Where the camera lost most of the band's pixels (a
+structured-light camera loses those near a depth step), the end is where their share steps
+down to the table's (``_lost_end``). A part whose end is not known within END_TOLERANCE,
+whose line runs into another object, the robot, the table's or the image's edge with no
+bare table beyond its end, or whose height falls along it (FALL_SHARE: the depth losing it,
+or two parts) is refused (as ``thin_parts`` refuses it, saying why). Otherwise its band's
+pixels join the object as pixels whose height the depth did not measure (as the colour's
+are), and the rod is measured whole. World frame, m; pixels as (u, v).
 """
 
 from __future__ import annotations
@@ -45,6 +46,10 @@ MIN_BARE = 0.03  # the line must show this much table beyond the end (m)
 UNKNOWN = "Its extent is not known from this depth"
 FALL_SHARE = 0.2  # a part whose second half stands this share lower than its first fades
 MAX_HALF_WIDTH_PX = 6  # the part's profile across its line is taken this far each side
+# A part whose band's share of pixels without depth stands this much and this many stds above
+# the table's beyond it: its end is where that share steps down (a structured-light camera's
+# holes at depth steps)
+MIN_LOST_SHARE, LOST_SIGMAS = 0.25, 5.0
 
 
 def thin_part_around(view, standing: np.ndarray, mask: np.ndarray, pixel: float,
@@ -63,13 +68,15 @@ def thin_part_around(view, standing: np.ndarray, mask: np.ndarray, pixel: float,
     return heights, table, find_thin_part(heights, mask, table, 1.0 / pixel)
 
 
-def follow_thin_part(view, standing: np.ndarray, mask: np.ndarray, pixel: float, threshold: float,
-                     part: ThinPart, table: np.ndarray) -> np.ndarray:  # fmt: skip
+def follow_thin_part(view, lost: np.ndarray, standing: np.ndarray, mask: np.ndarray,
+                     pixel: float, threshold: float, part: ThinPart,
+                     table: np.ndarray) -> np.ndarray:  # fmt: skip
     """(H, W) bool: the pixels of the thin ``part`` that goes on from ``mask`` (its band).
 
     The arguments are ``thin_part_around``'s, and what it found: the ``part`` and the bare
-    ``table`` around the object. Raises UntrustedImageError (``thin_parts``' refusal, with
-    why) where the part's end is not known.
+    ``table`` around the object; ``lost``: (H, W) bool, the pixels the camera gave no depth
+    (before the view's cleaning filled them). Raises UntrustedImageError (``thin_parts``'
+    refusal, with why) where the part's end is not known.
     """
     height = view.points[..., 2] - view.table_z
     robot = robot_parts(height, threshold, pixel)
@@ -86,10 +93,13 @@ def follow_thin_part(view, standing: np.ndarray, mask: np.ndarray, pixel: float,
     first_end = _end(radii, samples, 0.0)[0] or radii[-1]
     offsets = _band(line, lines, theta, shift, np.arange(radii[0], first_end))
     radii, samples, stop = lines.along(theta, offsets)
-    # the noise's variance per sample as the band's sums over END_TOLERANCE have it (the
-    # noise is correlated)
+    # the noise's variance per sample as the band's sums over END_TOLERANCE have it (correlated)
     n = max(3, int(round(END_TOLERANCE / pixel)))
-    end, spread = _end(radii, samples, n * _band_noise(low, table, len(offsets), n) ** 2)
+    variance = n * _band_noise(low, table, len(offsets), n) ** 2
+    end, spread = _end(radii, samples, variance)
+    lost_end = _lost_end(lost.astype(float), lines, theta, offsets, radii[0], stop)
+    if end is not None and lost_end is not None:  # the pixels without depth show its end
+        end, spread = lost_end
     if end is None or spread > END_TOLERANCE / pixel or stop - end < MIN_BARE / pixel:
         where = "no end within the line" if end is None else (
             f"its end within {spread * pixel * 1e2:.1f} cm, with "
@@ -100,11 +110,10 @@ def follow_thin_part(view, standing: np.ndarray, mask: np.ndarray, pixel: float,
         refuse_thin_part(part, f"{UNKNOWN}: followed along its line, its height falls from "
                          f"{fall[0]:.1f} to {fall[1]:.1f} mm, the depth losing it short of "
                          "its end")  # fmt: skip
-    band = np.zeros(mask.shape, np.uint8)
-    middle = float(np.mean(offsets))
-    cv2.line(band, lines.pixel(theta, middle, 0.0), lines.pixel(theta, middle, end), 1,
-             thickness=len(offsets))  # fmt: skip
-    return band.astype(bool) & ~mask
+    along, across = lines.coordinates(mask.shape, theta)
+    band = (along >= 0.0) & (along <= end)
+    band &= (across >= offsets.min() - 0.5) & (across <= offsets.max() + 0.5)
+    return band & ~mask
 
 
 class _Lines:
@@ -119,11 +128,11 @@ class _Lines:
         self.dist = cv2.distanceTransform((~mask).astype(np.uint8), cv2.DIST_L2, 5)
         self.gap, self.radii = max(2.0, GAP * px_per_m), np.arange(int(MAX_REACH * px_per_m))
 
-    def pixel(self, theta, shift, radius) -> tuple[int, int]:
-        """The (u, v) pixel at ``radius`` (px) along the line."""
-        u = self.centre[0] + radius * np.cos(theta) - shift * np.sin(theta)
-        v = self.centre[1] + radius * np.sin(theta) + shift * np.cos(theta)
-        return int(np.rint(u)), int(np.rint(v))
+    def coordinates(self, shape, theta) -> tuple[np.ndarray, np.ndarray]:
+        """(along, across): every pixel's coordinates (px) on the line at ``theta``."""
+        rows, cols = np.ogrid[: shape[0], : shape[1]]
+        u, v = cols - self.centre[0], rows - self.centre[1]
+        return u * np.cos(theta) + v * np.sin(theta), v * np.cos(theta) - u * np.sin(theta)
 
     def sample(self, image, theta, shift, radii) -> np.ndarray:
         """``image`` at the pixels nearest the line's ``radii`` (NaN outside the image)."""
@@ -201,6 +210,44 @@ def _end(radii, h, variance) -> tuple[float | None, float]:
     best = int(np.argmax(fit))
     near = radii[fit >= fit[best] - END_CHI2 * variance]
     return float(radii[best]) + 0.5, float(near.max() - near.min())
+
+
+def _lost_end(lost, lines: _Lines, theta, offsets, first: int, stop: int) -> tuple | None:
+    """(end (px), spread (px)) of the part from the pixels the depth ``lost`` along its band.
+
+    A structured-light camera loses most pixels within a few of a depth step: a part under
+    a centimetre is mostly lost, and its band's share of lost pixels steps down to the
+    table's at its end. The step (two levels, least squares) between ``first`` and ``stop``
+    (px) counts where the part's share stands MIN_LOST_SHARE and LOST_SIGMAS of its std
+    above the table's; the
+    ends whose fit is worse by less than END_CHI2 of the residuals' variance could be it.
+    The camera loses pixels as far beyond the part's end as beside it: the end lies up to
+    half the lost band's width across the line (the shifts losing half the part's share,
+    or more) short of the lost pixels' end. None where the lost pixels show no such step.
+    """
+    radii = np.arange(first, stop)
+    share = np.mean([lines.sample(lost, theta, s, radii) for s in offsets], axis=0)
+    n = len(share)
+    if n < 6 or not np.isfinite(share).all():
+        return None
+    k = np.arange(2, n - 1)  # the part's samples: the first k
+    s1, s2 = np.cumsum(share)[k - 1], np.cumsum(share**2)[k - 1]
+    sse = s2 - s1**2 / k + (np.sum(share**2) - s2) - (np.sum(share) - s1) ** 2 / (n - k)
+    best = int(np.argmin(sse))
+    part, beyond = s1[best] / k[best], (np.sum(share) - s1[best]) / (n - k[best])
+    variance = max(float(sse[best]) / (n - 2), 1e-12)
+    std = np.sqrt(variance * (1 / k[best] + 1 / (n - k[best])))
+    if part - beyond < max(MIN_LOST_SHARE, LOST_SIGMAS * std):
+        return None
+    near = radii[k[sse <= sse[best] + END_CHI2 * variance] - 1] + 0.5
+    wide = np.arange(-2 * MAX_HALF_WIDTH_PX, 2 * MAX_HALF_WIDTH_PX + 1)
+    mid = float(np.mean(offsets))
+    across = np.array([np.mean(lines.sample(lost, theta, mid + o, radii[: k[best]]))
+                       for o in wide])  # fmt: skip
+    lossy = wide[np.nan_to_num(across) >= 0.5 * (part + beyond)]
+    half_band = 0.5 * (lossy.max() - lossy.min() + 1) if len(lossy) else 0.0
+    lo, hi = float(near.min()) - half_band, float(near.max())
+    return 0.5 * (lo + hi), hi - lo
 
 
 def _fall(h, low, table, width_px: int) -> tuple[float, float] | None:

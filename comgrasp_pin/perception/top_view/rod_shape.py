@@ -236,6 +236,7 @@ def _profile_two_tops(p, centroid, direction, table_z, noise, measured) -> bool:
     """
     if measured is None:
         measured = np.ones(len(p), bool)
+    along_all = (p[:, :2] - centroid) @ direction
     rel = p[measured, :2] - centroid
     along = rel @ direction
     across = rel @ np.array([-direction[1], direction[0]])
@@ -248,8 +249,8 @@ def _profile_two_tops(p, centroid, direction, table_z, noise, measured) -> bool:
     np.fmax.at(grid, (slices, bins), height)
     seen = np.isfinite(grid).sum(axis=0)
     rows = np.count_nonzero(np.isfinite(grid).any(axis=1))
-    if rows < MIN_SPLIT_SLICES:
-        return False
+    if rows < max(MIN_SPLIT_SLICES, 0.5 * np.ptp(np.floor(along_all / SLICE))):
+        return False  # (a tool's head whose handle the depth did not measure: not all along)
     kept = seen >= 0.5 * rows  # the bins most slices see
     profile = np.nanmedian(grid[:, kept], axis=0)
     edge = slice(PROFILE_EDGE_BINS, -PROFILE_EDGE_BINS)  # (the outline: flying pixels)

@@ -222,16 +222,18 @@ def _followed(view, rgb, depth, camera, T_world_cam, pick_area, colour_to_come, 
 
     Refused as the thin part (UntrustedImageError, with why) where there is colour to ask
     (``rgb``), a part was already joined (``part``), its end is not known, or the whole is
-    refused (but for a cut by the image's border); ``around``: (standing, mask, pixel,
+    refused (but for a cut by the image's border, and a whole left to the colour to come,
+    which keep their own errors); ``around``: (standing, mask, pixel,
     threshold, the bare table around the object) as ``_detect`` has them.
     """
     if rgb is not None or part is not None:
         refuse_thin_part(found)
     standing, mask, pixel, threshold, table = around
-    part = follow_thin_part(view, standing, mask, pixel, threshold, found, table)
+    lost = ~(np.isfinite(depth) & (depth > 0))
+    part = follow_thin_part(view, lost, standing, mask, pixel, threshold, found, table)
     try:
         return _detect(view, rgb, depth, camera, T_world_cam, pick_area, colour_to_come, part)
-    except ObjectCutByBorderError:
+    except (ObjectCutByBorderError, _LeftToColour):  # its own error; the colour's to try
         raise
     except PerceptionError as whole:
         refuse_thin_part(found, f"Followed to its end, the whole is refused: {whole}")
