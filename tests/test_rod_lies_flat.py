@@ -93,3 +93,38 @@ def test_a_tapered_body_lying_flat_is_not_propped():
     handle = _rod((-0.15, 0.15), (-0.005, 0.005), (0.016, 0.032))
     ends = propped_ends(handle, np.zeros(2), np.array([1.0, 0.0]), 0.0, NOISE, None, SLICE)
     assert ends is not None and abs(ends[1] - ends[0] - 0.016 * 0.29 / 0.30) < 0.001
+
+
+def _mallet() -> np.ndarray:
+    """A mallet's points as a noisy depth measures them: a 5 cm wide head 2 cm high, 4 cm
+    along, and the 6 cm of its handle (7 mm high) the depth shows, 2 cm wide and then, where
+    the depth loses its sides, 1 cm (as on the real PrimeSense mallet)."""
+    head = _rod((0.0, 0.04), (-0.025, 0.025), (0.020, 0.020))
+    handle = _rod((0.04, 0.07), (-0.01, 0.01), (0.007, 0.007))
+    end = _rod((0.07, 0.10), (-0.005, 0.005), (0.007, 0.007))
+    p = np.r_[head, handle, end]
+    p[:, 2] += np.random.default_rng(1).normal(0.0, NOISE, len(p))
+    return p
+
+
+def test_a_tools_head_and_handle_pass_only_where_its_rest_is_looked_for():
+    """The median profile of a wide head's and a narrow handle's slices has a valley in the
+    middle (the handle's slices there, the head's alone at the sides). Without ``heads`` it
+    is refused as two rods side by side (a smooth depth: no check looks for the rest of the
+    tool); with ``heads`` (a cleaned depth, where the thin-part checks do), its slices'
+    heights, 7 against 20 mm, are no two rods alike all along: it passes."""
+    p = _mallet()
+    centroid, direction = p[:, :2].mean(axis=0), _turned(0.0)
+    with pytest.raises(AmbiguousObjectError, match="two tops all along"):
+        check_one_rod(p, centroid, direction, 0.0, NOISE)
+    check_one_rod(p, centroid, direction, 0.0, NOISE, heads=True)
+
+
+def test_two_rods_touching_all_along_are_refused_with_heads():
+    """Two round rods 1.2 cm thick and 20 cm long touching side by side: alike all along,
+    refused with ``heads`` too."""
+    p = np.r_[_rod((0.0, 0.2), (-0.012, 0.0), (0.012, 0.012), round_top=True),
+              _rod((0.0, 0.2), (0.0, 0.012), (0.012, 0.012), round_top=True)]  # fmt: skip
+    p[:, 2] += np.random.default_rng(2).normal(0.0, NOISE, len(p))
+    with pytest.raises(AmbiguousObjectError, match="not one rod"):
+        check_one_rod(p, p[:, :2].mean(axis=0), _turned(0.0), 0.0, NOISE, heads=True)

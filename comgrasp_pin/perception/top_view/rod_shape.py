@@ -41,6 +41,7 @@ TOP_BAND, TOP_SIGMAS = 0.002, 3.0  # m, noise stds
 PROFILE_BIN = 0.001  # m
 PROFILE_EDGE_BINS = 3  # bins at each side of the profile not looked at (its outline)
 PROFILE_VALLEY_SHARE = 0.15
+ALIKE = 1.5  # two rods side by side: the middle half of the slices' heights within this ratio
 _KERNEL3, _KERNEL5 = np.ones((3, 3), np.uint8), np.ones((5, 5), np.uint8)
 
 
@@ -139,13 +140,16 @@ def check_one_rod(
     table_z: float,
     noise: float,
     measured: np.ndarray | None = None,
+    heads: bool = False,
 ) -> None:
     """AmbiguousObjectError when the blob is not one rod.
 
     That is: the blob's points ``p`` (N, 3), which should lie along ``direction`` (2,)
     through ``centroid`` (2,): too many of its slices across the axis are split in two
     pieces or two tops (``split_slices``; ``measured``: see there). A rod whose tops rise
-    steadily along it is named as not lying flat (``rod_flat.propped_ends``).
+    steadily along it is named as not lying flat (``rod_flat.propped_ends``). ``heads``: a
+    tool's head and handle may pass as one rod (``_profile_two_tops``), as where the
+    thin-part checks then look for the rest of the tool (a cleaned depth).
     """
     split, total = split_slices(p, centroid, direction, table_z, noise, measured)
     if total and split >= max(MIN_SPLIT_SLICES, SPLIT_SLICES * total):
@@ -164,7 +168,7 @@ def check_one_rod(
             "by side, crossing or at an angle?); the top view measures one rod alone on the "
             "table: move the others away"
         )
-    if _profile_two_tops(p, centroid, direction, table_z, noise, measured):
+    if _profile_two_tops(p, centroid, direction, table_z, noise, measured, heads):
         raise AmbiguousObjectError(
             "what lies on the table is not one rod: across its axis it shows two tops all "
             "along (two rods side by side, touching?); the top view measures one rod alone "
@@ -228,11 +232,16 @@ def _off_axis(across: np.ndarray, height: np.ndarray, measured: np.ndarray, nois
     return bool(abs(middle) > off or abs(np.median(top)) > off)
 
 
-def _profile_two_tops(p, centroid, direction, table_z, noise, measured) -> bool:
+def _profile_two_tops(p, centroid, direction, table_z, noise, measured, heads) -> bool:
     """Whether the slices' median profile across the axis has two tops.
 
     Two equal rods touching side by side, whose valley one slice's coarse profile misses.
-    The arguments are ``split_slices``'.
+    The arguments are ``split_slices``' and ``check_one_rod``'s ``heads``. Asked only where
+    the depth measured half the object's slices at least, and, with ``heads``, where the
+    middle half of their median heights lie within ALIKE of each other: two rods side by
+    side all along. A tool's head and handle are not, and the median of their slices mixed
+    leaves a valley in the middle; without ``heads`` that valley refuses it (a head whose
+    handle's rest no check would look for).
     """
     if measured is None:
         measured = np.ones(len(p), bool)
@@ -252,6 +261,9 @@ def _profile_two_tops(p, centroid, direction, table_z, noise, measured) -> bool:
     if rows < max(MIN_SPLIT_SLICES, 0.5 * np.ptp(np.floor(along_all / SLICE))):
         return False  # (a tool's head whose handle the depth did not measure: not all along)
     kept = seen >= 0.5 * rows  # the bins most slices see
+    tops = np.nanmedian(grid[np.isfinite(grid).any(axis=1)], axis=1)  # each slice's
+    if heads and np.percentile(tops, 75) > ALIKE * np.percentile(tops, 25):
+        return False  # (a tool's head and handle, not two rods all along)
     profile = np.nanmedian(grid[:, kept], axis=0)
     edge = slice(PROFILE_EDGE_BINS, -PROFILE_EDGE_BINS)  # (the outline: flying pixels)
     profile, counts = profile[edge], seen[kept][edge]

@@ -157,7 +157,7 @@ def _detect(view: TableView, rgb, depth, camera, T_world_cam, pick_area,
     _, _, vt = np.linalg.svd(p[:, :2] - centroid, full_matrices=False)
     direction = vt[0]
     check_one_rod(view.points[mask], centroid, direction, view.table_z, view.points_noise,
-                  measured)  # fmt: skip
+                  measured, heads=view.cleaned)  # fmt: skip
     check_no_rod_alongside(view.points[mask], centroid, direction)
     threshold = stands_at(view)
     check_ends_stand(view.points, mask, unmeasured, view.table_z, centroid, direction, threshold,
