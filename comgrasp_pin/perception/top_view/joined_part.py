@@ -220,10 +220,10 @@ def _lost_end(lost, lines: _Lines, theta, offsets, first: int, stop: int) -> tup
     table's at its end. The step (two levels, least squares) between ``first`` and ``stop``
     (px) counts where the part's share stands MIN_LOST_SHARE and LOST_SIGMAS of its std
     above the table's; the ends whose fit is worse by less than END_CHI2 of the residuals'
-    variance could be it.
-    The camera loses pixels as far beyond the part's end as beside it: the end lies up to
-    half the lost band's width across the line (the shifts losing half the part's share,
-    or more) short of the lost pixels' end. None where the lost pixels show no such step.
+    variance could be it. The camera loses pixels as far beyond the part's end as beside
+    it: the end lies up to half the lost band's width across the line (the shifts whose
+    share stands at least halfway from the table's to the part's) short of the lost pixels'
+    end. None where the lost pixels show no such step.
     """
     radii = np.arange(first, stop)
     share = np.mean([lines.sample(lost, theta, s, radii) for s in offsets], axis=0)

@@ -246,9 +246,8 @@ def _profile_two_tops(p, centroid, direction, table_z, noise, measured, heads) -
     if measured is None:
         measured = np.ones(len(p), bool)
     along_all = (p[:, :2] - centroid) @ direction
-    rel = p[measured, :2] - centroid
-    along = rel @ direction
-    across = rel @ np.array([-direction[1], direction[0]])
+    along = along_all[measured]
+    across = (p[measured, :2] - centroid) @ np.array([-direction[1], direction[0]])
     height = p[measured, 2] - table_z
     slices = np.floor(along / SLICE).astype(int)
     bins = np.floor(across / PROFILE_BIN).astype(int)
@@ -257,11 +256,12 @@ def _profile_two_tops(p, centroid, direction, table_z, noise, measured, heads) -
     grid = np.full((slices.max() + 1, bins.max() + 1), np.nan)
     np.fmax.at(grid, (slices, bins), height)
     seen = np.isfinite(grid).sum(axis=0)
-    rows = np.count_nonzero(np.isfinite(grid).any(axis=1))
+    seen_rows = np.isfinite(grid).any(axis=1)  # the slices with a measured point
+    rows = np.count_nonzero(seen_rows)
     if rows < max(MIN_SPLIT_SLICES, 0.5 * np.ptp(np.floor(along_all / SLICE))):
         return False  # (a tool's head whose handle the depth did not measure: not all along)
     kept = seen >= 0.5 * rows  # the bins most slices see
-    tops = np.nanmedian(grid[np.isfinite(grid).any(axis=1)], axis=1)  # each slice's
+    tops = np.nanmedian(grid[seen_rows], axis=1)  # each slice's median height
     if heads and np.percentile(tops, 75) > ALIKE * np.percentile(tops, 25):
         return False  # (a tool's head and handle, not two rods all along)
     profile = np.nanmedian(grid[:, kept], axis=0)

@@ -223,8 +223,8 @@ def _followed(view, rgb, depth, camera, T_world_cam, pick_area, colour_to_come, 
     Refused as the thin part (UntrustedImageError, with why) where there is colour to ask
     (``rgb``), a part was already joined (``part``), its end is not known, or the whole is
     refused (but for a cut by the image's border, and a whole left to the colour to come,
-    which keep their own errors); ``around``: (standing, mask, pixel,
-    threshold, the bare table around the object) as ``_detect`` has them.
+    which keep their own errors); ``around``: (standing, mask, pixel, threshold, the bare
+    table around the object) as ``_detect`` has them.
     """
     if rgb is not None or part is not None:
         refuse_thin_part(found)
